@@ -1,0 +1,72 @@
+// Executor: what runs activities (the os layer's tasks) and owns time. An activity is reactive:
+// it is started, told when input is pending, ticked at its period, and stopped; it never blocks
+// or sleeps. The same activity code runs unchanged under every executor:
+//  - ThreadExecutor: one OS thread per activity, wall-clock time (the FreeRTOS model);
+//  - VirtualTimeExecutor: discrete events on one thread, deterministic, faster than real time.
+#pragma once
+
+#include <string>
+
+#include "symb/kernel/clock.hpp"
+#include "symb/kernel/time.hpp"
+
+namespace symb::kernel {
+
+struct ActivityOptions {
+  int priority = 0;      // higher runs first (virtual time) or is favoured by the OS (threads)
+  Duration period{0};    // 0: never ticked
+  std::string name;      // for thread names and diagnostics
+};
+
+// Implemented by whatever an executor runs. Every call for one activity happens on that
+// activity's own execution context, one at a time, never two at once.
+class ActivitySlot;
+
+class Activity {
+ public:
+  virtual ~Activity() = default;
+  // Called inside Executor::attach(), before any handler can run: the slot to signal from now on.
+  virtual void on_activity_attached(ActivitySlot& slot) = 0;
+  // First call, once, when the activity is attached.
+  virtual void on_activity_start() = 0;
+  // Input was signalled through the slot's wake(): handle what is pending.
+  virtual void on_activity_input() = 0;
+  // A period elapsed.
+  virtual void on_activity_tick() = 0;
+  // Last handler call, once, after detach (only if on_activity_start ran).
+  virtual void on_activity_stop() = 0;
+  // The executor will never touch this activity or its slot again; the owner may free it.
+  virtual void on_activity_released() = 0;
+};
+
+// The executor's side of one attached activity. Owned by the executor and valid until the
+// activity's on_activity_released(); every method may be called from any thread (and from inside
+// any activity's handler), except under the single-threaded virtual-time executor where all
+// calls come from its thread.
+class ActivitySlot {
+ public:
+  virtual ~ActivitySlot() = default;
+  // Input is pending: on_activity_input() will run soon (once for any number of wakes).
+  virtual void wake() = 0;
+  // No handler runs while suspended; wakes are remembered; ticks resume one period after resume.
+  virtual void suspend() = 0;
+  virtual void resume() = 0;
+  virtual void set_priority(int priority) = 0;
+  virtual void set_period(Duration period) = 0;
+  // Stops the activity: on_activity_stop() then on_activity_released(), after any handler that is
+  // running returns. Safe to call from the activity's own handler.
+  virtual void detach() = 0;
+};
+
+class Executor {
+ public:
+  virtual ~Executor() = default;
+  virtual const Clock& clock() const = 0;
+  // True when handlers of different activities may run at the same time, so shared state needs
+  // locks; false for the single-threaded virtual-time executor.
+  virtual bool concurrent() const = 0;
+  // Starts running `activity`, which must outlive its on_activity_released().
+  virtual ActivitySlot& attach(Activity& activity, const ActivityOptions& options) = 0;
+};
+
+}  // namespace symb::kernel

@@ -1,0 +1,188 @@
+#include "symb/kernel/virtual_time_executor.hpp"
+
+#include <cassert>
+
+namespace symb::kernel {
+
+struct VirtualTimeExecutor::Slot final : ActivitySlot {
+  VirtualTimeExecutor* exec = nullptr;
+  Activity* activity = nullptr;
+  int priority = 0;
+  Duration period{0};
+  std::uint32_t generation = 0;
+  // Bumped to cancel the tick chain in flight (suspend, new period).
+  std::uint32_t tick_generation = 0;
+  bool started = false;
+  bool suspended = false;
+  bool input_scheduled = false;
+  bool input_while_suspended = false;
+  bool detaching = false;
+
+  void wake() override {
+    if (detaching) return;
+    if (suspended) {
+      input_while_suspended = true;
+      return;
+    }
+    if (!input_scheduled) {
+      input_scheduled = true;
+      exec->schedule(*this, EventKind::kInput, exec->clock_.now());
+    }
+  }
+  void suspend() override {
+    if (suspended || detaching) return;
+    suspended = true;
+    ++tick_generation;
+  }
+  void resume() override {
+    if (!suspended || detaching) return;
+    suspended = false;
+    ++tick_generation;
+    if (started && period.count() > 0) exec->schedule(*this, EventKind::kTick, exec->clock_.now() + period);
+    // An input event still queued will simply run now that the slot is awake again.
+    if (input_while_suspended && !input_scheduled) {
+      input_while_suspended = false;
+      input_scheduled = true;
+      exec->schedule(*this, EventKind::kInput, exec->clock_.now());
+    }
+  }
+  void set_priority(int p) override { priority = p; }
+  void set_period(Duration p) override {
+    period = p;
+    ++tick_generation;
+    if (started && !suspended && !detaching && p.count() > 0)
+      exec->schedule(*this, EventKind::kTick, exec->clock_.now() + p);
+  }
+  void detach() override {
+    if (detaching) return;
+    detaching = true;
+    exec->to_finalize_.push_back(this);
+    // Outside a run nobody else can be inside a handler: stop it now. Inside a run it stops as
+    // soon as the handler that is running returns.
+    if (!exec->running_) exec->finalize_pending();
+  }
+};
+
+VirtualTimeExecutor::VirtualTimeExecutor() = default;
+
+VirtualTimeExecutor::~VirtualTimeExecutor() {
+  for (auto& s : slots_)
+    if (s->activity != nullptr && !s->detaching) s->detach();
+  finalize_pending();
+}
+
+ActivitySlot& VirtualTimeExecutor::attach(Activity& activity, const ActivityOptions& options) {
+  Slot* s = nullptr;
+  if (!free_slots_.empty()) {
+    s = free_slots_.back();
+    free_slots_.pop_back();
+  } else {
+    slots_.push_back(std::make_unique<Slot>());
+    s = slots_.back().get();
+    s->exec = this;
+  }
+  s->activity = &activity;
+  s->priority = options.priority;
+  s->period = options.period;
+  s->started = s->suspended = s->input_scheduled = s->input_while_suspended = s->detaching = false;
+  activity.on_activity_attached(*s);
+  schedule(*s, EventKind::kStart, clock_.now());
+  return *s;
+}
+
+void VirtualTimeExecutor::schedule(Slot& s, EventKind kind, Time t) {
+  events_.push(Event{t, s.priority, seq_++, &s, s.generation, s.tick_generation, kind});
+}
+
+std::uint64_t VirtualTimeExecutor::run_until(Time until) {
+  assert(!running_ && "run_until is not reentrant");
+  running_ = true;
+  stop_requested_ = false;
+  std::uint64_t handled = 0;
+  while (!events_.empty() && events_.top().time <= until && !stop_requested_) {
+    const Event e = events_.top();
+    events_.pop();
+    clock_.advance_to(e.time);
+    handle(e);
+    ++handled;
+    if (!to_finalize_.empty()) finalize_pending();
+  }
+  running_ = false;
+  if (!stop_requested_ && until != kTimeNever) clock_.advance_to(until);
+  return handled;
+}
+
+std::uint64_t VirtualTimeExecutor::run_until_idle(Time limit) {
+  assert(!running_ && "run_until_idle is not reentrant");
+  running_ = true;
+  stop_requested_ = false;
+  std::uint64_t handled = 0;
+  while (!events_.empty() && events_.top().time <= limit && !stop_requested_) {
+    const Event e = events_.top();
+    events_.pop();
+    clock_.advance_to(e.time);
+    handle(e);
+    ++handled;
+    if (!to_finalize_.empty()) finalize_pending();
+  }
+  running_ = false;
+  return handled;
+}
+
+void VirtualTimeExecutor::handle(const Event& e) {
+  Slot& s = *e.slot;
+  if (e.generation != s.generation || s.detaching) return;  // stale: the activity is gone
+  current_ = &s;
+  switch (e.kind) {
+    case EventKind::kStart:
+      s.started = true;
+      s.activity->on_activity_start();
+      if (s.period.count() > 0 && !s.suspended && !s.detaching) schedule(s, EventKind::kTick, e.time + s.period);
+      break;
+    case EventKind::kInput:
+      if (s.suspended) {
+        s.input_while_suspended = true;
+        s.input_scheduled = false;
+        break;
+      }
+      s.input_scheduled = false;
+      s.activity->on_activity_input();
+      break;
+    case EventKind::kTick:
+      if (e.tick_generation != s.tick_generation || s.suspended) break;
+      s.activity->on_activity_tick();
+      // Scheduled from the event time, not from now, so a period never drifts.
+      if (e.tick_generation == s.tick_generation && !s.suspended && !s.detaching && s.period.count() > 0)
+        schedule(s, EventKind::kTick, e.time + s.period);
+      break;
+  }
+  current_ = nullptr;
+}
+
+void VirtualTimeExecutor::finalize_pending() {
+  // A stop handler may detach further activities; keep going until none is left.
+  while (!to_finalize_.empty()) {
+    Slot* s = to_finalize_.back();
+    to_finalize_.pop_back();
+    finalize(*s);
+  }
+}
+
+void VirtualTimeExecutor::finalize(Slot& s) {
+  Activity* a = s.activity;
+  const bool started = s.started;
+  ++s.generation;  // every event still queued for this slot is now stale
+  if (started) {
+    const bool was_running = running_;
+    running_ = true;  // detaches from inside a stop handler are deferred like any other
+    current_ = &s;
+    a->on_activity_stop();
+    current_ = nullptr;
+    running_ = was_running;
+  }
+  s.activity = nullptr;
+  free_slots_.push_back(&s);
+  a->on_activity_released();
+}
+
+}  // namespace symb::kernel

@@ -1,0 +1,75 @@
+// VirtualTimeExecutor: a discrete-event executor on one thread. Events (start, pending input,
+// tick, stop) are ordered by virtual time, then by activity priority (higher first), then by the
+// order they were scheduled, so the same inputs always give the same run, bit for bit. Handlers
+// take no virtual time; a message sent at t is handled at t. Many nodes (a swarm) share one
+// executor and so one timeline.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <queue>
+#include <vector>
+
+#include "symb/kernel/executor.hpp"
+
+namespace symb::kernel {
+
+class VirtualTimeExecutor final : public Executor {
+ public:
+  VirtualTimeExecutor();
+  ~VirtualTimeExecutor() override;
+  VirtualTimeExecutor(const VirtualTimeExecutor&) = delete;
+  VirtualTimeExecutor& operator=(const VirtualTimeExecutor&) = delete;
+
+  const Clock& clock() const override { return clock_; }
+  bool concurrent() const override { return false; }
+  ActivitySlot& attach(Activity& activity, const ActivityOptions& options) override;
+
+  // Handles every event up to and including `until`, then sets the clock to `until`. Returns the
+  // number of events handled. A handler may call stop() to return early.
+  std::uint64_t run_until(Time until);
+  std::uint64_t run_for(Duration d) { return run_until(clock_.now() + d); }
+  // Handles events until none is left or `limit` is reached.
+  std::uint64_t run_until_idle(Time limit = kTimeNever);
+  // Makes the running run_*() return after the current handler.
+  void stop() { stop_requested_ = true; }
+  Time now() const { return clock_.now(); }
+  std::size_t pending_events() const { return events_.size(); }
+
+ private:
+  struct Slot;
+  enum class EventKind : std::uint8_t { kStart, kInput, kTick };
+  struct Event {
+    Time time;
+    int priority;
+    std::uint64_t seq;
+    Slot* slot;
+    std::uint32_t generation;
+    std::uint32_t tick_generation;
+    EventKind kind;
+  };
+  struct Later {
+    bool operator()(const Event& a, const Event& b) const {
+      if (a.time != b.time) return a.time > b.time;
+      if (a.priority != b.priority) return a.priority < b.priority;
+      return a.seq > b.seq;
+    }
+  };
+
+  void schedule(Slot& s, EventKind kind, Time t);
+  void handle(const Event& e);
+  void finalize(Slot& s);
+  void finalize_pending();
+
+  VirtualClock clock_;
+  std::priority_queue<Event, std::vector<Event>, Later> events_;
+  std::vector<std::unique_ptr<Slot>> slots_;
+  std::vector<Slot*> free_slots_;
+  std::vector<Slot*> to_finalize_;
+  Slot* current_ = nullptr;
+  std::uint64_t seq_ = 0;
+  bool running_ = false;
+  bool stop_requested_ = false;
+};
+
+}  // namespace symb::kernel

@@ -1,0 +1,60 @@
+// Message: what one send delivers to every hooked task (the paper's QueueMessage): the sending
+// task's id, a port, the send time and a payload. Up to kInlineValues numbers travel inside the
+// message itself, so sensor and actuator traffic never touches the heap; larger data (an image, a
+// spike packet) travels as a shared, immutable Blob that all receivers read without a copy.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <initializer_list>
+#include <memory>
+#include <span>
+
+#include "symb/kernel/time.hpp"
+#include "symb/os/ids.hpp"
+
+namespace symb::os {
+
+// Base for large payloads. kind() tells receivers what it is without RTTI.
+class Blob {
+ public:
+  virtual ~Blob() = default;
+  virtual std::uint32_t kind() const = 0;
+};
+
+// Casts a blob to T when its kind() is T::kKind; nullptr otherwise.
+template <class T>
+const T* blob_as(const Blob* b) {
+  return (b != nullptr && b->kind() == T::kKind) ? static_cast<const T*>(b) : nullptr;
+}
+
+struct Payload {
+  static constexpr std::size_t kInlineValues = 32;
+
+  std::uint8_t count = 0;
+  float values[kInlineValues]{};
+  std::shared_ptr<const Blob> blob;
+
+  Payload() = default;
+  // Keeps the first kInlineValues numbers; callers with more use a Blob.
+  explicit Payload(std::span<const float> v) { assign(v); }
+  Payload(std::initializer_list<float> v) { assign({v.begin(), v.size()}); }
+  explicit Payload(std::shared_ptr<const Blob> b) : blob(std::move(b)) {}
+
+  void assign(std::span<const float> v) {
+    count = static_cast<std::uint8_t>(std::min(v.size(), kInlineValues));
+    std::copy_n(v.begin(), count, values);
+  }
+  std::span<const float> numbers() const { return {values, count}; }
+};
+
+struct Message {
+  TaskId source;        // invalid for messages posted from outside any task
+  Port port = 0;
+  kernel::Time time{0};  // the sender's node clock at send
+  Payload payload;
+
+  std::span<const float> numbers() const { return payload.numbers(); }
+};
+
+}  // namespace symb::os

@@ -1,0 +1,709 @@
+#include "symb/os/node.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <exception>
+
+#include "symb/os/task_record.hpp"
+
+namespace symb::os {
+
+using kernel::Error;
+using kernel::Result;
+using kernel::Status;
+
+namespace {
+
+std::uint64_t fnv1a(std::string_view s) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (char c : s) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ULL;
+  return h;
+}
+
+template <class T>
+void fold(std::uint64_t& h, const T& v) {
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, &v, sizeof(T));
+  for (unsigned char b : bytes) h = (h ^ b) * 0x100000001b3ULL;
+}
+
+std::string id_text(TaskId id) { return "#" + std::to_string(id.index) + "." + std::to_string(id.generation); }
+
+}  // namespace
+
+const char* to_string(TaskState s) {
+  switch (s) {
+    case TaskState::kCreated: return "created";
+    case TaskState::kRunning: return "running";
+    case TaskState::kSuspended: return "suspended";
+    case TaskState::kFaulted: return "faulted";
+    case TaskState::kDeleted: return "deleted";
+  }
+  return "?";
+}
+
+const char* to_string(QueuePolicy p) { return p == QueuePolicy::kKeepNewest ? "keep-newest" : "refuse"; }
+
+TrafficCounters& TrafficCounters::operator+=(const TrafficCounters& o) {
+  attempted += o.attempted;
+  delivered += o.delivered;
+  overwritten += o.overwritten;
+  refused += o.refused;
+  suppressed += o.suppressed;
+  inhibited += o.inhibited;
+  discarded += o.discarded;
+  return *this;
+}
+
+// --- TaskRecord ------------------------------------------------------------------------------------
+
+namespace detail {
+
+TaskRecord::TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> t, const TaskOptions& o,
+                       bool concurrent)
+    : node(n),
+      id(i),
+      name(std::move(nm)),
+      task(std::move(t)),
+      priority(o.priority),
+      period_ns(o.period.count()),
+      random(n.seed(), fnv1a(name)),
+      out_mu(concurrent),
+      in_mu(concurrent),
+      queue(o.queue_capacity) {
+  task->record_ = this;
+}
+
+void TaskRecord::on_activity_attached(kernel::ActivitySlot& s) {
+  std::lock_guard lock(in_mu);
+  slot = &s;
+}
+
+void TaskRecord::fault(const char* where, const char* what) {
+  TaskState s = state.load();
+  while ((s == TaskState::kRunning || s == TaskState::kSuspended) && !state.compare_exchange_weak(s, TaskState::kFaulted)) {
+  }
+  node.log().error(name, std::string("faulted in ") + where + ": " + what);
+  slot->suspend();
+}
+
+#define SYMB_GUARDED(where, call)                                  \
+  try {                                                            \
+    call;                                                          \
+  } catch (const std::exception& e) {                              \
+    fault(where, e.what());                                        \
+  } catch (...) {                                                  \
+    fault(where, "an exception that is not a std::exception");     \
+  }
+
+void TaskRecord::on_activity_start() {
+  if (state.load() != TaskState::kRunning) return;
+  SYMB_GUARDED("on_start", task->on_start())
+}
+
+void TaskRecord::apply_pending_parameters() {
+  std::vector<std::pair<std::string, ParamValue>> pending;
+  {
+    std::lock_guard lock(in_mu);
+    if (!params || params->pending.empty()) return;
+    pending.swap(params->pending);
+  }
+  for (auto& [n, v] : pending) {
+    Status st;
+    SYMB_GUARDED("on_parameter", st = task->on_parameter(n, v))
+    if (!st) {
+      node.log().warn(name, "parameter '" + n + "' not changed: " + st.error());
+      continue;
+    }
+    std::lock_guard lock(in_mu);
+    params->values.set(n, std::move(v));
+  }
+}
+
+void TaskRecord::on_activity_input() {
+  apply_pending_parameters();
+  for (;;) {
+    Message m;
+    {
+      std::lock_guard lock(in_mu);
+      // A task suspended, faulted or deleted mid-batch leaves the rest queued; whoever resumes it
+      // wakes it again.
+      if (queue.empty() || state.load(std::memory_order_relaxed) != TaskState::kRunning) {
+        wake_pending = false;
+        return;
+      }
+      m = queue.take();
+    }
+    delivered.store(delivered.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    if (node.tracing_.load(std::memory_order_relaxed)) node.trace(*this, m);
+    SYMB_GUARDED("on_message", task->on_message(m))
+  }
+}
+
+void TaskRecord::on_activity_tick() {
+  apply_pending_parameters();
+  if (state.load(std::memory_order_relaxed) != TaskState::kRunning) return;
+  SYMB_GUARDED("on_tick", task->on_tick())
+}
+
+void TaskRecord::on_activity_stop() {
+  try {
+    task->on_stop();
+  } catch (const std::exception& e) {
+    node.log().error(name, std::string("exception in on_stop: ") + e.what());
+  } catch (...) {
+    node.log().error(name, "exception in on_stop");
+  }
+}
+
+#undef SYMB_GUARDED
+
+void TaskRecord::on_activity_released() { node.release(*this); }
+
+kernel::ActivitySlot* TaskRecord::offer(const Message& m, int hook_priority, QueuePolicy policy,
+                                        kernel::Duration suppress_window) {
+  std::lock_guard lock(in_mu);
+  ++traffic.attempted;
+  for (const auto& w : suppression) {
+    if (hook_priority < w.level && m.time < w.until) {
+      ++traffic.suppressed;
+      return nullptr;
+    }
+  }
+  if (suppress_window.count() > 0) {
+    // Keep the window of this level, or the one that ends first, up to date.
+    const kernel::Time until = m.time + suppress_window;
+    SuppressionWindow* target = &suppression[0];
+    for (auto& w : suppression) {
+      if (w.level == hook_priority || w.until <= m.time) {
+        target = &w;
+        break;
+      }
+      if (w.until < target->until) target = &w;
+    }
+    if (target->level != hook_priority || target->until < until) *target = {hook_priority, until};
+  }
+  if (queue.full()) {
+    if (policy == QueuePolicy::kRefuse) {
+      ++traffic.refused;
+      return nullptr;
+    }
+    ++traffic.overwritten;
+  }
+  queue.push_overwrite(m);
+  if (wake_pending || slot == nullptr) return nullptr;
+  wake_pending = true;
+  return slot;
+}
+
+}  // namespace detail
+
+// --- Node ------------------------------------------------------------------------------------------
+
+using detail::TaskRecord;
+
+Node::Node(kernel::Executor& executor, NodeConfig config)
+    : executor_(executor), config_(std::move(config)), log_(executor.clock(), config_.log_capacity) {}
+
+Node::~Node() {
+  std::vector<TaskId> ids;
+  {
+    std::lock_guard lock(mu_);
+    for (const auto& s : slots_)
+      if (s.record && s.record->state.load() != TaskState::kDeleted) ids.push_back(s.record->id);
+  }
+  for (TaskId id : ids) (void)remove(id);
+  std::unique_lock lock(mu_);
+  released_cv_.wait(lock, [&] { return live_records_ == 0; });
+}
+
+kernel::RandomStream Node::random_stream(std::string_view purpose) const {
+  return kernel::RandomStream(config_.seed, fnv1a(purpose) ^ 0x5bd1e995ULL);
+}
+
+TaskRecord* Node::lookup_locked(TaskId id) const {
+  if (id.index >= slots_.size()) return nullptr;
+  const auto& s = slots_[id.index];
+  if (!s.record || s.generation != id.generation || s.record->state.load() == TaskState::kDeleted) return nullptr;
+  return s.record.get();
+}
+
+Status Node::no_task(TaskId id) const {
+  return Error{"node '" + config_.name + "' has no task " + (id.valid() ? id_text(id) : std::string("(invalid id)"))};
+}
+
+Result<TaskId> Node::create(std::string name, std::unique_ptr<Task> task, TaskOptions options) {
+  if (!is_valid_name(name))
+    return Error{"invalid task name '" + name.substr(0, 63) +
+                 "': use 1 to 63 letters, digits, '_', '.' or '-', starting with a letter or '_'"};
+  if (!task) return Error{"task '" + name + "': no task object"};
+  if (options.queue_capacity == 0 || options.queue_capacity > (1u << 20))
+    return Error{"task '" + name + "': queue capacity must be between 1 and 1048576"};
+  if (options.period.count() < 0) return Error{"task '" + name + "': negative period"};
+  TaskId id;
+  {
+    std::lock_guard lock(mu_);
+    for (const auto& s : slots_)
+      if (s.record && s.record->state.load() != TaskState::kDeleted && s.record->name == name)
+        return Error{"node '" + config_.name + "' already has a task named '" + name + "'"};
+    if (!free_slots_.empty()) {
+      id.index = free_slots_.back();
+      free_slots_.pop_back();
+    } else {
+      id.index = static_cast<std::uint32_t>(slots_.size());
+      slots_.emplace_back();
+    }
+    auto& slot = slots_[id.index];
+    id.generation = slot.generation;
+    slot.record = std::make_unique<TaskRecord>(*this, id, std::move(name), std::move(task), options,
+                                               executor_.concurrent());
+    ++live_records_;
+    if (options.autostart) start_locked(*slot.record);
+  }
+  return id;
+}
+
+Result<TaskId> Node::create(std::string_view type_name, std::string name, std::span<const ParamAssignment> params,
+                            std::optional<TaskOptions> options) {
+  if (config_.types == nullptr) return Error{"node '" + config_.name + "' has no task type registry"};
+  const TaskType* type = config_.types->find(type_name);
+  if (type == nullptr) return Error{config_.types->unknown_type_error(type_name)};
+  auto values = config_.types->resolve(*type, params);
+  if (!values) return Error{values.error()};
+  std::unique_ptr<Task> task;
+  try {
+    task = type->make(*values);
+  } catch (const std::exception& e) {
+    return Error{"task type '" + type->name + "' could not make a task: " + e.what()};
+  }
+  if (!task) return Error{"task type '" + type->name + "' made no task"};
+  auto state = std::make_unique<detail::ParamState>();
+  state->type = type;
+  state->values = std::move(values).value();
+  const TaskOptions o = options.value_or(type->defaults);
+  // Parameters must be in place before the task can start, so create it unstarted first.
+  TaskOptions unstarted = o;
+  unstarted.autostart = false;
+  auto id = create(std::move(name), std::move(task), unstarted);
+  if (!id) return id;
+  {
+    std::lock_guard lock(mu_);
+    TaskRecord* r = lookup_locked(*id);
+    std::lock_guard in(r->in_mu);
+    r->params = std::move(state);
+  }
+  if (o.autostart)
+    if (auto st = start(*id); !st) return Error{st.error()};
+  return id;
+}
+
+void Node::start_locked(TaskRecord& r) {
+  r.state.store(TaskState::kRunning);
+  kernel::ActivityOptions ao;
+  ao.priority = r.priority.load();
+  ao.period = kernel::Duration{r.period_ns.load()};
+  ao.name = r.name;
+  executor_.attach(r, ao);
+}
+
+Status Node::start(TaskId id) {
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(id);
+  if (r == nullptr) return no_task(id);
+  if (r->state.load() != TaskState::kCreated)
+    return Error{"task '" + r->name + "' is " + to_string(r->state.load()) + ", not created"};
+  start_locked(*r);
+  // Messages may have been queued before it started.
+  kernel::ActivitySlot* wake = nullptr;
+  {
+    std::lock_guard in(r->in_mu);
+    if (!r->queue.empty() && !r->wake_pending) {
+      r->wake_pending = true;
+      wake = r->slot;
+    }
+  }
+  if (wake != nullptr) wake->wake();
+  return {};
+}
+
+Status Node::suspend(TaskId id) {
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(id);
+  if (r == nullptr) return no_task(id);
+  TaskState expected = TaskState::kRunning;
+  if (!r->state.compare_exchange_strong(expected, TaskState::kSuspended))
+    return Error{"task '" + r->name + "' is " + to_string(expected) + ", not running"};
+  r->slot->suspend();
+  return {};
+}
+
+Status Node::resume(TaskId id) {
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(id);
+  if (r == nullptr) return no_task(id);
+  TaskState expected = TaskState::kSuspended;
+  if (!r->state.compare_exchange_strong(expected, TaskState::kRunning))
+    return Error{"task '" + r->name + "' is " + to_string(expected) + ", not suspended"};
+  r->slot->resume();
+  kernel::ActivitySlot* wake = nullptr;
+  {
+    std::lock_guard in(r->in_mu);
+    if (!r->queue.empty() && !r->wake_pending) {
+      r->wake_pending = true;
+      wake = r->slot;
+    }
+  }
+  if (wake != nullptr) wake->wake();
+  return {};
+}
+
+Status Node::remove(TaskId id) {
+  kernel::ActivitySlot* slot = nullptr;
+  TaskRecord* never_started = nullptr;
+  {
+    std::lock_guard lock(mu_);
+    TaskRecord* r = lookup_locked(id);
+    if (r == nullptr) return no_task(id);
+    // Unhook it from every sender first: after this, no send can reach it.
+    for (auto& s : slots_) {
+      if (!s.record) continue;
+      std::lock_guard out(s.record->out_mu);
+      std::erase_if(s.record->hooks, [&](const detail::Hook& h) { return h.receiver == r; });
+    }
+    {
+      std::lock_guard out(r->out_mu);
+      r->hooks.clear();
+    }
+    const TaskState before = r->state.exchange(TaskState::kDeleted);
+    {
+      std::lock_guard in(r->in_mu);
+      slot = r->slot;
+    }
+    if (before == TaskState::kCreated) never_started = r;
+  }
+  // Outside the node lock: stopping runs the task's on_stop, which may call back into the node.
+  if (never_started != nullptr) release(*never_started);
+  else if (slot != nullptr) slot->detach();
+  return {};
+}
+
+void Node::release(TaskRecord& r) {
+  std::unique_ptr<TaskRecord> dying;
+  {
+    std::lock_guard lock(mu_);
+    {
+      std::lock_guard in(r.in_mu);
+      r.traffic.discarded += r.queue.size();
+      r.queue.clear();
+      TrafficCounters t = r.traffic;
+      t.delivered = r.delivered.load();
+      retired_ += t;
+    }
+    auto& s = slots_[r.id.index];
+    dying = std::move(s.record);
+    ++s.generation;
+    free_slots_.push_back(r.id.index);
+    --live_records_;
+  }
+  released_cv_.notify_all();
+  // The task object is destroyed outside the lock: its destructor may do anything.
+}
+
+Status Node::set_priority(TaskId id, int priority) {
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(id);
+  if (r == nullptr) return no_task(id);
+  r->priority.store(priority);
+  std::lock_guard in(r->in_mu);
+  if (r->slot != nullptr) r->slot->set_priority(priority);
+  return {};
+}
+
+Status Node::set_period(TaskId id, kernel::Duration period) {
+  if (period.count() < 0) return Error{"negative period"};
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(id);
+  if (r == nullptr) return no_task(id);
+  r->period_ns.store(period.count());
+  std::lock_guard in(r->in_mu);
+  if (r->slot != nullptr) r->slot->set_period(period);
+  return {};
+}
+
+Status Node::set_parameter(TaskId id, std::string_view param, std::string_view value) {
+  kernel::ActivitySlot* wake = nullptr;
+  {
+    std::lock_guard lock(mu_);
+    TaskRecord* r = lookup_locked(id);
+    if (r == nullptr) return no_task(id);
+    std::lock_guard in(r->in_mu);
+    if (!r->params) return Error{"task '" + r->name + "' was not made from a registered type: it has no parameters"};
+    const TaskType& type = *r->params->type;
+    const ParamSpec* spec = type.param(param);
+    if (spec == nullptr) {
+      std::vector<std::string_view> names;
+      for (const auto& p : type.params) names.push_back(p.name);
+      std::string msg = "task type '" + type.name + "' has no parameter '" + std::string(param.substr(0, 63)) + "'";
+      if (auto hint = closest_name(param, names); !hint.empty()) msg += " (did you mean '" + hint + "'?)";
+      return Error{msg};
+    }
+    auto v = parse_param_value(*spec, value);
+    if (!v) return Error{v.error()};
+    r->params->pending.emplace_back(spec->name, std::move(v).value());
+    // Wake the task so that it applies the change on its own context soon.
+    if (!r->wake_pending && r->slot != nullptr) {
+      r->wake_pending = true;
+      wake = r->slot;
+    }
+    if (wake != nullptr) wake->wake();
+  }
+  return {};
+}
+
+Result<ParamSet> Node::parameters(TaskId id) const {
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(id);
+  if (r == nullptr) return Error{no_task(id).error()};
+  std::lock_guard in(r->in_mu);
+  if (!r->params) return ParamSet{};
+  return r->params->values;
+}
+
+std::optional<TaskId> Node::find(std::string_view task_name) const {
+  std::lock_guard lock(mu_);
+  for (const auto& s : slots_)
+    if (s.record && s.record->state.load() != TaskState::kDeleted && s.record->name == task_name) return s.record->id;
+  return std::nullopt;
+}
+
+namespace {
+
+TaskInfo describe(TaskRecord& r) {
+  TaskInfo i;
+  i.id = r.id;
+  i.name = r.name;
+  i.state = r.state.load();
+  i.priority = r.priority.load();
+  i.period = kernel::Duration{r.period_ns.load()};
+  i.sent = r.sent.load(std::memory_order_relaxed);
+  std::lock_guard in(r.in_mu);
+  i.type = r.params ? r.params->type->name : "-";
+  i.queue_depth = r.queue.size();
+  i.queue_capacity = r.queue.capacity();
+  i.traffic = r.traffic;
+  i.traffic.delivered = r.delivered.load(std::memory_order_relaxed);
+  return i;
+}
+
+}  // namespace
+
+std::optional<TaskInfo> Node::info(TaskId id) const {
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(id);
+  if (r == nullptr) return std::nullopt;
+  return describe(*r);
+}
+
+std::vector<TaskInfo> Node::tasks() const {
+  std::lock_guard lock(mu_);
+  std::vector<TaskInfo> out;
+  for (const auto& s : slots_)
+    if (s.record && s.record->state.load() != TaskState::kDeleted) out.push_back(describe(*s.record));
+  return out;
+}
+
+std::size_t Node::task_count() const {
+  std::lock_guard lock(mu_);
+  std::size_t n = 0;
+  for (const auto& s : slots_)
+    if (s.record && s.record->state.load() != TaskState::kDeleted) ++n;
+  return n;
+}
+
+Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
+  std::lock_guard lock(mu_);
+  TaskRecord* s = lookup_locked(sender);
+  if (s == nullptr) return Error{no_task(sender).error()};
+  TaskRecord* r = lookup_locked(receiver);
+  if (r == nullptr) return Error{no_task(receiver).error()};
+  if (options.port > 0xffff) return Error{"hook port must be -1 (any) or 0..65535"};
+  if (options.suppress_window.count() < 0) return Error{"negative suppression window"};
+  detail::Hook h;
+  h.serial = ++hook_serial_;
+  h.priority = options.priority;
+  h.port = options.port < 0 ? -1 : options.port;
+  h.policy = options.policy;
+  h.enabled = options.enabled;
+  h.receiver = r;
+  h.suppress_window = options.suppress_window;
+  {
+    std::lock_guard out(s->out_mu);
+    // Higher-priority hooks deliver first; equal priorities keep hook order.
+    auto at = std::find_if(s->hooks.begin(), s->hooks.end(), [&](const detail::Hook& x) { return x.priority < h.priority; });
+    s->hooks.insert(at, h);
+  }
+  return HookId{sender.index, h.serial};
+}
+
+Status Node::unhook(HookId id) {
+  std::lock_guard lock(mu_);
+  if (id.sender_index < slots_.size() && slots_[id.sender_index].record) {
+    TaskRecord& s = *slots_[id.sender_index].record;
+    std::lock_guard out(s.out_mu);
+    auto it = std::find_if(s.hooks.begin(), s.hooks.end(), [&](const detail::Hook& h) { return h.serial == id.serial; });
+    if (it != s.hooks.end()) {
+      s.hooks.erase(it);
+      return {};
+    }
+  }
+  return Error{"node '" + config_.name + "' has no hook " + std::to_string(id.serial)};
+}
+
+Status Node::set_hook_enabled(HookId id, bool enabled) {
+  std::lock_guard lock(mu_);
+  if (id.sender_index < slots_.size() && slots_[id.sender_index].record) {
+    TaskRecord& s = *slots_[id.sender_index].record;
+    std::lock_guard out(s.out_mu);
+    for (auto& h : s.hooks)
+      if (h.serial == id.serial) {
+        h.enabled = enabled;
+        return {};
+      }
+  }
+  return Error{"node '" + config_.name + "' has no hook " + std::to_string(id.serial)};
+}
+
+std::vector<HookInfo> Node::hooks() const {
+  std::lock_guard lock(mu_);
+  std::vector<HookInfo> out;
+  for (const auto& s : slots_) {
+    if (!s.record || s.record->state.load() == TaskState::kDeleted) continue;
+    std::lock_guard o(s.record->out_mu);
+    for (const auto& h : s.record->hooks) {
+      HookInfo i;
+      i.id = HookId{s.record->id.index, h.serial};
+      i.sender = s.record->id;
+      i.receiver = h.receiver->id;
+      i.sender_name = s.record->name;
+      i.receiver_name = h.receiver->name;
+      i.options = HookOptions{h.priority, h.policy, h.enabled, h.port, h.suppress_window};
+      i.inhibited_until = h.inhibited_until;
+      out.push_back(std::move(i));
+    }
+  }
+  return out;
+}
+
+Status Node::suppress(TaskId receiver, int level, kernel::Duration window) {
+  if (window.count() < 0) return Error{"negative suppression window"};
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(receiver);
+  if (r == nullptr) return no_task(receiver);
+  const kernel::Time now = this->now();
+  std::lock_guard in(r->in_mu);
+  detail::SuppressionWindow* target = &r->suppression[0];
+  for (auto& w : r->suppression) {
+    if (w.level == level || w.until <= now) {
+      target = &w;
+      break;
+    }
+    if (w.until < target->until) target = &w;
+  }
+  *target = {level, now + window};
+  return {};
+}
+
+Status Node::inhibit(TaskId sender, TaskId receiver, kernel::Duration window) {
+  if (window.count() < 0) return Error{"negative inhibition window"};
+  std::lock_guard lock(mu_);
+  TaskRecord* s = lookup_locked(sender);
+  if (s == nullptr) return no_task(sender);
+  TaskRecord* r = nullptr;
+  if (receiver.valid()) {
+    r = lookup_locked(receiver);
+    if (r == nullptr) return no_task(receiver);
+  }
+  const kernel::Time until = now() + window;
+  std::lock_guard out(s->out_mu);
+  bool any = false;
+  for (auto& h : s->hooks)
+    if (r == nullptr || h.receiver == r) {
+      h.inhibited_until = until;
+      any = true;
+    }
+  if (!any) return Error{"task '" + s->name + "' has no hook " + (r ? "to '" + r->name + "'" : std::string("at all"))};
+  return {};
+}
+
+Status Node::post(TaskId receiver, const Message& message, QueuePolicy policy) {
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(receiver);
+  if (r == nullptr) return no_task(receiver);
+  Message m = message;
+  m.time = now();
+  if (kernel::ActivitySlot* wake = r->offer(m, 0, policy, kernel::Duration{0})) wake->wake();
+  return {};
+}
+
+void Node::send_from(TaskRecord& from, const Message& m) {
+  std::lock_guard out(from.out_mu);
+  from.sent.store(from.sent.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  for (auto& h : from.hooks) {
+    if (!h.enabled || (h.port >= 0 && h.port != m.port)) continue;
+    if (m.time < h.inhibited_until) {
+      std::lock_guard in(h.receiver->in_mu);
+      ++h.receiver->traffic.attempted;
+      ++h.receiver->traffic.inhibited;
+      continue;
+    }
+    // The wake happens while out_mu is held: that keeps the receiver alive (see Hook).
+    if (kernel::ActivitySlot* wake = h.receiver->offer(m, h.priority, h.policy, h.suppress_window)) wake->wake();
+  }
+}
+
+TrafficCounters Node::traffic() const {
+  std::lock_guard lock(mu_);
+  TrafficCounters t = retired_;
+  for (const auto& s : slots_) {
+    if (!s.record) continue;
+    TaskRecord& r = *s.record;
+    std::lock_guard in(r.in_mu);
+    TrafficCounters x = r.traffic;
+    x.delivered = r.delivered.load(std::memory_order_relaxed);
+    t += x;
+  }
+  return t;
+}
+
+std::uint64_t Node::queued() const {
+  std::lock_guard lock(mu_);
+  std::uint64_t n = 0;
+  for (const auto& s : slots_) {
+    if (!s.record) continue;
+    std::lock_guard in(s.record->in_mu);
+    n += s.record->queue.size();
+  }
+  return n;
+}
+
+void Node::set_tracing(bool on) {
+  tracing_.store(on);
+}
+
+std::uint64_t Node::trace_hash() const {
+  std::lock_guard lock(trace_mu_);
+  return trace_hash_;
+}
+
+void Node::trace(const TaskRecord& receiver, const Message& m) {
+  std::lock_guard lock(trace_mu_);
+  std::uint64_t& h = trace_hash_;
+  fold(h, m.time.count());
+  fold(h, receiver.id);
+  fold(h, m.source);
+  fold(h, m.port);
+  fold(h, m.payload.count);
+  for (float v : m.numbers()) fold(h, v);
+}
+
+}  // namespace symb::os

@@ -1,0 +1,138 @@
+// Node: one robot's operating-system instance (the paper's TaskManager, one per robot instead of
+// a process-wide singleton). It owns the robot's tasks and their hooks, its SysLog and its random
+// streams, and reads time from the clock of the executor it runs on. Every operation may be
+// called at runtime from any task's handler or from outside (a shell, a scenario, a test), on any
+// thread; tasks and hooks are named by handles, so rewiring never leaves a dangling reference.
+// Hooks join tasks of the same node.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "symb/kernel/executor.hpp"
+#include "symb/kernel/random_stream.hpp"
+#include "symb/kernel/result.hpp"
+#include "symb/os/hook.hpp"
+#include "symb/os/ids.hpp"
+#include "symb/os/message.hpp"
+#include "symb/os/syslog.hpp"
+#include "symb/os/task.hpp"
+#include "symb/os/task_type_registry.hpp"
+
+namespace symb::os {
+
+namespace detail {
+struct TaskRecord;
+struct TaskSlot {
+  std::unique_ptr<TaskRecord> record;
+  std::uint32_t generation = 0;
+};
+}  // namespace detail
+
+struct NodeConfig {
+  std::string name = "node";
+  std::uint64_t seed = 0;
+  std::size_t log_capacity = 1024;
+  // Where create-by-type-name looks; may be null (then only tasks made in code).
+  const TaskTypeRegistry* types = nullptr;
+};
+
+class Node {
+ public:
+  // `executor` must outlive the node.
+  Node(kernel::Executor& executor, NodeConfig config);
+  // Deletes every task and waits until each has stopped.
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  const std::string& name() const { return config_.name; }
+  std::uint64_t seed() const { return config_.seed; }
+  kernel::Time now() const { return executor_.clock().now(); }
+  SysLog& log() { return log_; }
+  const TaskTypeRegistry* types() const { return config_.types; }
+  // A fresh stream for `purpose`, the same for the same node seed and purpose.
+  kernel::RandomStream random_stream(std::string_view purpose) const;
+
+  // --- tasks -------------------------------------------------------------------------------------
+  kernel::Result<TaskId> create(std::string name, std::unique_ptr<Task> task, TaskOptions options = {});
+  // Creates a task of a registered type; `params` overrides the type's defaults.
+  kernel::Result<TaskId> create(std::string_view type, std::string name, std::span<const ParamAssignment> params,
+                                std::optional<TaskOptions> options = std::nullopt);
+  kernel::Status start(TaskId id);
+  kernel::Status suspend(TaskId id);
+  kernel::Status resume(TaskId id);
+  // Unhooks the task from everything, then stops it (its on_stop runs on its own context) and frees
+  // it. Messages still in its queue are counted as discarded. Safe from the task's own handler.
+  kernel::Status remove(TaskId id);
+  kernel::Status set_priority(TaskId id, int priority);
+  kernel::Status set_period(TaskId id, kernel::Duration period);
+  // Checks `value` against the task type's schema now; the task applies it on its own context.
+  kernel::Status set_parameter(TaskId id, std::string_view param, std::string_view value);
+  // Current parameter values of a task made from a registered type.
+  kernel::Result<ParamSet> parameters(TaskId id) const;
+
+  std::optional<TaskId> find(std::string_view task_name) const;
+  std::optional<TaskInfo> info(TaskId id) const;
+  std::vector<TaskInfo> tasks() const;
+  std::size_t task_count() const;
+
+  // --- hooks -------------------------------------------------------------------------------------
+  // From now on, every send of `sender` also reaches `receiver`'s queue.
+  kernel::Result<HookId> hook(TaskId sender, TaskId receiver, HookOptions options = {});
+  kernel::Status unhook(HookId id);
+  kernel::Status set_hook_enabled(HookId id, bool enabled);
+  std::vector<HookInfo> hooks() const;
+  // Blocks delivery into `receiver` through hooks of priority < `level` for [now, now + window).
+  kernel::Status suppress(TaskId receiver, int level, kernel::Duration window);
+  // Blocks `sender`'s output to `receiver` (to every receiver when `receiver` is invalid) for
+  // [now, now + window).
+  kernel::Status inhibit(TaskId sender, TaskId receiver, kernel::Duration window);
+
+  // Puts a message straight into a task's queue, as from outside any task (source invalid).
+  kernel::Status post(TaskId receiver, const Message& message, QueuePolicy policy = QueuePolicy::kRefuse);
+
+  // --- accounting --------------------------------------------------------------------------------
+  // Traffic into every task this node ever had, deleted ones included.
+  TrafficCounters traffic() const;
+  // Messages now waiting in queues.
+  std::uint64_t queued() const;
+  // When on, every delivery is folded into a 64-bit hash (time, receiver, source, port, payload
+  // bits): equal hashes mean equal message traces.
+  void set_tracing(bool on);
+  std::uint64_t trace_hash() const;
+
+ private:
+  friend struct detail::TaskRecord;
+  friend class Task;
+
+  detail::TaskRecord* lookup_locked(TaskId id) const;
+  kernel::Status no_task(TaskId id) const;
+  void start_locked(detail::TaskRecord& r);
+  void release(detail::TaskRecord& r);
+  void send_from(detail::TaskRecord& from, const Message& m);
+  void trace(const detail::TaskRecord& receiver, const Message& m);
+
+  kernel::Executor& executor_;
+  NodeConfig config_;
+  SysLog log_;
+  mutable std::mutex mu_;  // structure: the task table, hook lists' membership, states
+  std::condition_variable released_cv_;
+  std::vector<detail::TaskSlot> slots_;
+  std::vector<std::uint32_t> free_slots_;
+  std::size_t live_records_ = 0;
+  std::uint32_t hook_serial_ = 0;
+  TrafficCounters retired_;  // traffic of deleted tasks
+  std::atomic<bool> tracing_{false};
+  mutable std::mutex trace_mu_;
+  std::uint64_t trace_hash_ = 0xcbf29ce484222325ULL;
+};
+
+}  // namespace symb::os

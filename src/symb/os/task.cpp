@@ -1,0 +1,29 @@
+#include "symb/os/task.hpp"
+
+#include "symb/os/node.hpp"
+#include "symb/os/task_record.hpp"
+
+namespace symb::os {
+
+kernel::Status Task::on_parameter(std::string_view name, const ParamValue& /*value*/) {
+  return kernel::Error{"task does not accept a new '" + std::string(name) + "' while it runs"};
+}
+
+Node& Task::node() const { return record_->node; }
+TaskId Task::id() const { return record_->id; }
+const std::string& Task::name() const { return record_->name; }
+kernel::Time Task::now() const { return record_->node.now(); }
+kernel::RandomStream& Task::random() { return record_->random; }
+
+void Task::send(Port port, const Payload& payload) {
+  Message m;
+  m.source = record_->id;
+  m.port = port;
+  m.time = record_->node.now();
+  m.payload = payload;
+  record_->node.send_from(*record_, m);
+}
+
+void Task::log(LogLevel level, std::string_view text) const { record_->node.log().write(level, record_->name, text); }
+
+}  // namespace symb::os

@@ -1,0 +1,102 @@
+// Task: one reactive unit of a robot's control system (the paper's Task class). A task never
+// blocks or sleeps: its node's executor calls its handlers (start, message, tick, stop) one at a
+// time, on the task's own execution context, and the task answers by sending messages to the
+// tasks hooked to it. State: created -> running <-> suspended -> deleted, or faulted when a
+// handler throws (that task only; the rest of the node goes on).
+#pragma once
+
+#include <cstdint>
+#include <initializer_list>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "symb/kernel/random_stream.hpp"
+#include "symb/kernel/result.hpp"
+#include "symb/kernel/time.hpp"
+#include "symb/os/ids.hpp"
+#include "symb/os/message.hpp"
+#include "symb/os/param.hpp"
+#include "symb/os/syslog.hpp"
+
+namespace symb::os {
+
+class Node;
+namespace detail {
+struct TaskRecord;
+}
+
+enum class TaskState : std::uint8_t { kCreated, kRunning, kSuspended, kFaulted, kDeleted };
+const char* to_string(TaskState s);
+
+struct TaskOptions {
+  int priority = 0;
+  kernel::Duration period{0};  // 0: never ticked
+  std::size_t queue_capacity = 16;
+  bool autostart = true;       // false: stays `created` until Node::start()
+};
+
+// Message accounting for one receiver. For every receiver, at every moment:
+// attempted == delivered + dropped() + queued.
+struct TrafficCounters {
+  std::uint64_t attempted = 0;    // messages offered to the receiver's queue
+  std::uint64_t delivered = 0;    // handed to its on_message()
+  std::uint64_t overwritten = 0;  // pushed out of a full queue by a newer one (keep-newest hooks)
+  std::uint64_t refused = 0;      // refused by a full queue (refuse hooks)
+  std::uint64_t suppressed = 0;   // dropped by a suppression window
+  std::uint64_t inhibited = 0;    // dropped by an inhibition window
+  std::uint64_t discarded = 0;    // still queued when the task was deleted
+
+  std::uint64_t dropped() const { return overwritten + refused + suppressed + inhibited + discarded; }
+  TrafficCounters& operator+=(const TrafficCounters& o);
+};
+
+struct TaskInfo {
+  TaskId id;
+  std::string name;
+  std::string type;  // the registered type's name, or "-" for a task made in code
+  TaskState state = TaskState::kCreated;
+  int priority = 0;
+  kernel::Duration period{0};
+  std::size_t queue_depth = 0;
+  std::size_t queue_capacity = 0;
+  std::uint64_t sent = 0;  // send() calls
+  TrafficCounters traffic;
+};
+
+class Task {
+ public:
+  Task() = default;
+  virtual ~Task() = default;
+  Task(const Task&) = delete;
+  Task& operator=(const Task&) = delete;
+
+ protected:
+  virtual void on_start() {}
+  virtual void on_message(const Message& /*message*/) {}
+  virtual void on_tick() {}
+  virtual void on_stop() {}
+  // A parameter changed at runtime (shell, scenario, genome). Runs on the task's own context; the
+  // value has passed the schema's type and range check. The default refuses every change.
+  virtual kernel::Status on_parameter(std::string_view name, const ParamValue& value);
+
+  // Services for handlers; valid from on_start() until on_stop() returns.
+  Node& node() const;
+  TaskId id() const;
+  const std::string& name() const;
+  kernel::Time now() const;
+  // Sends to every task hooked to this one. Timestamped with the node clock.
+  void send(Port port, const Payload& payload);
+  void send(Port port, std::span<const float> values) { send(port, Payload(values)); }
+  void send(Port port, std::initializer_list<float> values) { send(port, Payload(values)); }
+  void log(LogLevel level, std::string_view text) const;
+  // This task's own random stream, derived from the node seed and the task's name.
+  kernel::RandomStream& random();
+
+ private:
+  friend class Node;
+  friend struct detail::TaskRecord;
+  detail::TaskRecord* record_ = nullptr;
+};
+
+}  // namespace symb::os

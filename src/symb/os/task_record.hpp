@@ -1,0 +1,91 @@
+// TaskRecord: the node's private bookkeeping for one task (not part of the public API): its
+// queue, hooks, counters and state, and its side of the executor contract. Kept in its own header
+// only so that node.cpp and task.cpp share one definition.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "symb/kernel/executor.hpp"
+#include "symb/kernel/optional_mutex.hpp"
+#include "symb/kernel/random_stream.hpp"
+#include "symb/kernel/ring_buffer.hpp"
+#include "symb/os/hook.hpp"
+#include "symb/os/message.hpp"
+#include "symb/os/task.hpp"
+#include "symb/os/task_type_registry.hpp"
+
+namespace symb::os::detail {
+
+struct TaskRecord;
+
+// One entry of a sender's hook list. The receiver pointer is safe: a task is unhooked from every
+// sender, under that sender's out_mu, before it can be freed.
+struct Hook {
+  std::uint32_t serial = 0;
+  std::int32_t priority = 0;
+  std::int32_t port = -1;
+  QueuePolicy policy = QueuePolicy::kKeepNewest;
+  bool enabled = true;
+  TaskRecord* receiver = nullptr;
+  kernel::Duration suppress_window{0};
+  kernel::Time inhibited_until{0};
+};
+
+// A suppression in force at a receiver: hooks below `level` are blocked until `until`.
+struct SuppressionWindow {
+  std::int32_t level = 0;
+  kernel::Time until{0};
+};
+
+// Parameter state of a task made from a registered type.
+struct ParamState {
+  const TaskType* type = nullptr;
+  ParamSet values;
+  std::vector<std::pair<std::string, ParamValue>> pending;  // applied on the task's context
+};
+
+struct TaskRecord final : kernel::Activity {
+  TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> t, const TaskOptions& o, bool concurrent);
+
+  void on_activity_attached(kernel::ActivitySlot& s) override;
+  void on_activity_start() override;
+  void on_activity_input() override;
+  void on_activity_tick() override;
+  void on_activity_stop() override;
+  void on_activity_released() override;
+
+  // Offers `m` to this task's queue; returns the slot to wake (outside any lock) or null.
+  kernel::ActivitySlot* offer(const Message& m, int priority, QueuePolicy policy, kernel::Duration suppress_window);
+  void fault(const char* where, const char* what);
+  void apply_pending_parameters();
+
+  Node& node;
+  const TaskId id;
+  const std::string name;
+  std::unique_ptr<Task> task;
+  std::atomic<TaskState> state{TaskState::kCreated};
+  std::atomic<int> priority;
+  std::atomic<std::int64_t> period_ns;
+  kernel::ActivitySlot* slot = nullptr;  // set under in_mu
+  std::unique_ptr<ParamState> params;
+  kernel::RandomStream random;
+
+  // Output side: the hooks of this task as a sender.
+  kernel::OptionalMutex out_mu;
+  std::vector<Hook> hooks;
+  std::atomic<std::uint64_t> sent{0};  // written by the task's own context only
+
+  // Input side, under in_mu.
+  kernel::OptionalMutex in_mu;
+  kernel::RingBuffer<Message> queue;
+  TrafficCounters traffic;  // `delivered` is mirrored from `delivered` below when read
+  std::array<SuppressionWindow, 2> suppression{};
+  bool wake_pending = false;
+  std::atomic<std::uint64_t> delivered{0};  // written by the task's own context only
+};
+
+}  // namespace symb::os::detail
