@@ -217,6 +217,15 @@ Node::~Node() {
   released_cv_.wait(lock, [&] { return live_records_ == 0; });
 }
 
+void Node::wait_released() {
+  std::unique_lock lock(mu_);
+  released_cv_.wait(lock, [&] {
+    return std::none_of(slots_.begin(), slots_.end(), [](const detail::TaskSlot& s) {
+      return s.record && s.record->state.load() == TaskState::kDeleted;
+    });
+  });
+}
+
 kernel::RandomStream Node::random_stream(std::string_view purpose) const {
   return kernel::RandomStream(config_.seed, fnv1a(purpose) ^ 0x5bd1e995ULL);
 }

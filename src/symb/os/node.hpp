@@ -83,6 +83,9 @@ class Node {
   std::optional<TaskInfo> info(TaskId id) const;
   std::vector<TaskInfo> tasks() const;
   std::size_t task_count() const;
+  // Waits until every deleted task has stopped and been freed (under the thread executor a
+  // deletion completes on the task's own thread, after remove() returned).
+  void wait_released();
 
   // --- hooks -------------------------------------------------------------------------------------
   // From now on, every send of `sender` also reaches `receiver`'s queue.

@@ -221,22 +221,25 @@ bool is_valid_name(std::string_view name) {
 }
 
 std::string closest_name(std::string_view name, std::span<const std::string_view> candidates) {
-  // Levenshtein distance; a hint only when at most a third of the letters differ.
+  // Edit distance counting a swap of two neighbours as one edit (typing errors are mostly
+  // those); a hint only when at most about a third of the letters differ.
   std::string best;
-  std::size_t best_d = name.size() / 3 + 1;
-  std::vector<std::size_t> prev, cur;
+  std::size_t best_d = std::max<std::size_t>(1, name.size() / 3) + 1;
   for (std::string_view c : candidates) {
-    prev.resize(c.size() + 1);
-    cur.resize(c.size() + 1);
-    for (std::size_t j = 0; j <= c.size(); ++j) prev[j] = j;
+    const std::size_t w = c.size() + 1;
+    std::vector<std::size_t> d((name.size() + 1) * w);
+    for (std::size_t j = 0; j < w; ++j) d[j] = j;
     for (std::size_t i = 1; i <= name.size(); ++i) {
-      cur[0] = i;
-      for (std::size_t j = 1; j <= c.size(); ++j)
-        cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (name[i - 1] == c[j - 1] ? 0 : 1)});
-      std::swap(prev, cur);
+      d[i * w] = i;
+      for (std::size_t j = 1; j <= c.size(); ++j) {
+        std::size_t v = std::min({d[(i - 1) * w + j] + 1, d[i * w + j - 1] + 1,
+                                  d[(i - 1) * w + j - 1] + (name[i - 1] == c[j - 1] ? 0 : 1)});
+        if (i > 1 && j > 1 && name[i - 1] == c[j - 2] && name[i - 2] == c[j - 1]) v = std::min(v, d[(i - 2) * w + j - 2] + 1);
+        d[i * w + j] = v;
+      }
     }
-    if (prev[c.size()] < best_d) {
-      best_d = prev[c.size()];
+    if (d.back() < best_d) {
+      best_d = d.back();
       best = std::string(c);
     }
   }

@@ -1,0 +1,72 @@
+#include "symb/kernel/bounded_queue.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+namespace symb::kernel {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(BoundedQueue, PoliciesWhenFull) {
+  BoundedQueue<int> q(2);
+  EXPECT_EQ(q.push(1, FullPolicy::kRefuse), PushResult::kPushed);
+  EXPECT_EQ(q.push(2, FullPolicy::kRefuse), PushResult::kPushed);
+  EXPECT_EQ(q.push(3, FullPolicy::kRefuse), PushResult::kRefused);
+  EXPECT_EQ(q.push(4, FullPolicy::kKeepNewest), PushResult::kOverwrote);
+  EXPECT_EQ(q.try_pop(), 2);
+  EXPECT_EQ(q.try_pop(), 4);
+  EXPECT_EQ(q.try_pop(), std::nullopt);
+}
+
+TEST(BoundedQueue, PopTimesOutWhenEmpty) {
+  BoundedQueue<int> q(1);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(q.pop_for(20ms), std::nullopt);
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, 20ms);
+}
+
+TEST(BoundedQueue, PushTimesOutWhenFull) {
+  BoundedQueue<int> q(1);
+  ASSERT_TRUE(q.push_for(1, 1ms));
+  EXPECT_FALSE(q.push_for(2, 10ms));
+}
+
+TEST(BoundedQueue, BlockedPopWakesOnPush) {
+  BoundedQueue<int> q(1);
+  std::thread producer([&] {
+    std::this_thread::sleep_for(10ms);
+    q.push(42, FullPolicy::kRefuse);
+  });
+  EXPECT_EQ(q.pop_for(5s), 42);
+  producer.join();
+}
+
+TEST(BoundedQueue, CloseWakesWaiters) {
+  BoundedQueue<int> q(1);
+  std::thread waiter([&] { EXPECT_EQ(q.pop_for(10s), std::nullopt); });
+  std::this_thread::sleep_for(10ms);
+  q.close();
+  waiter.join();
+}
+
+TEST(BoundedQueue, EveryItemCrossesThreadsExactlyOnce) {
+  BoundedQueue<int> q(8);
+  constexpr int kItems = 20000;
+  long long sum = 0;
+  std::thread consumer([&] {
+    for (int i = 0; i < kItems; ++i) {
+      auto v = q.pop_for(10s);
+      ASSERT_TRUE(v.has_value());
+      sum += *v;
+    }
+  });
+  for (int i = 1; i <= kItems; ++i) ASSERT_TRUE(q.push_for(i, 10s));
+  consumer.join();
+  EXPECT_EQ(sum, static_cast<long long>(kItems) * (kItems + 1) / 2);
+}
+
+}  // namespace
+}  // namespace symb::kernel

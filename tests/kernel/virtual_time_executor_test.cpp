@@ -1,0 +1,133 @@
+#include "symb/kernel/virtual_time_executor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <deque>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace symb::kernel {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Records every call with its virtual time, so tests can check exact orders and instants.
+struct Recorder final : Activity {
+  Recorder(std::string n, VirtualTimeExecutor& e, std::vector<std::string>& l) : name(std::move(n)), exec(e), log(l) {}
+  void on_activity_attached(ActivitySlot& s) override { slot = &s; }
+  void on_activity_start() override { note("start"); }
+  void on_activity_input() override {
+    note("input");
+    if (on_input) on_input();
+  }
+  void on_activity_tick() override {
+    note("tick");
+    if (on_tick) on_tick();
+  }
+  void on_activity_stop() override { note("stop"); }
+  void on_activity_released() override { note("released"); }
+  void note(const char* what) { log.push_back(name + ":" + what + "@" + std::to_string(exec.now().count() / 1000000)); }
+
+  std::string name;
+  VirtualTimeExecutor& exec;
+  std::vector<std::string>& log;
+  ActivitySlot* slot = nullptr;
+  std::function<void()> on_input, on_tick;
+};
+
+// The executor is declared last so it is destroyed first, while its activities still exist.
+struct VirtualTimeExecutorTest : ::testing::Test {
+  std::vector<std::string> log;
+  std::deque<Recorder> recorders;
+  VirtualTimeExecutor ex;
+  Recorder& make(const std::string& name) { return recorders.emplace_back(name, ex, log); }
+};
+
+TEST_F(VirtualTimeExecutorTest, TicksAtExactPeriods) {
+  Recorder& a = make("a");
+  ex.attach(a, {0, 30ms, "a"});
+  ex.run_until(Time{100ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:tick@30", "a:tick@60", "a:tick@90"}));
+  EXPECT_EQ(ex.now(), Time{100ms});
+}
+
+TEST_F(VirtualTimeExecutorTest, HigherPriorityFirstAtTheSameInstant) {
+  Recorder& lo = make("lo");
+  Recorder& hi = make("hi");
+  ex.attach(lo, {1, 10ms, "lo"});
+  ex.attach(hi, {5, 10ms, "hi"});
+  ex.run_until(Time{10ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"hi:start@0", "lo:start@0", "hi:tick@10", "lo:tick@10"}));
+}
+
+TEST_F(VirtualTimeExecutorTest, ManyWakesOneInput) {
+  Recorder& a = make("a");
+  ex.attach(a, {});
+  ex.run_until_idle();
+  a.slot->wake();
+  a.slot->wake();
+  a.slot->wake();
+  ex.run_until_idle();
+  EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:input@0"}));
+}
+
+TEST_F(VirtualTimeExecutorTest, SuspendStopsTicksAndInputResumeRestartsThem) {
+  Recorder& a = make("a");
+  ex.attach(a, {0, 10ms, "a"});
+  ex.run_until(Time{15ms});
+  a.slot->suspend();
+  a.slot->wake();
+  ex.run_until(Time{45ms});
+  a.slot->resume();
+  ex.run_until(Time{56ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:tick@10", "a:input@45", "a:tick@55"}));
+}
+
+TEST_F(VirtualTimeExecutorTest, DetachFromOwnHandlerStopsAfterIt) {
+  Recorder& a = make("a");
+  a.on_tick = [&] { a.slot->detach(); };
+  ex.attach(a, {0, 10ms, "a"});
+  ex.run_until(Time{50ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:tick@10", "a:stop@10", "a:released@10"}));
+  EXPECT_EQ(ex.pending_events(), 0u);
+}
+
+TEST_F(VirtualTimeExecutorTest, DetachOutsideRunIsImmediate) {
+  Recorder& a = make("a");
+  ex.attach(a, {0, 10ms, "a"});
+  ex.run_until(Time{0ms});
+  a.slot->detach();
+  EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:stop@0", "a:released@0"}));
+  ex.run_until(Time{100ms});
+  EXPECT_EQ(log.size(), 3u);  // the queued tick of the detached activity is stale
+}
+
+TEST_F(VirtualTimeExecutorTest, NeverStartedActivityIsReleasedWithoutStop) {
+  Recorder& a = make("a");
+  ex.attach(a, {});
+  a.slot->detach();
+  EXPECT_EQ(log, (std::vector<std::string>{"a:released@0"}));
+}
+
+TEST_F(VirtualTimeExecutorTest, SetPeriodRestartsChain) {
+  Recorder& a = make("a");
+  ex.attach(a, {0, 10ms, "a"});
+  ex.run_until(Time{12ms});
+  a.slot->set_period(25ms);
+  ex.run_until(Time{70ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:tick@10", "a:tick@37", "a:tick@62"}));
+}
+
+TEST_F(VirtualTimeExecutorTest, StopReturnsEarly) {
+  Recorder& a = make("a");
+  a.on_tick = [&] {
+    if (ex.now() == Time{20ms}) ex.stop();
+  };
+  ex.attach(a, {0, 10ms, "a"});
+  ex.run_until(Time{100ms});
+  EXPECT_EQ(ex.now(), Time{20ms});
+}
+
+}  // namespace
+}  // namespace symb::kernel
