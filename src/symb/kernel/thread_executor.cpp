@@ -70,12 +70,14 @@ class ThreadExecutor::Worker final : public ActivitySlot {
 
   void loop() {
     if (!name_.empty()) pthread_setname_np(pthread_self(), name_.substr(0, 15).c_str());
-    apply_priority(priority_);
     const Clock& clock = exec_.clock_;
     std::unique_lock lock(mu_);
+    const int first_priority = priority_;
+    priority_dirty_ = false;
     Time next_tick = period_.count() > 0 ? clock.now() + period_ : kTimeNever;
     bool stop = detach_;
     lock.unlock();
+    apply_priority(first_priority);
     if (!stop) activity_.on_activity_start();
     lock.lock();
     while (!detach_) {
@@ -89,7 +91,7 @@ class ThreadExecutor::Worker final : public ActivitySlot {
       if (detach_) break;
       if (priority_dirty_) {
         priority_dirty_ = false;
-        apply_priority(priority_);
+        apply_priority(priority_);  // only this thread may change its own scheduling
       }
       const Time now = clock.now();
       if (resumed_ || period_dirty_) {

@@ -412,10 +412,14 @@ void Node::release(TaskRecord& r) {
     dying = std::move(s.record);
     ++s.generation;
     free_slots_.push_back(r.id.index);
-    --live_records_;
   }
+  // The task object is destroyed outside the lock (its destructor may do anything) but before
+  // the count drops, so the node's destructor cannot finish while a task is still being torn down.
+  dying.reset();
+  std::lock_guard lock(mu_);
+  --live_records_;
+  // Notified under the lock: once the waiter sees the count it may destroy the condition variable.
   released_cv_.notify_all();
-  // The task object is destroyed outside the lock: its destructor may do anything.
 }
 
 Status Node::set_priority(TaskId id, int priority) {
