@@ -1,9 +1,9 @@
 #include "symb/kernel/bounded_queue.hpp"
 
-#include <gtest/gtest.h>
-
 #include <chrono>
 #include <thread>
+
+#include <gtest/gtest.h>
 
 namespace symb::kernel {
 namespace {

@@ -1,8 +1,8 @@
 #include "symb/kernel/random_stream.hpp"
 
-#include <gtest/gtest.h>
-
 #include <cmath>
+
+#include <gtest/gtest.h>
 
 namespace symb::kernel {
 namespace {

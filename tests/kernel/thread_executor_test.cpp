@@ -1,10 +1,10 @@
 #include "symb/kernel/thread_executor.hpp"
 
-#include <gtest/gtest.h>
-
 #include <atomic>
 #include <chrono>
 #include <thread>
+
+#include <gtest/gtest.h>
 
 namespace symb::kernel {
 namespace {

@@ -1,11 +1,11 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 
-#include <gtest/gtest.h>
-
 #include <deque>
 #include <functional>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 namespace symb::kernel {
 namespace {

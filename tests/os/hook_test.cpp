@@ -2,6 +2,7 @@
 
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
+
 #include "test_tasks.hpp"
 
 namespace symb::os {
@@ -191,14 +192,14 @@ TEST_F(Hooks, SuppressionWindowIsExactInVirtualTime) {
     s.fire(0, {v});
     if (arrives) expected.emplace_back(ms, v);
   };
-  at(0, low, 1, true);      // nothing suppresses yet
-  at(10, high, 2, true);    // opens [10, 110)
-  at(10, low, 3, false);    // same instant: suppressed
-  at(50, other, 4, true);   // equal priority is not suppressed
-  at(109, low, 5, false);   // still inside the window
-  at(110, low, 6, true);    // window closed at 110 exactly
-  at(150, high, 7, true);   // reopens [150, 250)
-  at(200, high, 8, true);   // extends to [200, 300)
+  at(0, low, 1, true);     // nothing suppresses yet
+  at(10, high, 2, true);   // opens [10, 110)
+  at(10, low, 3, false);   // same instant: suppressed
+  at(50, other, 4, true);  // equal priority is not suppressed
+  at(109, low, 5, false);  // still inside the window
+  at(110, low, 6, true);   // window closed at 110 exactly
+  at(150, high, 7, true);  // reopens [150, 250)
+  at(200, high, 8, true);  // extends to [200, 300)
   at(299, low, 9, false);
   at(300, low, 10, true);
   ex.run_until_idle();
@@ -241,13 +242,13 @@ TEST_F(Hooks, InhibitionWindowIsExactInVirtualTime) {
   ASSERT_TRUE(node.inhibit(s.id, a, 30ms));  // s -> a blocked for [10, 40)
   s.fire(0, {1});                            // b only
   ex.run_until(Time{39ms});
-  s.fire(0, {2});                            // b only
+  s.fire(0, {2});  // b only
   ex.run_until(Time{40ms});
-  s.fire(0, {3});                            // both
+  s.fire(0, {3});                                  // both
   ASSERT_TRUE(node.inhibit(s.id, TaskId{}, 5ms));  // every output blocked for [40, 45)
-  s.fire(0, {4});                            // none
+  s.fire(0, {4});                                  // none
   ex.run_until(Time{45ms});
-  s.fire(0, {5});                            // both
+  s.fire(0, {5});  // both
   ex.run_until_idle();
   auto values = [](Collector* c) {
     std::vector<float> v;

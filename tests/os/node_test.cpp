@@ -4,6 +4,7 @@
 
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
+
 #include "test_tasks.hpp"
 
 namespace symb::os {

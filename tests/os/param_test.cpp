@@ -46,7 +46,8 @@ TEST(Param, RangeErrorsSayTheRange) {
 
 TEST(Param, FormatReadsBackToTheSameValue) {
   const std::vector<std::pair<ParamSpec, ParamValue>> cases = {
-      {real_spec(), 0.1}, {real_spec(), -1.0 / 3.0},
+      {real_spec(), 0.1},
+      {real_spec(), -1.0 / 3.0},
       {{"d", ParamType::kDuration, kernel::Duration{0}, {}, {}, ""}, kernel::Duration{1234567}},
       {{"d", ParamType::kDuration, kernel::Duration{0}, {}, {}, ""}, kernel::Duration{30ms}},
       {{"n", ParamType::kInt, std::int64_t{0}, {}, {}, ""}, std::int64_t{-7}},
@@ -76,9 +77,9 @@ TEST(Param, AssignmentErrorsGiveTheColumn) {
     const char* text;
     const char* column;
   };
-  for (const auto& c : {Case{"gain", "column 1"}, Case{"a=1 b", "column 5"}, Case{"a=1 9x=2", "column 5"},
-                        Case{"a=\"open", "column 3"}, Case{"a=\"x\"y", "column 6"}, Case{"a=b\"c", "column 4"},
-                        Case{"a=\"\\q\"", "column 4"}}) {
+  for (const auto& c :
+       {Case{"gain", "column 1"}, Case{"a=1 b", "column 5"}, Case{"a=1 9x=2", "column 5"}, Case{"a=\"open", "column 3"},
+        Case{"a=\"x\"y", "column 6"}, Case{"a=b\"c", "column 4"}, Case{"a=\"\\q\"", "column 4"}}) {
     auto r = parse_param_assignments(c.text);
     ASSERT_FALSE(r) << c.text;
     EXPECT_NE(r.error().find(c.column), std::string::npos) << c.text << " -> " << r.error();

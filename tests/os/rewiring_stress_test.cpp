@@ -3,16 +3,17 @@
 // times, from outside and from a task's own handler. Nothing may crash or deadlock (TSan runs
 // this too), and the accounting must close exactly: every message offered to a queue was
 // delivered or counted as dropped by its policy.
-#include <gtest/gtest.h>
-
 #include <atomic>
 #include <chrono>
 #include <future>
 #include <thread>
 
+#include <gtest/gtest.h>
+
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/os/node.hpp"
+
 #include "test_tasks.hpp"
 
 namespace symb::os {
@@ -115,8 +116,9 @@ TEST(RewiringUnderLoad, TenThousandOperationsAccountingClosesExactly) {
       while (ops < 10000) {
         switch (rnd.below(8)) {
           case 0: {  // create, with a hook in each direction
-            auto id = node.create("t" + std::to_string(serial++), std::make_unique<Worker>(handled),
-                                  {.priority = static_cast<int>(rnd.below(5)), .period = kTempPeriod, .queue_capacity = 8});
+            auto id =
+                node.create("t" + std::to_string(serial++), std::make_unique<Worker>(handled),
+                            {.priority = static_cast<int>(rnd.below(5)), .period = kTempPeriod, .queue_capacity = 8});
             if (!id) break;
             temps.push_back(*id);
             if (auto h = node.hook(workers[rnd.below(8)], *id)) hooks.push_back(*h);

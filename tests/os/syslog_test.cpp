@@ -1,8 +1,8 @@
 #include "symb/os/syslog.hpp"
 
-#include <gtest/gtest.h>
-
 #include <sstream>
+
+#include <gtest/gtest.h>
 
 namespace symb::os {
 namespace {

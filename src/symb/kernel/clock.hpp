@@ -22,9 +22,7 @@ class Clock {
 class WallClock final : public Clock {
  public:
   WallClock() : epoch_(std::chrono::steady_clock::now()) {}
-  Time now() const override {
-    return std::chrono::duration_cast<Time>(std::chrono::steady_clock::now() - epoch_);
-  }
+  Time now() const override { return std::chrono::duration_cast<Time>(std::chrono::steady_clock::now() - epoch_); }
   // The steady_clock instant this clock counts from, for timed waits on real primitives.
   std::chrono::steady_clock::time_point epoch() const { return epoch_; }
 

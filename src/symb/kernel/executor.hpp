@@ -13,9 +13,9 @@
 namespace symb::kernel {
 
 struct ActivityOptions {
-  int priority = 0;      // higher runs first (virtual time) or is favoured by the OS (threads)
-  Duration period{0};    // 0: never ticked
-  std::string name;      // for thread names and diagnostics
+  int priority = 0;    // higher runs first (virtual time) or is favoured by the OS (threads)
+  Duration period{0};  // 0: never ticked
+  std::string name;    // for thread names and diagnostics
 };
 
 // Implemented by whatever an executor runs. Every call for one activity happens on that

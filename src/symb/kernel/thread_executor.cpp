@@ -13,7 +13,9 @@ class ThreadExecutor::Worker final : public ActivitySlot {
   Worker(ThreadExecutor& exec, Activity& activity, const ActivityOptions& o)
       : exec_(exec), activity_(activity), priority_(o.priority), period_(o.period), name_(o.name) {}
 
-  void start() { thread_ = std::thread([this] { loop(); }); }
+  void start() {
+    thread_ = std::thread([this] { loop(); });
+  }
   void join() {
     if (thread_.joinable()) thread_.join();
   }

@@ -91,7 +91,7 @@ ActivitySlot& VirtualTimeExecutor::attach(Activity& activity, const ActivityOpti
 }
 
 void VirtualTimeExecutor::schedule(Slot& s, EventKind kind, Time t) {
-  events_.push(Event{t, s.priority, seq_++, &s, s.generation, s.tick_generation, kind});
+  events_.push(Event{t, seq_++, &s, s.priority, s.generation, s.tick_generation, kind});
 }
 
 std::uint64_t VirtualTimeExecutor::run_until(Time until) {

@@ -49,7 +49,7 @@ struct Payload {
 };
 
 struct Message {
-  TaskId source;        // invalid for messages posted from outside any task
+  TaskId source;  // invalid for messages posted from outside any task
   Port port = 0;
   kernel::Time time{0};  // the sender's node clock at send
   Payload payload;

@@ -81,19 +81,20 @@ void TaskRecord::on_activity_attached(kernel::ActivitySlot& s) {
 
 void TaskRecord::fault(const char* where, const char* what) {
   TaskState s = state.load();
-  while ((s == TaskState::kRunning || s == TaskState::kSuspended) && !state.compare_exchange_weak(s, TaskState::kFaulted)) {
+  while ((s == TaskState::kRunning || s == TaskState::kSuspended) &&
+         !state.compare_exchange_weak(s, TaskState::kFaulted)) {
   }
   node.log().error(name, std::string("faulted in ") + where + ": " + what);
   slot->suspend();
 }
 
-#define SYMB_GUARDED(where, call)                                  \
-  try {                                                            \
-    call;                                                          \
-  } catch (const std::exception& e) {                              \
-    fault(where, e.what());                                        \
-  } catch (...) {                                                  \
-    fault(where, "an exception that is not a std::exception");     \
+#define SYMB_GUARDED(where, call)                              \
+  try {                                                        \
+    call;                                                      \
+  } catch (const std::exception& e) {                          \
+    fault(where, e.what());                                    \
+  } catch (...) {                                              \
+    fault(where, "an exception that is not a std::exception"); \
   }
 
 void TaskRecord::on_activity_start() {
@@ -102,10 +103,13 @@ void TaskRecord::on_activity_start() {
 }
 
 void TaskRecord::apply_pending_parameters() {
+  // `params` is set before the task starts and never replaced, so this unlocked test is safe
+  // and spares the common case (no parameters) a lock per batch.
+  if (!params) return;
   std::vector<std::pair<std::string, ParamValue>> pending;
   {
     std::lock_guard lock(in_mu);
-    if (!params || params->pending.empty()) return;
+    if (params->pending.empty()) return;
     pending.swap(params->pending);
   }
   for (auto& [n, v] : pending) {
@@ -264,8 +268,8 @@ Result<TaskId> Node::create(std::string name, std::unique_ptr<Task> task, TaskOp
     }
     auto& slot = slots_[id.index];
     id.generation = slot.generation;
-    slot.record = std::make_unique<TaskRecord>(*this, id, std::move(name), std::move(task), options,
-                                               executor_.concurrent());
+    slot.record =
+        std::make_unique<TaskRecord>(*this, id, std::move(name), std::move(task), options, executor_.concurrent());
     ++live_records_;
     if (options.autostart) start_locked(*slot.record);
   }
@@ -391,8 +395,10 @@ Status Node::remove(TaskId id) {
     if (before == TaskState::kCreated) never_started = r;
   }
   // Outside the node lock: stopping runs the task's on_stop, which may call back into the node.
-  if (never_started != nullptr) release(*never_started);
-  else if (slot != nullptr) slot->detach();
+  if (never_started != nullptr)
+    release(*never_started);
+  else if (slot != nullptr)
+    slot->detach();
   return {};
 }
 
@@ -552,7 +558,8 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   {
     std::lock_guard out(s->out_mu);
     // Higher-priority hooks deliver first; equal priorities keep hook order.
-    auto at = std::find_if(s->hooks.begin(), s->hooks.end(), [&](const detail::Hook& x) { return x.priority < h.priority; });
+    auto at =
+        std::find_if(s->hooks.begin(), s->hooks.end(), [&](const detail::Hook& x) { return x.priority < h.priority; });
     s->hooks.insert(at, h);
   }
   return HookId{sender.index, h.serial};
@@ -563,7 +570,8 @@ Status Node::unhook(HookId id) {
   if (id.sender_index < slots_.size() && slots_[id.sender_index].record) {
     TaskRecord& s = *slots_[id.sender_index].record;
     std::lock_guard out(s.out_mu);
-    auto it = std::find_if(s.hooks.begin(), s.hooks.end(), [&](const detail::Hook& h) { return h.serial == id.serial; });
+    auto it =
+        std::find_if(s.hooks.begin(), s.hooks.end(), [&](const detail::Hook& h) { return h.serial == id.serial; });
     if (it != s.hooks.end()) {
       s.hooks.erase(it);
       return {};
@@ -699,9 +707,7 @@ std::uint64_t Node::queued() const {
   return n;
 }
 
-void Node::set_tracing(bool on) {
-  tracing_.store(on);
-}
+void Node::set_tracing(bool on) { tracing_.store(on); }
 
 std::uint64_t Node::trace_hash() const {
   std::lock_guard lock(trace_mu_);

@@ -85,8 +85,14 @@ Status check_param_value(const ParamSpec& spec, const ParamValue& v) {
     case ParamType::kBool: return {};
     case ParamType::kInt: magnitude = static_cast<double>(std::get<std::int64_t>(v)); break;
     case ParamType::kReal: magnitude = std::get<double>(v); break;
-    case ParamType::kDuration: magnitude = kernel::to_seconds(std::get<kernel::Duration>(v)); what = "duration (s)"; break;
-    case ParamType::kString: magnitude = static_cast<double>(std::get<std::string>(v).size()); what = "length"; break;
+    case ParamType::kDuration:
+      magnitude = kernel::to_seconds(std::get<kernel::Duration>(v));
+      what = "duration (s)";
+      break;
+    case ParamType::kString:
+      magnitude = static_cast<double>(std::get<std::string>(v).size());
+      what = "length";
+      break;
   }
   if ((spec.min && magnitude < *spec.min) || (spec.max && magnitude > *spec.max)) {
     std::string range = "[" + (spec.min ? format_real(*spec.min) : std::string("-inf")) + ", " +
@@ -100,9 +106,12 @@ Result<ParamValue> parse_param_value(const ParamSpec& spec, std::string_view tex
   ParamValue v;
   switch (spec.type) {
     case ParamType::kBool: {
-      if (text == "true" || text == "1" || text == "yes" || text == "on") v = true;
-      else if (text == "false" || text == "0" || text == "no" || text == "off") v = false;
-      else return bad_value(spec, text, "true or false");
+      if (text == "true" || text == "1" || text == "yes" || text == "on")
+        v = true;
+      else if (text == "false" || text == "0" || text == "no" || text == "off")
+        v = false;
+      else
+        return bad_value(spec, text, "true or false");
       break;
     }
     case ParamType::kInt: {
@@ -124,12 +133,18 @@ Result<ParamValue> parse_param_value(const ParamSpec& spec, std::string_view tex
       while (unit_at > 0 && std::isalpha(static_cast<unsigned char>(text[unit_at - 1]))) --unit_at;
       const std::string_view unit = text.substr(unit_at);
       double scale = 0;
-      if (unit == "ns") scale = 1;
-      else if (unit == "us") scale = 1e3;
-      else if (unit == "ms") scale = 1e6;
-      else if (unit == "s") scale = 1e9;
-      else if (unit == "min") scale = 60e9;
-      else return bad_value(spec, text, "a duration with a unit (ns, us, ms, s, min)");
+      if (unit == "ns")
+        scale = 1;
+      else if (unit == "us")
+        scale = 1e3;
+      else if (unit == "ms")
+        scale = 1e6;
+      else if (unit == "s")
+        scale = 1e9;
+      else if (unit == "min")
+        scale = 60e9;
+      else
+        return bad_value(spec, text, "a duration with a unit (ns, us, ms, s, min)");
       auto d = parse_double(text.substr(0, unit_at));
       if (!d || *d < 0 || *d * scale > 9.2e18) return bad_value(spec, text, "a non-negative duration such as 30ms");
       v = kernel::Duration{static_cast<std::int64_t>(std::llround(*d * scale))};
@@ -170,7 +185,8 @@ Result<std::vector<ParamAssignment>> parse_param_assignments(std::string_view te
         if (c == '\\') {
           if (i >= text.size()) break;
           c = text[i++];
-          if (c != '"' && c != '\\') return Error{"column " + col(i - 2) + ": unknown escape '\\" + shorten({&c, 1}) + "'"};
+          if (c != '"' && c != '\\')
+            return Error{"column " + col(i - 2) + ": unknown escape '\\" + shorten({&c, 1}) + "'"};
         }
         a.value.push_back(c);
       }
@@ -232,9 +248,10 @@ std::string closest_name(std::string_view name, std::span<const std::string_view
     for (std::size_t i = 1; i <= name.size(); ++i) {
       d[i * w] = i;
       for (std::size_t j = 1; j <= c.size(); ++j) {
-        std::size_t v = std::min({d[(i - 1) * w + j] + 1, d[i * w + j - 1] + 1,
-                                  d[(i - 1) * w + j - 1] + (name[i - 1] == c[j - 1] ? 0 : 1)});
-        if (i > 1 && j > 1 && name[i - 1] == c[j - 2] && name[i - 2] == c[j - 1]) v = std::min(v, d[(i - 2) * w + j - 2] + 1);
+        std::size_t v = std::min(
+            {d[(i - 1) * w + j] + 1, d[i * w + j - 1] + 1, d[(i - 1) * w + j - 1] + (name[i - 1] == c[j - 1] ? 0 : 1)});
+        if (i > 1 && j > 1 && name[i - 1] == c[j - 2] && name[i - 2] == c[j - 1])
+          v = std::min(v, d[(i - 2) * w + j - 2] + 1);
         d[i * w + j] = v;
       }
     }

@@ -63,8 +63,8 @@ LogLevel SysLog::level() const {
 std::vector<LogEntry> SysLog::since(std::uint64_t after, std::size_t max) const {
   std::lock_guard lock(mu_);
   std::vector<LogEntry> out;
-  auto it = std::upper_bound(ring_.begin(), ring_.end(), after,
-                             [](std::uint64_t s, const LogEntry& e) { return s < e.seq; });
+  auto it =
+      std::upper_bound(ring_.begin(), ring_.end(), after, [](std::uint64_t s, const LogEntry& e) { return s < e.seq; });
   for (; it != ring_.end() && out.size() < max; ++it) out.push_back(*it);
   return out;
 }

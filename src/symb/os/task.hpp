@@ -33,7 +33,7 @@ struct TaskOptions {
   int priority = 0;
   kernel::Duration period{0};  // 0: never ticked
   std::size_t queue_capacity = 16;
-  bool autostart = true;       // false: stays `created` until Node::start()
+  bool autostart = true;  // false: stays `created` until Node::start()
 };
 
 // Message accounting for one receiver. For every receiver, at every moment:

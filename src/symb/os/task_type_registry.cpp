@@ -18,7 +18,8 @@ kernel::Status TaskTypeRegistry::add(TaskType type) {
     const ParamSpec& p = type.params[i];
     if (!is_valid_name(p.name)) return Error{"task type '" + type.name + "': invalid parameter name '" + p.name + "'"};
     for (std::size_t j = 0; j < i; ++j)
-      if (type.params[j].name == p.name) return Error{"task type '" + type.name + "': parameter '" + p.name + "' twice"};
+      if (type.params[j].name == p.name)
+        return Error{"task type '" + type.name + "': parameter '" + p.name + "' twice"};
     if (auto st = check_param_value(p, p.default_value); !st)
       return Error{"task type '" + type.name + "': default of " + st.error()};
   }
