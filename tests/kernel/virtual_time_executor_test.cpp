@@ -1,7 +1,9 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 
+#include <atomic>
 #include <deque>
 #include <functional>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -127,6 +129,39 @@ TEST_F(VirtualTimeExecutorTest, StopReturnsEarly) {
   ex.attach(a, {0, 10ms, "a"});
   ex.run_until(Time{100ms});
   EXPECT_EQ(ex.now(), Time{20ms});
+}
+
+TEST_F(VirtualTimeExecutorTest, InjectedWorkRunsOnTheExecutorThreadBetweenEvents) {
+  Recorder& a = make("a");
+  ex.attach(a, {0, 10ms, "a"});
+  int ran = 0;
+  std::thread::id where;
+  std::thread outside([&] {
+    ex.inject([&] {
+      ++ran;
+      where = std::this_thread::get_id();
+      a.slot->wake();
+    });
+  });
+  outside.join();
+  EXPECT_EQ(ran, 0);  // nothing runs until the executor's thread gets to it
+  ex.run_until(Time{5ms});
+  EXPECT_EQ(ran, 1);
+  EXPECT_EQ(where, std::this_thread::get_id());
+  EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:input@0"}));
+}
+
+TEST_F(VirtualTimeExecutorTest, WaitInjectedPacesAgainstOutsideThreads) {
+  std::atomic<int> sum{0};
+  std::thread outside([&] {
+    for (int i = 1; i <= 100; ++i) ex.inject([&sum, i] { sum.fetch_add(i); });
+  });
+  std::size_t ran = 0;
+  for (int tries = 0; tries < 1000 && ran < 100; ++tries) ran += ex.wait_injected(std::chrono::milliseconds(10));
+  outside.join();
+  ran += ex.run_injected();
+  EXPECT_EQ(ran, 100u);
+  EXPECT_EQ(sum.load(), 5050);
 }
 
 }  // namespace

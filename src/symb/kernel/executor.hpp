@@ -5,6 +5,7 @@
 //  - VirtualTimeExecutor: discrete events on one thread, deterministic, faster than real time.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "symb/kernel/clock.hpp"
@@ -67,6 +68,12 @@ class Executor {
   virtual bool concurrent() const = 0;
   // Starts running `activity`, which must outlive its on_activity_released().
   virtual ActivitySlot& attach(Activity& activity, const ActivityOptions& options) = 0;
+  // Runs `fn` on the executor's own context as soon as it can: the way for a thread outside the
+  // executor (a device reader, a socket) to hand work to nodes. The only executor call that may
+  // come from any thread under every executor. The thread executor, whose node operations are
+  // thread-safe anyway, runs `fn` at once on the calling thread; the virtual-time executor queues
+  // it and runs it on its thread between events (and in run_*() calls with nothing else to do).
+  virtual void inject(std::function<void()> fn) = 0;
 };
 
 }  // namespace symb::kernel

@@ -31,6 +31,7 @@ class ThreadExecutor final : public Executor {
   const Clock& clock() const override { return clock_; }
   bool concurrent() const override { return true; }
   ActivitySlot& attach(Activity& activity, const ActivityOptions& options) override;
+  void inject(std::function<void()> fn) override { fn(); }
 
   // Whether SCHED_FIFO was asked for and granted (false once any thread was refused).
   bool realtime_active() const { return realtime_ok_.load(); }

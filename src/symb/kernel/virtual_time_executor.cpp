@@ -90,6 +90,39 @@ ActivitySlot& VirtualTimeExecutor::attach(Activity& activity, const ActivityOpti
   return *s;
 }
 
+void VirtualTimeExecutor::inject(std::function<void()> fn) {
+  {
+    std::lock_guard lock(inbox_mu_);
+    inbox_.push_back(std::move(fn));
+    inbox_pending_.store(true, std::memory_order_release);
+  }
+  inbox_cv_.notify_all();
+}
+
+std::size_t VirtualTimeExecutor::run_injected() {
+  if (!inbox_pending_.load(std::memory_order_acquire)) return 0;
+  std::vector<std::function<void()>> work;
+  {
+    std::lock_guard lock(inbox_mu_);
+    work.swap(inbox_);
+    inbox_pending_.store(false, std::memory_order_relaxed);
+  }
+  const bool was_running = running_;
+  running_ = true;  // injected work may detach activities: defer that like a handler would
+  for (auto& fn : work) fn();
+  running_ = was_running;
+  finalize_pending();
+  return work.size();
+}
+
+std::size_t VirtualTimeExecutor::wait_injected(std::chrono::nanoseconds timeout) {
+  {
+    std::unique_lock lock(inbox_mu_);
+    inbox_cv_.wait_for(lock, timeout, [&] { return !inbox_.empty(); });
+  }
+  return run_injected();
+}
+
 void VirtualTimeExecutor::schedule(Slot& s, EventKind kind, Time t) {
   events_.push(Event{t, seq_++, &s, s.priority, s.generation, s.tick_generation, kind});
 }
@@ -99,7 +132,9 @@ std::uint64_t VirtualTimeExecutor::run_until(Time until) {
   running_ = true;
   stop_requested_ = false;
   std::uint64_t handled = 0;
-  while (!events_.empty() && events_.top().time <= until && !stop_requested_) {
+  for (;;) {
+    if (inbox_pending_.load(std::memory_order_relaxed)) run_injected();
+    if (events_.empty() || events_.top().time > until || stop_requested_) break;
     const Event e = events_.top();
     events_.pop();
     clock_.advance_to(e.time);
@@ -117,7 +152,9 @@ std::uint64_t VirtualTimeExecutor::run_until_idle(Time limit) {
   running_ = true;
   stop_requested_ = false;
   std::uint64_t handled = 0;
-  while (!events_.empty() && events_.top().time <= limit && !stop_requested_) {
+  for (;;) {
+    if (inbox_pending_.load(std::memory_order_relaxed)) run_injected();
+    if (events_.empty() || events_.top().time > limit || stop_requested_) break;
     const Event e = events_.top();
     events_.pop();
     clock_.advance_to(e.time);

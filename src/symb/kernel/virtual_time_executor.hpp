@@ -5,7 +5,11 @@
 // executor and so one timeline.
 #pragma once
 
+#include <atomic>
+#include <condition_variable>
 #include <cstdint>
+#include <functional>
+#include <mutex>
 #include <memory>
 #include <queue>
 #include <vector>
@@ -24,6 +28,12 @@ class VirtualTimeExecutor final : public Executor {
   const Clock& clock() const override { return clock_; }
   bool concurrent() const override { return false; }
   ActivitySlot& attach(Activity& activity, const ActivityOptions& options) override;
+  void inject(std::function<void()> fn) override;
+  // Runs the injected work now (run_*() also does, between events). Returns how much ran.
+  std::size_t run_injected();
+  // Waits up to `timeout` of real time for injected work, then runs it: lets a caller pace a
+  // virtual-time run against the outside world (a shell, a serial line) without spinning.
+  std::size_t wait_injected(std::chrono::nanoseconds timeout);
 
   // Handles every event up to and including `until`, then sets the clock to `until`. Returns the
   // number of events handled. A handler may call stop() to return early.
@@ -60,6 +70,11 @@ class VirtualTimeExecutor final : public Executor {
   void handle(const Event& e);
   void finalize(Slot& s);
   void finalize_pending();
+
+  std::mutex inbox_mu_;
+  std::condition_variable inbox_cv_;
+  std::vector<std::function<void()>> inbox_;
+  std::atomic<bool> inbox_pending_{false};
 
   VirtualClock clock_;
   std::priority_queue<Event, std::vector<Event>, Later> events_;

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -101,6 +102,11 @@ class Node {
 
   // Puts a message straight into a task's queue, as from outside any task (source invalid).
   kernel::Status post(TaskId receiver, const Message& message, QueuePolicy policy = QueuePolicy::kRefuse);
+
+  // Runs `fn` on the executor's context (see kernel::Executor::inject). The one Node call that
+  // a thread outside the executor (a device reader) may make under every executor. `fn` must
+  // not assume the node or any task still exists when it runs: pass handles, not pointers.
+  void inject(std::function<void()> fn) { executor_.inject(std::move(fn)); }
 
   // --- accounting --------------------------------------------------------------------------------
   // Traffic into every task this node ever had, deleted ones included.
