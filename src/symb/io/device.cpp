@@ -33,14 +33,15 @@ kernel::Result<std::string> Device::ioctl(std::string_view command, std::string_
     if (!arg.empty()) return Error{"ioctl '" + c->spec.name + "' of device '" + name_ + "' takes no argument"};
     return c->handler(nullptr);
   }
-  if (arg.empty()) return Error{"ioctl '" + c->spec.name + "' of device '" + name_ + "' needs a " +
-                                os::to_string(c->spec.arg->type) + " argument"};
+  if (arg.empty())
+    return Error{"ioctl '" + c->spec.name + "' of device '" + name_ + "' needs a " + os::to_string(c->spec.arg->type) +
+                 " argument"};
   auto v = os::parse_param_value(*c->spec.arg, arg);
   if (!v) return Error{"ioctl '" + c->spec.name + "' of device '" + name_ + "': " + v.error()};
   return c->handler(&*v);
 }
 
-kernel::Result<std::string> Device::ioctl(std::string_view command, const os::ParamValue& arg) {
+kernel::Result<std::string> Device::ioctl_value(std::string_view command, const os::ParamValue& arg) {
   std::string error;
   const Command* c = find(command, error);
   if (c == nullptr) return Error{error};

@@ -40,7 +40,7 @@ class Device {
   // device and the command, with a "did you mean" hint for a misspelt one.
   kernel::Result<std::string> ioctl(std::string_view command, std::string_view arg = {});
   // The same with an already typed argument (for C++ callers).
-  kernel::Result<std::string> ioctl(std::string_view command, const os::ParamValue& arg);
+  kernel::Result<std::string> ioctl_value(std::string_view command, const os::ParamValue& arg);
   // Every command this device understands, in the order they were added.
   std::vector<IoctlSpec> ioctls() const;
 

@@ -7,7 +7,8 @@ std::uint16_t crc16_ccitt(std::span<const std::byte> data, std::uint16_t crc) {
   // frame benchmark shows this is fast enough for any serial line.
   for (std::byte byte : data) {
     crc ^= static_cast<std::uint16_t>(static_cast<std::uint8_t>(byte)) << 8;
-    for (int i = 0; i < 8; ++i) crc = (crc & 0x8000) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021) : static_cast<std::uint16_t>(crc << 1);
+    for (int i = 0; i < 8; ++i)
+      crc = (crc & 0x8000) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021) : static_cast<std::uint16_t>(crc << 1);
   }
   return crc;
 }

@@ -46,8 +46,10 @@ class FrameDecoder {
     stats_.bytes += bytes.size();
     for (std::byte b : bytes) {
       if (b != std::byte{0}) {
-        if (encoded_.size() < max_encoded_) encoded_.push_back(b);
-        else overflow_ = true;
+        if (encoded_.size() < max_encoded_)
+          encoded_.push_back(b);
+        else
+          overflow_ = true;
         continue;
       }
       if (finish()) on_frame(std::span<const std::byte>(decoded_.data() + 1, decoded_.size() - 3));

@@ -49,16 +49,18 @@ bool convert(const std::string& s, T& out) {
 
 InputStream& InputStream::operator>>(std::string& token) {
   std::string t;
-  if (fail_ || !next_token(t)) fail_ = true;
-  else token = std::move(t);
+  if (fail_ || !next_token(t))
+    fail_ = true;
+  else
+    token = std::move(t);
   return *this;
 }
 
-#define SYMB_EXTRACT(T)                                        \
-  InputStream& InputStream::operator>>(T& v) {                 \
-    std::string t;                                             \
+#define SYMB_EXTRACT(T)                                          \
+  InputStream& InputStream::operator>>(T& v) {                   \
+    std::string t;                                               \
     if (fail_ || !next_token(t) || !convert(t, v)) fail_ = true; \
-    return *this;                                              \
+    return *this;                                                \
   }
 SYMB_EXTRACT(std::int64_t)
 SYMB_EXTRACT(int)
@@ -68,10 +70,14 @@ SYMB_EXTRACT(float)
 
 InputStream& InputStream::operator>>(bool& v) {
   std::string t;
-  if (fail_ || !next_token(t)) fail_ = true;
-  else if (t == "true" || t == "1") v = true;
-  else if (t == "false" || t == "0") v = false;
-  else fail_ = true;
+  if (fail_ || !next_token(t))
+    fail_ = true;
+  else if (t == "true" || t == "1")
+    v = true;
+  else if (t == "false" || t == "0")
+    v = false;
+  else
+    fail_ = true;
   return *this;
 }
 

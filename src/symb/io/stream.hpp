@@ -101,7 +101,12 @@ class OutputStream : public OutputDevice {
 class IOStream : public InputStream, public OutputStream {
  public:
   explicit IOStream(std::string name) : Device(std::move(name)), InputStream(""), OutputStream("") {}
-  using InputStream::fail;
+  // One stream, one state: failure on either side shows, and clearing clears both.
+  bool fail() const { return InputStream::fail() || OutputStream::fail(); }
+  void clear_fail() {
+    InputStream::clear_fail();
+    OutputStream::clear_fail();
+  }
   using InputStream::operator>>;
   using OutputStream::operator<<;
   explicit operator bool() const { return !InputStream::fail() && !OutputStream::fail(); }

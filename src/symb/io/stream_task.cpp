@@ -35,7 +35,8 @@ std::optional<std::vector<float>> decode_numbers(std::span<const std::byte> fram
   std::vector<float> v((frame.size() - 1) / 4);
   for (std::size_t k = 0; k < v.size(); ++k) {
     std::uint32_t bits = 0;
-    for (int i = 0; i < 4; ++i) bits |= static_cast<std::uint32_t>(frame[1 + 4 * k + static_cast<std::size_t>(i)]) << (8 * i);
+    for (int i = 0; i < 4; ++i)
+      bits |= static_cast<std::uint32_t>(frame[1 + 4 * k + static_cast<std::size_t>(i)]) << (8 * i);
     v[k] = std::bit_cast<float>(bits);
   }
   return v;
@@ -71,7 +72,8 @@ void StreamTask::on_start() {
   shared_->node = &node();
   shared_->self = id();
   if (!stream_->is_open())
-    if (auto st = stream_->open(); !st) log(os::LogLevel::kWarn, "cannot open '" + stream_->name() + "': " + st.error());
+    if (auto st = stream_->open(); !st)
+      log(os::LogLevel::kWarn, "cannot open '" + stream_->name() + "': " + st.error());
   reader_ = std::thread([this, s = shared_] { read_loop(s); });
 }
 
@@ -152,8 +154,10 @@ void StreamTask::write_out(std::span<const std::byte> bytes) {
   if (bytes.empty()) return;
   auto st = stream_->write_all(bytes);
   std::lock_guard lock(shared_->mu);
-  if (st) shared_->stats.bytes_out += bytes.size();
-  else ++shared_->stats.write_errors;
+  if (st)
+    shared_->stats.bytes_out += bytes.size();
+  else
+    ++shared_->stats.write_errors;
 }
 
 void StreamTask::on_message(const os::Message& m) {
@@ -163,8 +167,10 @@ void StreamTask::on_message(const os::Message& m) {
   }
   out_.clear();
   if (const Bytes* b = bytes_of(m)) {
-    if (options_.mode == StreamMode::kFrames) encode_frame(b->data, out_);
-    else out_.assign(b->data.begin(), b->data.end());
+    if (options_.mode == StreamMode::kFrames)
+      encode_frame(b->data, out_);
+    else
+      out_.assign(b->data.begin(), b->data.end());
   } else if (options_.mode == StreamMode::kFrames) {
     encode_frame(encode_numbers(m.numbers()), out_);
   } else {
@@ -176,7 +182,8 @@ void StreamTask::on_message(const os::Message& m) {
       text.append(buf, r.ptr);
     }
     text.push_back('\n');
-    out_.assign(reinterpret_cast<const std::byte*>(text.data()), reinterpret_cast<const std::byte*>(text.data()) + text.size());
+    out_.assign(reinterpret_cast<const std::byte*>(text.data()),
+                reinterpret_cast<const std::byte*>(text.data()) + text.size());
   }
   write_out(out_);
 }

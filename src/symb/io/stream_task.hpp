@@ -39,10 +39,10 @@ std::optional<std::vector<float>> decode_numbers(std::span<const std::byte> fram
 struct StreamStats {
   std::uint64_t bytes_in = 0;
   std::uint64_t bytes_out = 0;
-  std::uint64_t chunks_in = 0;      // messages sent to hooked tasks
+  std::uint64_t chunks_in = 0;  // messages sent to hooked tasks
   std::uint64_t write_errors = 0;
-  std::uint64_t lines_cut = 0;      // lines longer than max_line
-  FrameStats frames;                // frames mode: the decoder's counters
+  std::uint64_t lines_cut = 0;  // lines longer than max_line
+  FrameStats frames;            // frames mode: the decoder's counters
   bool open = false;
 };
 
