@@ -31,7 +31,7 @@ TEST(Param, RejectsBadTextWithTheParameterName) {
     EXPECT_NE(r.error().find("'gain'"), std::string::npos) << r.error();
   }
   ParamSpec d{"period", ParamType::kDuration, kernel::Duration{0}, {}, {}, ""};
-  for (const char* bad : {"30", "ms", "-1ms", "1e30s", "3 ms", "5h"}) EXPECT_FALSE(parse_param_value(d, bad)) << bad;
+  for (const char* bad : {"30", "ms", "-1ms", "1e30s", "3 ms", "5d"}) EXPECT_FALSE(parse_param_value(d, bad)) << bad;
   ParamSpec i{"n", ParamType::kInt, std::int64_t{0}, {}, {}, ""};
   for (const char* bad : {"1.0", "99999999999999999999", "0x10", "1 "}) EXPECT_FALSE(parse_param_value(i, bad)) << bad;
 }

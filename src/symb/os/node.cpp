@@ -20,13 +20,6 @@ std::uint64_t fnv1a(std::string_view s) {
   return h;
 }
 
-template <class T>
-void fold(std::uint64_t& h, const T& v) {
-  unsigned char bytes[sizeof(T)];
-  std::memcpy(bytes, &v, sizeof(T));
-  for (unsigned char b : bytes) h = (h ^ b) * 0x100000001b3ULL;
-}
-
 std::string id_text(TaskId id) { return "#" + std::to_string(id.index) + "." + std::to_string(id.generation); }
 
 }  // namespace
@@ -207,9 +200,14 @@ kernel::ActivitySlot* TaskRecord::offer(const Message& m, int hook_priority, Que
 using detail::TaskRecord;
 
 Node::Node(kernel::Executor& executor, NodeConfig config)
-    : executor_(executor), config_(std::move(config)), log_(executor.clock(), config_.log_capacity) {}
+    : executor_(executor),
+      config_(std::move(config)),
+      log_(executor.clock(), config_.log_capacity),
+      trace_mu_(executor.concurrent()) {}
 
-Node::~Node() {
+Node::~Node() { clear(); }
+
+void Node::clear() {
   std::vector<TaskId> ids;
   {
     std::lock_guard lock(mu_);
@@ -271,8 +269,12 @@ Result<TaskId> Node::create(std::string name, std::unique_ptr<Task> task, TaskOp
     slot.record =
         std::make_unique<TaskRecord>(*this, id, std::move(name), std::move(task), options, executor_.concurrent());
     ++live_records_;
-    if (options.autostart) start_locked(*slot.record);
   }
+  if (options.autostart)
+    if (auto st = start(id); !st) {
+      (void)remove(id);
+      return Error{st.error()};
+    }
   return id;
 }
 
@@ -310,13 +312,20 @@ Result<TaskId> Node::create(std::string_view type_name, std::string name, std::s
   return id;
 }
 
-void Node::start_locked(TaskRecord& r) {
-  r.state.store(TaskState::kRunning);
+Status Node::start_locked(TaskRecord& r) {
   kernel::ActivityOptions ao;
   ao.priority = r.priority.load();
   ao.period = kernel::Duration{r.period_ns.load()};
   ao.name = r.name;
-  executor_.attach(r, ao);
+  r.state.store(TaskState::kRunning);
+  try {
+    executor_.attach(r, ao);
+  } catch (const std::exception& e) {
+    // Out of threads, typically: the task stays `created`, nothing half-started is left behind.
+    r.state.store(TaskState::kCreated);
+    return Error{"task '" + r.name + "' could not start: " + e.what()};
+  }
+  return {};
 }
 
 Status Node::start(TaskId id) {
@@ -325,7 +334,7 @@ Status Node::start(TaskId id) {
   if (r == nullptr) return no_task(id);
   if (r->state.load() != TaskState::kCreated)
     return Error{"task '" + r->name + "' is " + to_string(r->state.load()) + ", not created"};
-  start_locked(*r);
+  if (auto st = start_locked(*r); !st) return st;
   // Messages may have been queued before it started.
   kernel::ActivitySlot* wake = nullptr;
   {
@@ -715,14 +724,21 @@ std::uint64_t Node::trace_hash() const {
 }
 
 void Node::trace(const TaskRecord& receiver, const Message& m) {
+  // Word-wise mixing (a 64-bit hash_combine): cheap enough to leave tracing on in every run.
+  const auto mix = [](std::uint64_t h, std::uint64_t w) {
+    return h ^ (w + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2));
+  };
+  std::uint64_t w = mix(static_cast<std::uint64_t>(m.time.count()),
+                        (std::uint64_t{receiver.id.index} << 32) | receiver.id.generation);
+  w = mix(w, (std::uint64_t{m.source.index} << 32) | m.source.generation);
+  w = mix(w, (std::uint64_t{m.port} << 8) | m.payload.count);
+  const auto n = m.payload.count;
+  std::uint32_t bits[Payload::kInlineValues];
+  std::memcpy(bits, m.payload.values, n * sizeof(float));
+  for (std::size_t i = 0; i + 1 < n; i += 2) w = mix(w, (std::uint64_t{bits[i]} << 32) | bits[i + 1]);
+  if (n % 2 != 0) w = mix(w, bits[n - 1]);
   std::lock_guard lock(trace_mu_);
-  std::uint64_t& h = trace_hash_;
-  fold(h, m.time.count());
-  fold(h, receiver.id);
-  fold(h, m.source);
-  fold(h, m.port);
-  fold(h, m.payload.count);
-  for (float v : m.numbers()) fold(h, v);
+  trace_hash_ = mix(trace_hash_, w) * 0x100000001b3ULL;
 }
 
 }  // namespace symb::os

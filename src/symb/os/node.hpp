@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "symb/kernel/executor.hpp"
+#include "symb/kernel/optional_mutex.hpp"
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/hook.hpp"
@@ -84,6 +85,8 @@ class Node {
   std::optional<TaskInfo> info(TaskId id) const;
   std::vector<TaskInfo> tasks() const;
   std::size_t task_count() const;
+  // Deletes every task and waits until each has stopped: the node is empty but still usable.
+  void clear();
   // Waits until every deleted task has stopped and been freed (under the thread executor a
   // deletion completes on the task's own thread, after remove() returned).
   void wait_released();
@@ -124,7 +127,7 @@ class Node {
 
   detail::TaskRecord* lookup_locked(TaskId id) const;
   kernel::Status no_task(TaskId id) const;
-  void start_locked(detail::TaskRecord& r);
+  kernel::Status start_locked(detail::TaskRecord& r);
   void release(detail::TaskRecord& r);
   void send_from(detail::TaskRecord& from, const Message& m);
   void trace(const detail::TaskRecord& receiver, const Message& m);
@@ -140,7 +143,7 @@ class Node {
   std::uint32_t hook_serial_ = 0;
   TrafficCounters retired_;  // traffic of deleted tasks
   std::atomic<bool> tracing_{false};
-  mutable std::mutex trace_mu_;
+  mutable kernel::OptionalMutex trace_mu_;
   std::uint64_t trace_hash_ = 0xcbf29ce484222325ULL;
 };
 

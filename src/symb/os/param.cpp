@@ -65,6 +65,31 @@ std::optional<double> parse_double(std::string_view text) {
 
 }  // namespace
 
+Result<kernel::Duration> parse_duration(std::string_view text) {
+  std::size_t unit_at = text.size();
+  while (unit_at > 0 && std::isalpha(static_cast<unsigned char>(text[unit_at - 1]))) --unit_at;
+  const std::string_view unit = text.substr(unit_at);
+  double scale = 0;
+  if (unit == "ns")
+    scale = 1;
+  else if (unit == "us")
+    scale = 1e3;
+  else if (unit == "ms")
+    scale = 1e6;
+  else if (unit == "s")
+    scale = 1e9;
+  else if (unit == "min")
+    scale = 60e9;
+  else if (unit == "h")
+    scale = 3600e9;
+  else
+    return Error{"'" + shorten(text) + "' has no unit: write e.g. 30ms, 1.5s, 250us, 2min"};
+  auto d = parse_double(text.substr(0, unit_at));
+  if (!d || *d < 0) return Error{"'" + shorten(text) + "' is not a non-negative duration"};
+  if (*d * scale > 9.2e18) return Error{"'" + shorten(text) + "' is too long a duration"};
+  return kernel::Duration{static_cast<std::int64_t>(std::llround(*d * scale))};
+}
+
 std::string format_param_value(const ParamValue& v) {
   switch (type_of(v)) {
     case ParamType::kBool: return std::get<bool>(v) ? "true" : "false";
@@ -129,25 +154,9 @@ Result<ParamValue> parse_param_value(const ParamSpec& spec, std::string_view tex
       break;
     }
     case ParamType::kDuration: {
-      std::size_t unit_at = text.size();
-      while (unit_at > 0 && std::isalpha(static_cast<unsigned char>(text[unit_at - 1]))) --unit_at;
-      const std::string_view unit = text.substr(unit_at);
-      double scale = 0;
-      if (unit == "ns")
-        scale = 1;
-      else if (unit == "us")
-        scale = 1e3;
-      else if (unit == "ms")
-        scale = 1e6;
-      else if (unit == "s")
-        scale = 1e9;
-      else if (unit == "min")
-        scale = 60e9;
-      else
-        return bad_value(spec, text, "a duration with a unit (ns, us, ms, s, min)");
-      auto d = parse_double(text.substr(0, unit_at));
-      if (!d || *d < 0 || *d * scale > 9.2e18) return bad_value(spec, text, "a non-negative duration such as 30ms");
-      v = kernel::Duration{static_cast<std::int64_t>(std::llround(*d * scale))};
+      auto d = parse_duration(text);
+      if (!d) return bad_value(spec, text, "a non-negative duration with a unit (ns, us, ms, s, min, h) such as 30ms");
+      v = *d;
       break;
     }
     case ParamType::kString: v = std::string(text); break;

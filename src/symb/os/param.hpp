@@ -36,6 +36,8 @@ const char* to_string(ParamType t);
 ParamType type_of(const ParamValue& v);
 // The canonical text of a value; parse_param_value() reads it back to the same value.
 std::string format_param_value(const ParamValue& v);
+// Parses a duration with its unit: "30ms", "1.5s", "250us", "100ns", "2min", "1h".
+kernel::Result<kernel::Duration> parse_duration(std::string_view text);
 // Parses `text` as a value of `spec`'s type and checks its range.
 kernel::Result<ParamValue> parse_param_value(const ParamSpec& spec, std::string_view text);
 // Checks a value's type and range against `spec` (error names the parameter).

@@ -1,0 +1,149 @@
+#include "symb/apps/cli_args.hpp"
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+
+#include "symb/os/param.hpp"
+
+namespace symb::apps {
+
+std::string quote_arg(std::string_view text) {
+  std::string s = "'";
+  for (char ch : text.substr(0, 60)) {
+    const auto c = static_cast<unsigned char>(ch);
+    s += (c < 0x20 || c == 0x7f) ? '?' : ch;
+  }
+  if (text.size() > 60) s += "...";
+  return s + "'";
+}
+
+std::string did_you_mean(std::string_view given, std::span<const std::string_view> candidates) {
+  const std::string hint = os::closest_name(given, candidates);
+  return hint.empty() ? std::string() : " (did you mean '" + hint + "'?)";
+}
+
+std::variant<std::vector<ParsedOption>, UsageError> parse_options(std::span<const std::string_view> args,
+                                                                  std::span<const OptionSpec> specs) {
+  std::vector<ParsedOption> out;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string_view arg = args[i];
+    if (arg == "-h" || arg == "--help") {
+      out.push_back({"--help", {}});
+      continue;
+    }
+    if (!arg.starts_with("--") || arg.size() == 2) {
+      if (arg.starts_with("-") && arg.size() > 1) return UsageError{"unknown option " + quote_arg(arg)};
+      return UsageError{"unexpected argument " + quote_arg(arg)};
+    }
+    const std::size_t eq = arg.find('=');
+    const std::string_view name = arg.substr(0, eq);
+    const OptionSpec* spec = nullptr;
+    for (const OptionSpec& s : specs)
+      if (s.name == name) spec = &s;
+    if (spec == nullptr) {
+      std::vector<std::string_view> names;
+      for (const OptionSpec& s : specs) names.push_back(s.name);
+      return UsageError{"unknown option " + quote_arg(name) + did_you_mean(name, names)};
+    }
+    ParsedOption p{spec->name, {}};
+    const auto missing = [&] {
+      return UsageError{"option " + std::string(spec->name) + " needs a value (" + std::string(spec->value_name) + ")"};
+    };
+    if (spec->value_name.empty()) {
+      if (eq != std::string_view::npos) return UsageError{"option " + std::string(spec->name) + " takes no value"};
+    } else if (eq != std::string_view::npos) {
+      p.value = std::string(arg.substr(eq + 1));
+    } else {
+      // "--nodes --seed 3" means a forgotten value, not a node count of "--seed".
+      if (i + 1 >= args.size() || args[i + 1].starts_with("--")) return missing();
+      p.value = std::string(args[++i]);
+    }
+    if (!spec->value_name.empty() && p.value.empty()) return missing();
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
+std::string describe_options(std::span<const OptionSpec> specs) {
+  std::string s;
+  for (const OptionSpec& spec : specs) {
+    std::string head = "  " + std::string(spec.name);
+    if (!spec.value_name.empty()) head += " " + std::string(spec.value_name);
+    if (head.size() < 20)
+      head.resize(20, ' ');
+    else
+      head += "  ";
+    s += head + std::string(spec.help) + "\n";
+  }
+  return s;
+}
+
+std::variant<std::uint64_t, UsageError> parse_count(std::string_view what, std::string_view text, std::uint64_t min,
+                                                    std::uint64_t max) {
+  const std::string range = "a whole number from " + std::to_string(min) + " to " + std::to_string(max);
+  std::uint64_t v = 0;
+  const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string_view::npos;
+  if (!digits) return UsageError{std::string(what) + ": " + quote_arg(text) + " is not " + range};
+  auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (r.ec == std::errc::result_out_of_range || (r.ec == std::errc{} && (v < min || v > max)))
+    return UsageError{std::string(what) + ": " + quote_arg(text) + " is out of range: expected " + range};
+  if (r.ec != std::errc{} || r.ptr != text.data() + text.size())
+    return UsageError{std::string(what) + ": " + quote_arg(text) + " is not " + range};
+  return v;
+}
+
+std::variant<std::uint64_t, UsageError> parse_u64(std::string_view what, std::string_view text) {
+  const bool hex = text.starts_with("0x") || text.starts_with("0X");
+  const std::string_view body = hex ? text.substr(2) : text;
+  const std::string_view allowed = hex ? "0123456789abcdefABCDEF" : "0123456789";
+  const std::string expected = "an unsigned 64-bit integer (decimal, or hexadecimal with 0x)";
+  if (body.empty() || body.find_first_not_of(allowed) != std::string_view::npos)
+    return UsageError{std::string(what) + ": " + quote_arg(text) + " is not " + expected};
+  std::uint64_t v = 0;
+  auto r = std::from_chars(body.data(), body.data() + body.size(), v, hex ? 16 : 10);
+  if (r.ec == std::errc::result_out_of_range)
+    return UsageError{std::string(what) + ": " + quote_arg(text) + " is out of range: expected " + expected};
+  if (r.ec != std::errc{} || r.ptr != body.data() + body.size())
+    return UsageError{std::string(what) + ": " + quote_arg(text) + " is not " + expected};
+  return v;
+}
+
+std::variant<kernel::Duration, UsageError> parse_duration(std::string_view what, std::string_view text,
+                                                          kernel::Duration max) {
+  const std::string expected = "a duration with a unit, such as 60s, 500ms or 2min";
+  std::size_t unit_at = text.size();
+  while (unit_at > 0 && std::isalpha(static_cast<unsigned char>(text[unit_at - 1]))) --unit_at;
+  const std::string_view number = text.substr(0, unit_at), unit = text.substr(unit_at);
+  double scale = 0;
+  if (unit == "ns")
+    scale = 1;
+  else if (unit == "us")
+    scale = 1e3;
+  else if (unit == "ms")
+    scale = 1e6;
+  else if (unit == "s")
+    scale = 1e9;
+  else if (unit == "min")
+    scale = 60e9;
+  else if (unit == "h")
+    scale = 3600e9;
+  double v = 0;
+  auto r = std::from_chars(number.data(), number.data() + number.size(), v);
+  if (scale == 0 || number.empty() || number.front() == '-' || r.ec != std::errc{} ||
+      r.ptr != number.data() + number.size() || !std::isfinite(v))
+    return UsageError{std::string(what) + ": " + quote_arg(text) + " is not " + expected};
+  const double ns = v * scale;
+  if (ns < 1 || ns > static_cast<double>(max.count()))
+    return UsageError{std::string(what) + ": " + quote_arg(text) +
+                      " is out of range: expected more than 0 and at most " +
+                      std::to_string(std::chrono::duration_cast<std::chrono::hours>(max).count()) + "h"};
+  return kernel::Duration{static_cast<std::int64_t>(std::llround(ns))};
+}
+
+int usage_error(const CliContext& ctx, std::string_view command, const UsageError& e) {
+  ctx.err << command << ": " << e.message << "\n(run '" << command << " --help' for usage)\n";
+  return kExitUsage;
+}
+
+}  // namespace symb::apps

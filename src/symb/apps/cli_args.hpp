@@ -1,0 +1,72 @@
+// Command-line arguments of the `symb` tool: a small option reader and the value parsers its
+// commands share. Bad input is a value (a UsageError), never an exception or a crash, and each
+// message names the argument that was wrong and, for a misspelt option, the closest real one.
+// The tool exits with kExitUsage for any of them.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "symb/kernel/time.hpp"
+
+namespace symb::apps {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;  // the command was fine but could not be carried out
+inline constexpr int kExitUsage = 2;    // the command line was wrong
+
+struct UsageError {
+  std::string message;
+};
+
+struct OptionSpec {
+  std::string_view name;        // "--nodes"
+  std::string_view value_name;  // "N"; empty for a flag
+  std::string_view help;
+};
+
+struct ParsedOption {
+  std::string_view name;  // the spec's name
+  std::string value;      // empty for a flag
+};
+
+// Reads `args` (what follows the command's name) as options of `specs`, as `--name value` or
+// `--name=value`. "-h" and "--help" are recognised as "--help" whether or not a spec lists it.
+// Positional arguments are refused.
+std::variant<std::vector<ParsedOption>, UsageError> parse_options(std::span<const std::string_view> args,
+                                                                  std::span<const OptionSpec> specs);
+
+// "  --nodes N      how many robots" lines for a help text.
+std::string describe_options(std::span<const OptionSpec> specs);
+
+// Value parsers; `what` names the option in the message ("--nodes").
+std::variant<std::uint64_t, UsageError> parse_count(std::string_view what, std::string_view text, std::uint64_t min,
+                                                    std::uint64_t max);
+// Decimal, or hexadecimal with 0x.
+std::variant<std::uint64_t, UsageError> parse_u64(std::string_view what, std::string_view text);
+// A number with a unit: ns, us, ms, s, min, h (e.g. 60s, 500ms, 1.5min); within (0, max].
+std::variant<kernel::Duration, UsageError> parse_duration(std::string_view what, std::string_view text,
+                                                          kernel::Duration max);
+
+// `text` cut to a readable length with control characters replaced, for quoting in a message.
+std::string quote_arg(std::string_view text);
+// " (did you mean 'x'?)" or "".
+std::string did_you_mean(std::string_view given, std::span<const std::string_view> candidates);
+
+// Where a command writes: results on `out`, progress and errors on `err`.
+struct CliContext {
+  std::ostream& out;
+  std::ostream& err;
+  bool err_is_terminal = false;  // progress lines redraw in place only on a terminal
+};
+
+// Writes "<command>: <message>" and a pointer to the help, and returns kExitUsage.
+int usage_error(const CliContext& ctx, std::string_view command, const UsageError& e);
+
+}  // namespace symb::apps

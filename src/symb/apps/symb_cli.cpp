@@ -1,0 +1,88 @@
+#include "symb/apps/symb_cli.hpp"
+
+#include <array>
+
+#include "symb/apps/swarm_command.hpp"
+
+#ifndef SYMB_VERSION
+#define SYMB_VERSION "unknown"
+#endif
+
+namespace symb::apps {
+
+namespace {
+
+constexpr std::string_view kCommands[] = {"demo", "version", "help"};
+constexpr std::string_view kDemos[] = {"swarm"};
+
+void print_help(std::ostream& out) {
+  out << "symb " << symb_version()
+      << " - Symbricator: bio-inspired robot control and evolution (SymbricatorRTOS re-implemented)\n\n"
+      << "Usage: symb <command> [options]\n\n"
+      << "Commands:\n"
+      << "  demo <name> [options]   run a built-in demo (symb demo --help lists them)\n"
+      << "  version                 print the version\n"
+      << "  help                    print this help\n\n"
+      << "Run 'symb <command> --help' for a command's options.\n"
+      << "Exit codes: 0 done, 1 failed while running, 2 bad command line.\n";
+}
+
+void print_demo_help(std::ostream& out) {
+  out << "Usage: symb demo <name> [options]\n\n"
+      << "Demos:\n"
+      << "  swarm    robots wandering in a walled arena, one node each, on one virtual-time\n"
+      << "           executor; writes trajectories.svg, summary.txt, syslog.txt\n\n"
+      << "Run 'symb demo <name> --help' for a demo's options.\n";
+}
+
+int run_demo(std::span<const std::string_view> args, const CliContext& ctx) {
+  if (args.empty()) return usage_error(ctx, "symb demo", UsageError{"missing demo name (available: swarm)"});
+  const std::string_view name = args.front();
+  if (name == "-h" || name == "--help") {
+    print_demo_help(ctx.out);
+    return kExitOk;
+  }
+  if (name == "swarm") return run_swarm_command(args.subspan(1), ctx);
+  if (name.starts_with("-"))
+    return usage_error(ctx, "symb demo",
+                       UsageError{"unknown option " + quote_arg(name) +
+                                  did_you_mean(name, std::array<std::string_view, 1>{"--help"})});
+  return usage_error(
+      ctx, "symb demo",
+      UsageError{"unknown demo " + quote_arg(name) + did_you_mean(name, kDemos) + " (available: swarm)"});
+}
+
+}  // namespace
+
+std::string_view symb_version() { return SYMB_VERSION; }
+
+int run_symb(std::span<const std::string_view> args, const CliContext& ctx) {
+  if (args.empty()) {
+    print_help(ctx.err);
+    ctx.err << "\nsymb: missing command\n";
+    return kExitUsage;
+  }
+  const std::string_view command = args.front();
+  const auto rest = args.subspan(1);
+  if (command == "-h" || command == "--help" || command == "help") {
+    if (!rest.empty()) return usage_error(ctx, "symb", UsageError{"unexpected argument " + quote_arg(rest.front())});
+    print_help(ctx.out);
+    return kExitOk;
+  }
+  if (command == "version" || command == "--version") {
+    if (!rest.empty())
+      return usage_error(ctx, "symb version", UsageError{"unexpected argument " + quote_arg(rest.front())});
+    ctx.out << "symb " << symb_version() << "\n";
+    return kExitOk;
+  }
+  if (command == "demo") return run_demo(rest, ctx);
+  if (command.starts_with("-")) {
+    constexpr std::string_view kTopOptions[] = {"--help", "--version"};
+    return usage_error(ctx, "symb",
+                       UsageError{"unknown option " + quote_arg(command) + did_you_mean(command, kTopOptions)});
+  }
+  return usage_error(ctx, "symb",
+                     UsageError{"unknown command " + quote_arg(command) + did_you_mean(command, kCommands)});
+}
+
+}  // namespace symb::apps
