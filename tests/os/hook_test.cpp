@@ -334,7 +334,7 @@ TEST_F(Hooks, ListingShowsEveryHook) {
 TEST_F(Hooks, PostFromOutsideUsesTheGivenPolicy) {
   auto [a, ca] = collector("a", {.queue_capacity = 1, .autostart = false});
   ASSERT_TRUE(node.post(a, Message{}));
-  ASSERT_TRUE(node.post(a, Message{}));  // refused: queue full, not started
+  EXPECT_FALSE(node.post(a, Message{}));  // refused: queue full, not started
   ASSERT_TRUE(node.start(a));
   ex.run_until_idle();
   EXPECT_EQ(ca->count(), 1u);

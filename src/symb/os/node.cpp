@@ -158,8 +158,9 @@ void TaskRecord::on_activity_stop() {
 void TaskRecord::on_activity_released() { node.release(*this); }
 
 kernel::ActivitySlot* TaskRecord::offer(const Message& m, int hook_priority, QueuePolicy policy,
-                                        kernel::Duration suppress_window) {
+                                        kernel::Duration suppress_window, bool* accepted) {
   std::lock_guard lock(in_mu);
+  if (accepted != nullptr) *accepted = false;
   ++traffic.attempted;
   for (const auto& w : suppression) {
     if (hook_priority < w.level && m.time < w.until) {
@@ -188,6 +189,7 @@ kernel::ActivitySlot* TaskRecord::offer(const Message& m, int hook_priority, Que
     ++traffic.overwritten;
   }
   queue.push_overwrite(m);
+  if (accepted != nullptr) *accepted = true;
   if (wake_pending || slot == nullptr) return nullptr;
   wake_pending = true;
   return slot;
@@ -671,7 +673,9 @@ Status Node::post(TaskId receiver, const Message& message, QueuePolicy policy) {
   if (r == nullptr) return no_task(receiver);
   Message m = message;
   m.time = now();
-  if (kernel::ActivitySlot* wake = r->offer(m, 0, policy, kernel::Duration{0})) wake->wake();
+  bool accepted = false;
+  if (kernel::ActivitySlot* wake = r->offer(m, 0, policy, kernel::Duration{0}, &accepted)) wake->wake();
+  if (!accepted) return Error{"task '" + r->name + "' did not take the message (queue full or suppressed)"};
   return {};
 }
 

@@ -104,6 +104,8 @@ class Node {
   kernel::Status inhibit(TaskId sender, TaskId receiver, kernel::Duration window);
 
   // Puts a message straight into a task's queue, as from outside any task (source invalid).
+  // Fails when the queue refused it (full, under kRefuse) or a suppression window dropped it;
+  // either way the message is counted like any other.
   kernel::Status post(TaskId receiver, const Message& message, QueuePolicy policy = QueuePolicy::kRefuse);
 
   // Runs `fn` on the executor's context (see kernel::Executor::inject). The one Node call that

@@ -59,7 +59,9 @@ struct TaskRecord final : kernel::Activity {
   void on_activity_released() override;
 
   // Offers `m` to this task's queue; returns the slot to wake (outside any lock) or null.
-  kernel::ActivitySlot* offer(const Message& m, int priority, QueuePolicy policy, kernel::Duration suppress_window);
+  // `*accepted` (when given) tells whether the message was queued.
+  kernel::ActivitySlot* offer(const Message& m, int priority, QueuePolicy policy, kernel::Duration suppress_window,
+                              bool* accepted = nullptr);
   void fault(const char* where, const char* what);
   void apply_pending_parameters();
 

@@ -1,0 +1,199 @@
+#include "symb/robot/actuator.hpp"
+
+#include <charconv>
+#include <stdexcept>
+
+namespace symb::robot {
+
+using kernel::Error;
+
+namespace {
+
+std::string numbers_text(std::span<const float> v) {
+  std::string text;
+  char buf[32];
+  for (float x : v) {
+    if (!text.empty()) text.push_back(' ');
+    auto r = std::to_chars(buf, buf + sizeof buf, x);
+    text.append(buf, r.ptr);
+  }
+  return text;
+}
+
+// "0.5 1 0" -> numbers; NaN text is let through so that set() rejects it the usual way.
+kernel::Result<std::vector<float>> parse_numbers(std::string_view text) {
+  std::vector<float> v;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    if (text[pos] == ' ' || text[pos] == ',') {
+      ++pos;
+      continue;
+    }
+    float x = 0;
+    auto [ptr, ec] = std::from_chars(text.data() + pos, text.data() + text.size(), x);
+    if (ec != std::errc{} || ptr == text.data() + pos)
+      return Error{"column " + std::to_string(pos + 1) + ": expected a number"};
+    v.push_back(x);
+    pos = static_cast<std::size_t>(ptr - text.data());
+  }
+  return v;
+}
+
+}  // namespace
+
+// --- Actuator --------------------------------------------------------------------------------------
+
+Actuator::Actuator(std::string name, std::vector<ChannelSpec> channels)
+    : io::Device(std::move(name)), channels_(std::move(channels)) {
+  if (auto st = validate_channels(channels_); !st)
+    throw std::invalid_argument("actuator '" + this->name() + "': " + st.error());
+  output_.resize(channels_.size());
+  for (std::size_t i = 0; i < channels_.size(); ++i) output_[i] = channels_[i].clamp(0.0f);
+  staged_ = output_;
+  add_ioctl({"channels", std::nullopt, "the channels: name [min, max] units, one per line"},
+            [this](const os::ParamValue*) {
+              std::string text;
+              for (const auto& c : channels_) text += describe(c) + "\n";
+              return kernel::Result<std::string>(text);
+            });
+  add_ioctl({"output", std::nullopt, "the values last applied, one per channel"},
+            [this](const os::ParamValue*) { return kernel::Result<std::string>(numbers_text(output())); });
+  add_ioctl(
+      {"set", os::ParamSpec{"values", os::ParamType::kString, std::string(), 1.0, 1024.0, "one number per channel"},
+       "applies values now (clamped to range; NaN or a wrong count is refused)"},
+      [this](const os::ParamValue* arg) -> kernel::Result<std::string> {
+        auto v = parse_numbers(std::get<std::string>(*arg));
+        if (!v) return Error{v.error()};
+        auto r = set(*v);
+        if (!r) return Error{r.error()};
+        return numbers_text(output());
+      });
+  add_ioctl({"stats", std::nullopt, "command counters"}, [this](const os::ParamValue*) {
+    const ActuatorStats s = stats();
+    return kernel::Result<std::string>(
+        "commands=" + std::to_string(s.commands) + " applied=" + std::to_string(s.applied) +
+        " rejected=" + std::to_string(s.rejected) + " not_open=" + std::to_string(s.not_open) +
+        " driver_errors=" + std::to_string(s.driver_errors) + " clamped_values=" + std::to_string(s.clamped_values));
+  });
+}
+
+kernel::Status Actuator::open() {
+  open_.store(true, std::memory_order_release);
+  return {};
+}
+
+void Actuator::close() { open_.store(false, std::memory_order_release); }
+
+kernel::Result<std::size_t> Actuator::set(std::span<const float> values) {
+  std::lock_guard lock(mu_);
+  ++stats_.commands;
+  if (!is_open()) {
+    ++stats_.not_open;
+    return Error{"actuator '" + name() + "' is closed"};
+  }
+  const Conditioned c = condition_sample(channels_, values, staged_);
+  if (!c.ok()) {
+    ++stats_.rejected;
+    if (c.fault == SampleFault::kWrongCount)
+      return Error{"actuator '" + name() + "' takes " + std::to_string(channels_.size()) + " values, not " +
+                   std::to_string(values.size())};
+    return Error{"actuator '" + name() + "': NaN for channel '" + channels_[c.channel].name + "'"};
+  }
+  kernel::Status st;
+  try {
+    st = apply(staged_);
+  } catch (const std::exception& e) {
+    st = Error{std::string("driver threw: ") + e.what()};
+  }
+  if (!st) {
+    // The hardware state is unknown now; output() keeps what we last know was applied.
+    ++stats_.driver_errors;
+    staged_ = output_;
+    return Error{"actuator '" + name() + "': " + st.error()};
+  }
+  output_ = staged_;
+  ++stats_.applied;
+  stats_.clamped_values += c.clamped;
+  return c.clamped;
+}
+
+std::vector<float> Actuator::output() const {
+  std::lock_guard lock(mu_);
+  return output_;
+}
+
+ActuatorStats Actuator::stats() const {
+  std::lock_guard lock(mu_);
+  return stats_;
+}
+
+// --- ActuatorSinkTask ------------------------------------------------------------------------------
+
+ActuatorSinkTask::ActuatorSinkTask(std::shared_ptr<Actuator> actuator, Options options)
+    : actuator_(std::move(actuator)),
+      options_(std::move(options)),
+      fail_warning_(options_.warn_interval),
+      clamp_warning_(options_.warn_interval) {
+  if (!actuator_) throw std::invalid_argument("actuator sink: no actuator");
+  if (!options_.ranges.empty()) {
+    if (options_.ranges.size() != actuator_->channels().size())
+      throw std::invalid_argument("actuator sink: " + std::to_string(options_.ranges.size()) + " ranges for " +
+                                  std::to_string(actuator_->channels().size()) + " channels of '" + actuator_->name() +
+                                  "'");
+    if (auto st = validate_channels(options_.ranges); !st) throw std::invalid_argument("actuator sink: " + st.error());
+  }
+}
+
+ActuatorSinkStats ActuatorSinkTask::stats() const {
+  constexpr auto kRelaxed = std::memory_order_relaxed;
+  return {received_.load(kRelaxed), applied_.load(kRelaxed), failed_.load(kRelaxed), ignored_.load(kRelaxed)};
+}
+
+void ActuatorSinkTask::on_start() {
+  if (!actuator_->is_open())
+    if (auto st = actuator_->open(); !st)
+      log(os::LogLevel::kWarn, "cannot open '" + actuator_->name() + "': " + st.error());
+}
+
+void ActuatorSinkTask::on_message(const os::Message& m) {
+  received_.fetch_add(1, std::memory_order_relaxed);
+  if (m.payload.blob) {
+    ignored_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  std::span<const float> values = m.numbers();
+  std::size_t narrowed_clamps = 0;
+  if (!options_.ranges.empty()) {
+    const Conditioned c = condition_sample(options_.ranges, values, narrowed_);
+    // A fault here is passed on unnarrowed: the actuator refuses it and says why.
+    if (c.ok()) {
+      values = std::span<const float>(narrowed_.data(), options_.ranges.size());
+      narrowed_clamps = c.clamped;
+    }
+  }
+  auto r = actuator_->set(values);
+  if (!r) {
+    failed_.fetch_add(1, std::memory_order_relaxed);
+    if (fail_warning_.note(now()))
+      log(os::LogLevel::kWarn, std::to_string(fail_warning_.count()) + " command(s) refused, latest: " + r.error() +
+                                   " (previous output kept)");
+    return;
+  }
+  applied_.fetch_add(1, std::memory_order_relaxed);
+  const std::size_t clamped = *r + narrowed_clamps;
+  if (clamped > 0 && clamp_warning_.note(now(), clamped))
+    log(os::LogLevel::kWarn, std::to_string(clamp_warning_.count()) + " value(s) for '" + actuator_->name() +
+                                 "' outside their range, clamped");
+}
+
+kernel::Status ActuatorSinkTask::on_parameter(std::string_view name, const os::ParamValue& value) {
+  if (name == "warn_interval") {
+    options_.warn_interval = std::get<kernel::Duration>(value);
+    fail_warning_.set_interval(options_.warn_interval);
+    clamp_warning_.set_interval(options_.warn_interval);
+    return {};
+  }
+  return os::Task::on_parameter(name, value);
+}
+
+}  // namespace symb::robot

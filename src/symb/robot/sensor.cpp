@@ -1,0 +1,273 @@
+#include "symb/robot/sensor.hpp"
+
+#include <charconv>
+#include <stdexcept>
+
+#include "symb/os/node.hpp"
+#include "symb/robot/ports.hpp"
+
+namespace symb::robot {
+
+using kernel::Error;
+
+namespace {
+
+std::string numbers_text(std::span<const float> v) {
+  std::string text;
+  char buf[32];
+  for (float x : v) {
+    if (!text.empty()) text.push_back(' ');
+    auto r = std::to_chars(buf, buf + sizeof buf, x);
+    text.append(buf, r.ptr);
+  }
+  return text;
+}
+
+}  // namespace
+
+// --- Sensor ----------------------------------------------------------------------------------------
+
+Sensor::Sensor(std::string name, std::vector<ChannelSpec> channels, Options options)
+    : io::Device(std::move(name)), channels_(std::move(channels)), mailbox_(options.mailbox) {
+  if (auto st = validate_channels(channels_); !st)
+    throw std::invalid_argument("sensor '" + this->name() + "': " + st.error());
+  if (options.mailbox == 0)
+    throw std::invalid_argument("sensor '" + this->name() + "': mailbox must hold at least one sample");
+  add_ioctl({"channels", std::nullopt, "the channels: name [min, max] units, one per line"},
+            [this](const os::ParamValue*) {
+              std::string text;
+              for (const auto& c : channels_) text += describe(c) + "\n";
+              return kernel::Result<std::string>(text);
+            });
+  add_ioctl({"latest", std::nullopt, "the newest accepted sample: time in ns, then one value per channel"},
+            [this](const os::ParamValue*) -> kernel::Result<std::string> {
+              auto s = latest();
+              if (!s) return Error{"sensor '" + this->name() + "' has no sample yet"};
+              return std::to_string(s->time.count()) + " " + numbers_text(s->numbers());
+            });
+  add_ioctl({"stats", std::nullopt, "publish counters"}, [this](const os::ParamValue*) {
+    const SensorStats s = stats();
+    return kernel::Result<std::string>(
+        "published=" + std::to_string(s.published) + " not_open=" + std::to_string(s.not_open) +
+        " rejected=" + std::to_string(s.rejected) + " unheard=" + std::to_string(s.unheard) +
+        " queued=" + std::to_string(s.queued_total) + " taken=" + std::to_string(s.taken) +
+        " overwritten=" + std::to_string(s.overwritten) + " clamped_values=" + std::to_string(s.clamped_values));
+  });
+}
+
+Sensor::~Sensor() = default;
+
+kernel::Status Sensor::open() {
+  std::lock_guard lock(open_mu_);
+  if (open_.load()) return {};
+  if (auto st = activate(); !st) return Error{"sensor '" + name() + "' did not open: " + st.error()};
+  open_.store(true, std::memory_order_release);
+  return {};
+}
+
+void Sensor::close() {
+  std::lock_guard lock(open_mu_);
+  if (!open_.load()) return;
+  open_.store(false, std::memory_order_release);
+  deactivate();
+}
+
+PublishResult Sensor::publish(std::span<const float> values, kernel::Time time) {
+  SensorSample s;
+  s.time = time;
+  std::lock_guard lock(mu_);
+  ++stats_.published;
+  if (!open_.load(std::memory_order_acquire)) {
+    ++stats_.not_open;
+    return PublishResult::kNotOpen;
+  }
+  const Conditioned c = condition_sample(channels_, values, s.values);
+  PublishResult result = PublishResult::kQueued;
+  if (!c.ok()) {
+    ++stats_.rejected;
+    result = PublishResult::kRejected;
+  } else {
+    s.count = static_cast<std::uint8_t>(channels_.size());
+    stats_.clamped_values += c.clamped;
+    latest_ = s;
+    if (!notify_) {
+      ++stats_.unheard;
+      return PublishResult::kUnheard;
+    }
+    ++stats_.queued_total;
+    if (mailbox_.push_overwrite(s)) ++stats_.overwritten;
+  }
+  // A rejection wakes the task too, so that it can log it; one notification per drain.
+  if (notify_ && !notified_) {
+    notified_ = true;
+    notify_();
+  }
+  return result;
+}
+
+SensorStats Sensor::stats() const {
+  std::lock_guard lock(mu_);
+  return stats_;
+}
+
+std::optional<SensorSample> Sensor::latest() const {
+  std::lock_guard lock(mu_);
+  return latest_;
+}
+
+bool Sensor::has_listener() const {
+  std::lock_guard lock(mu_);
+  return static_cast<bool>(notify_);
+}
+
+kernel::Status Sensor::attach(std::function<void()> notify) {
+  std::lock_guard lock(mu_);
+  if (notify_) return Error{"sensor '" + name() + "' already feeds a task"};
+  notify_ = std::move(notify);
+  notified_ = false;
+  return {};
+}
+
+void Sensor::detach() {
+  std::lock_guard lock(mu_);
+  notify_ = nullptr;
+  // Whatever the task did not take is now unheard; keeping it would hand stale samples to the
+  // next task as fresh ones.
+  stats_.overwritten += mailbox_.size();
+  mailbox_.clear();
+  notified_ = false;
+}
+
+void Sensor::take(std::vector<SensorSample>& out) {
+  out.clear();
+  std::lock_guard lock(mu_);
+  notified_ = false;
+  while (!mailbox_.empty()) out.push_back(mailbox_.take());
+  stats_.taken += out.size();
+}
+
+// --- SensorTask ------------------------------------------------------------------------------------
+
+// What an injected notification needs to find the task. Owned by the task alone: the injected
+// work holds it weakly, so work still queued in a virtual-time executor after the task is gone
+// does nothing (and so never touches a node that may be gone too).
+struct SensorTask::Link {
+  os::Node* node = nullptr;
+  os::TaskId self;
+};
+
+SensorTask::SensorTask(std::shared_ptr<Sensor> sensor, Options options)
+    : sensor_(std::move(sensor)),
+      options_(std::move(options)),
+      link_(std::make_shared<Link>()),
+      clamp_warning_(options_.warn_interval),
+      reject_warning_(options_.warn_interval),
+      overwrite_warning_(options_.warn_interval) {
+  if (!sensor_) throw std::invalid_argument("sensor task: no sensor");
+  if (!options_.ranges.empty()) {
+    if (options_.ranges.size() != sensor_->channels().size())
+      throw std::invalid_argument("sensor task: " + std::to_string(options_.ranges.size()) + " ranges for " +
+                                  std::to_string(sensor_->channels().size()) + " channels of '" + sensor_->name() +
+                                  "'");
+    if (auto st = validate_channels(options_.ranges); !st) throw std::invalid_argument("sensor task: " + st.error());
+  }
+  batch_.reserve(16);
+}
+
+SensorTask::~SensorTask() {
+  // on_stop detached; this covers a task destroyed without running it.
+  if (attached_) sensor_->detach();
+}
+
+SensorTaskStats SensorTask::stats() const {
+  return {forwarded_.load(std::memory_order_relaxed), clamped_.load(std::memory_order_relaxed),
+          rejected_.load(std::memory_order_relaxed)};
+}
+
+void SensorTask::on_start() {
+  link_->node = &node();
+  link_->self = id();
+  if (!sensor_->is_open())
+    if (auto st = sensor_->open(); !st) log(os::LogLevel::kWarn, st.error());
+  seen_ = sensor_->stats();
+  // The notifier runs on the driver's thread with the sensor locked. The node pointer it uses is
+  // valid there: the task detaches in on_stop, under that same lock, before the task (and so
+  // its node) can go away.
+  os::Node* node = &this->node();
+  std::weak_ptr<Link> weak = link_;
+  auto st = sensor_->attach([node, weak] {
+    node->inject([weak] {
+      auto link = weak.lock();
+      if (!link) return;
+      os::Message m;
+      m.port = kWakePort;
+      // Keep-newest: the notification must never be refused; at most one is ever in flight.
+      (void)link->node->post(link->self, m, os::QueuePolicy::kKeepNewest);
+    });
+  });
+  if (!st) {
+    log(os::LogLevel::kError, st.error() + ": this task forwards nothing");
+    return;
+  }
+  attached_ = true;
+}
+
+void SensorTask::on_stop() {
+  if (attached_) sensor_->detach();
+  attached_ = false;
+}
+
+void SensorTask::on_message(const os::Message& m) {
+  // Only our own notification means anything; someone hooked to us by mistake is ignored.
+  if (m.port == kWakePort && !m.source.valid()) drain();
+}
+
+void SensorTask::drain() {
+  sensor_->take(batch_);
+  std::array<float, os::Payload::kInlineValues> narrowed{};
+  for (const SensorSample& s : batch_) {
+    if (options_.ranges.empty()) {
+      send(kDataPort, s.numbers());
+    } else {
+      const Conditioned c = condition_sample(options_.ranges, s.numbers(), narrowed);
+      if (!c.ok()) {
+        rejected_.fetch_add(1, std::memory_order_relaxed);
+        continue;
+      }
+      if (c.clamped > 0) clamped_.fetch_add(c.clamped, std::memory_order_relaxed);
+      send(kDataPort, std::span<const float>(narrowed.data(), s.count));
+    }
+    forwarded_.fetch_add(1, std::memory_order_relaxed);
+  }
+  report(sensor_->stats());
+}
+
+void SensorTask::report(const SensorStats& st) {
+  const kernel::Time t = now();
+  const std::uint64_t clamped = st.clamped_values - seen_.clamped_values;
+  const std::uint64_t rejected = st.rejected - seen_.rejected;
+  const std::uint64_t overwritten = st.overwritten - seen_.overwritten;
+  seen_ = st;
+  if (clamped > 0 && clamp_warning_.note(t, clamped))
+    log(os::LogLevel::kWarn, std::to_string(clamp_warning_.count()) + " value(s) of '" + sensor_->name() +
+                                 "' outside their channel range, clamped");
+  if (rejected > 0 && reject_warning_.note(t, rejected))
+    log(os::LogLevel::kWarn, std::to_string(reject_warning_.count()) + " sample(s) of '" + sensor_->name() +
+                                 "' rejected (NaN or wrong number of values)");
+  if (overwritten > 0 && overwrite_warning_.note(t, overwritten))
+    log(os::LogLevel::kWarn, std::to_string(overwrite_warning_.count()) + " sample(s) of '" + sensor_->name() +
+                                 "' lost: the mailbox was full before this task ran");
+}
+
+kernel::Status SensorTask::on_parameter(std::string_view name, const os::ParamValue& value) {
+  if (name == "warn_interval") {
+    options_.warn_interval = std::get<kernel::Duration>(value);
+    clamp_warning_.set_interval(options_.warn_interval);
+    reject_warning_.set_interval(options_.warn_interval);
+    overwrite_warning_.set_interval(options_.warn_interval);
+    return {};
+  }
+  return os::Task::on_parameter(name, value);
+}
+
+}  // namespace symb::robot

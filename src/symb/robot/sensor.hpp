@@ -1,0 +1,176 @@
+// Sensor and SensorTask: the paper's active sensor, one that "informs the system that new data
+// arrived by generating a hardware/software interrupt". The driver owns the timing: whenever it
+// has a sample (an interrupt fired, a reader thread decoded a frame) it calls Sensor::publish()
+// from whatever thread it runs on. A SensorTask attached to the sensor makes that data hookable:
+// every sample is sent, one number per channel, on kDataPort to the tasks hooked to it.
+//
+// Design:
+//  - The Sensor is a device (open, close, typed ioctls) holding its channel specs and a small
+//    mailbox of samples. publish() conditions the sample (NaN: rejected; out of range: clamped),
+//    queues it and, like an interrupt handler giving a semaphore, notifies the task once; more
+//    samples before the task runs just join the mailbox. A full mailbox drops its oldest sample
+//    (counted): for sensor data only the newest matters.
+//  - The notification goes through Node::inject, the one node call a foreign thread may make
+//    under every executor, and becomes a message the task posts to itself; so the same code runs
+//    under the thread executor (at once, on the driver's thread) and under the virtual-time one
+//    (between events, on its thread). The task then drains the mailbox on its own context.
+//  - Every counter is exact: published == not_open + rejected + unheard + queued_total, and
+//    queued_total == taken + overwritten + (samples still in the mailbox).
+//  - Samples published while no task listens are unheard: kept as latest() only, never queued,
+//    so a task that starts later does not forward stale data as fresh.
+//  - A sensor feeds one SensorTask at a time; hooks give any number of receivers.
+//  - Forwarded messages carry the node time at which the task sent them (Task::send stamps every
+//    message); the driver's own sample time is kept with latest().
+//  - Drivers either hold a Sensor and call publish(), or derive from it to start and stop the
+//    hardware with the device (activate() on open, deactivate() on close).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "symb/io/device.hpp"
+#include "symb/kernel/result.hpp"
+#include "symb/kernel/ring_buffer.hpp"
+#include "symb/kernel/time.hpp"
+#include "symb/os/message.hpp"
+#include "symb/os/task.hpp"
+#include "symb/robot/channel_spec.hpp"
+#include "symb/robot/warning_limiter.hpp"
+
+namespace symb::robot {
+
+// One conditioned reading of every channel, with the instant the driver gave for it.
+struct SensorSample {
+  kernel::Time time{0};
+  std::uint8_t count = 0;
+  std::array<float, os::Payload::kInlineValues> values{};
+
+  std::span<const float> numbers() const { return {values.data(), count}; }
+};
+
+struct SensorStats {
+  std::uint64_t published = 0;       // publish() calls
+  std::uint64_t not_open = 0;        // published while the device was closed: dropped
+  std::uint64_t rejected = 0;        // wrong number of values or a NaN: dropped
+  std::uint64_t unheard = 0;         // accepted while no task listened: kept as latest() only
+  std::uint64_t queued_total = 0;    // put into the mailbox for the task
+  std::uint64_t taken = 0;           // taken from the mailbox by the task
+  std::uint64_t overwritten = 0;     // pushed out of a full mailbox, or left in it when the task detached
+  std::uint64_t clamped_values = 0;  // values moved into their channel's range (in accepted samples)
+};
+
+// What publish() did with a sample.
+enum class PublishResult : std::uint8_t { kQueued, kUnheard, kRejected, kNotOpen };
+
+class Sensor : public io::Device {
+ public:
+  struct Options {
+    std::size_t mailbox = 8;  // samples held for the task between two of its runs (>= 1)
+  };
+
+  // Throws std::invalid_argument on a bad channel list (see validate_channels): a driver's
+  // channel table is fixed when it is written, not input to be recovered from.
+  Sensor(std::string name, std::vector<ChannelSpec> channels) : Sensor(std::move(name), std::move(channels), {}) {}
+  Sensor(std::string name, std::vector<ChannelSpec> channels, Options options);
+  ~Sensor() override;
+
+  const std::vector<ChannelSpec>& channels() const { return channels_; }
+
+  // Starts the device (activate()); a sample is only accepted while it is open.
+  kernel::Status open() override;
+  void close() override;
+  bool is_open() const override { return open_.load(std::memory_order_acquire); }
+
+  // For the driver, from any thread, at any time (the "interrupt"): one value per channel,
+  // sampled at `time`. Never blocks for long (a short lock), never throws.
+  PublishResult publish(std::span<const float> values, kernel::Time time);
+
+  SensorStats stats() const;
+  // The newest accepted sample, heard or not.
+  std::optional<SensorSample> latest() const;
+  // Whether a SensorTask is attached (samples are queued, not unheard).
+  bool has_listener() const;
+
+ protected:
+  // Driver hooks, called outside the sensor's data lock (a driver may publish from inside).
+  virtual kernel::Status activate() { return {}; }
+  virtual void deactivate() {}
+
+ private:
+  friend class SensorTask;
+  // The notifier runs inside publish(), on the driver's thread, with the sensor's lock held: it
+  // may only hand work over (Node::inject), never call back into the sensor.
+  kernel::Status attach(std::function<void()> notify);
+  void detach();
+  // Moves the mailbox out, oldest first, and rearms the notification.
+  void take(std::vector<SensorSample>& out);
+
+  const std::vector<ChannelSpec> channels_;
+  std::mutex open_mu_;  // serialises open/close (and the driver's activate/deactivate)
+  std::atomic<bool> open_{false};
+
+  mutable std::mutex mu_;  // everything below
+  kernel::RingBuffer<SensorSample> mailbox_;
+  std::function<void()> notify_;
+  bool notified_ = false;
+  std::optional<SensorSample> latest_;
+  SensorStats stats_;
+};
+
+struct SensorTaskStats {
+  std::uint64_t forwarded = 0;       // samples sent to hooked tasks
+  std::uint64_t clamped_values = 0;  // values clamped by the task's own (narrower) ranges
+  std::uint64_t rejected = 0;        // samples that did not fit the task's ranges (channel count)
+};
+
+class SensorTask : public os::Task {
+ public:
+  struct Options {
+    // Narrower ranges than the device's (same channels), or empty for the device's own.
+    std::vector<ChannelSpec> ranges;
+    kernel::Duration warn_interval = std::chrono::seconds(1);
+  };
+
+  // Throws std::invalid_argument when `ranges` does not match the sensor's channels.
+  explicit SensorTask(std::shared_ptr<Sensor> sensor) : SensorTask(std::move(sensor), Options{}) {}
+  SensorTask(std::shared_ptr<Sensor> sensor, Options options);
+  ~SensorTask() override;
+
+  Sensor& sensor() { return *sensor_; }
+  // Safe from any thread.
+  SensorTaskStats stats() const;
+
+ protected:
+  void on_start() override;
+  void on_message(const os::Message& m) override;
+  void on_stop() override;
+  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+
+ private:
+  struct Link;
+  void drain();
+  void report(const SensorStats& now_seen);
+
+  std::shared_ptr<Sensor> sensor_;
+  Options options_;
+  std::shared_ptr<Link> link_;
+  bool attached_ = false;
+  std::vector<SensorSample> batch_;
+  SensorStats seen_;  // the sensor's counters at the last report
+  WarningLimiter clamp_warning_;
+  WarningLimiter reject_warning_;
+  WarningLimiter overwrite_warning_;
+  std::atomic<std::uint64_t> forwarded_{0};
+  std::atomic<std::uint64_t> clamped_{0};
+  std::atomic<std::uint64_t> rejected_{0};
+};
+
+}  // namespace symb::robot
