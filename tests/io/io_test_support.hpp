@@ -1,0 +1,116 @@
+// Helpers shared by the fd-based stream tests: waiting on a condition with a deadline (never a
+// fixed sleep), telling when another thread is really blocked in the kernel, and moving bytes
+// and frames across a stream with a writer thread and a reading loop.
+#pragma once
+
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <functional>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "symb/io/frame_codec.hpp"
+#include "symb/io/stream.hpp"
+
+namespace symb::io::testing {
+
+using namespace std::chrono_literals;
+
+// Generous: a TSan build runs about ten times slower than a normal one.
+inline constexpr auto kDeadline = 20s;
+
+// Polls `done` until it holds or `limit` passes; returns whether it held.
+inline bool eventually(const std::function<bool()>& done, std::chrono::nanoseconds limit = kDeadline) {
+  const auto end = std::chrono::steady_clock::now() + limit;
+  for (;;) {
+    if (done()) return true;
+    if (std::chrono::steady_clock::now() >= end) return false;
+    std::this_thread::yield();
+  }
+}
+
+inline pid_t this_thread_tid() { return static_cast<pid_t>(::syscall(SYS_gettid)); }
+
+// True when thread `tid` of this process sleeps in the kernel (state 'S'): a reader is then
+// inside its poll, which is what a "close wakes the reader" test must interrupt.
+inline bool thread_sleeping(pid_t tid) {
+  std::ifstream f("/proc/self/task/" + std::to_string(tid) + "/stat");
+  std::string line;
+  if (!std::getline(f, line)) return false;
+  const auto paren = line.rfind(')');
+  return paren != std::string::npos && paren + 2 < line.size() && line[paren + 2] == 'S';
+}
+
+// Reads from `in` until `want` bytes came or the deadline passed.
+inline std::vector<std::byte> read_exactly(InputDevice& in, std::size_t want,
+                                           std::chrono::nanoseconds limit = kDeadline) {
+  std::vector<std::byte> got;
+  std::vector<std::byte> buf(4096);
+  const auto end = std::chrono::steady_clock::now() + limit;
+  while (got.size() < want && std::chrono::steady_clock::now() < end) {
+    auto n = in.read_some(buf, 50ms);
+    if (!n) break;
+    got.insert(got.end(), buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(*n));
+  }
+  return got;
+}
+
+// Writes `wire` to `out` from a thread of its own, in pieces of 1 to `piece` bytes, while the
+// caller reads; join() returns the first write error, or an empty string.
+class Writer {
+ public:
+  Writer(OutputDevice& out, std::vector<std::byte> wire, std::size_t piece = 777)
+      : thread_([this, &out, wire = std::move(wire), piece] {
+          std::span<const std::byte> rest(wire);
+          std::size_t k = 0;
+          while (!rest.empty()) {
+            const std::size_t n = std::min(rest.size(), 1 + (7919 * ++k) % piece);
+            if (auto st = out.write_all(rest.first(n)); !st) {
+              std::lock_guard lock(mu_);
+              error_ = st.error();
+              return;
+            }
+            rest = rest.subspan(n);
+          }
+        }) {}
+  ~Writer() {
+    if (thread_.joinable()) thread_.join();
+  }
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  std::string join() {
+    if (thread_.joinable()) thread_.join();
+    std::lock_guard lock(mu_);
+    return error_;
+  }
+
+ private:
+  std::mutex mu_;
+  std::string error_;
+  std::thread thread_;
+};
+
+// Reads frames from `in` into `decoder` until `count` frames came or the deadline passed.
+inline std::vector<std::vector<std::byte>> read_frames(InputDevice& in, FrameDecoder& decoder, std::size_t count,
+                                                       std::chrono::nanoseconds limit = kDeadline) {
+  std::vector<std::vector<std::byte>> frames;
+  std::vector<std::byte> buf(4096);
+  const auto end = std::chrono::steady_clock::now() + limit;
+  while (frames.size() < count && std::chrono::steady_clock::now() < end) {
+    auto n = in.read_some(buf, 50ms);
+    if (!n) break;
+    decoder.feed(std::span<const std::byte>(buf.data(), *n),
+                 [&](std::span<const std::byte> f) { frames.emplace_back(f.begin(), f.end()); });
+  }
+  return frames;
+}
+
+}  // namespace symb::io::testing
