@@ -205,6 +205,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"demo swarm --duration 5parsecs", "--duration: '5parsecs'"},
         BadInput{"demo swarm --quiet=yes", "--quiet takes no value"},
         BadInput{"demo swarm --realtime --nodes 1000", "--nodes: with --realtime"},
+        BadInput{"demo swarm --shell-port 0", "--shell-port needs --realtime"},
+        BadInput{"demo swarm --realtime --shell-port 70000", "--shell-port: '70000' is out of range"},
+        BadInput{"shell", "symb shell"}, BadInput{"shell --tcp nohost", "symb shell"},
         BadInput{"version now", "unexpected argument 'now'"},
         BadInput{"--verison", "'--verison' (did you mean '--version'?)"}),
     test_name);

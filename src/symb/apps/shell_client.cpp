@@ -24,11 +24,11 @@ namespace {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
-constexpr unsigned char kQuitKey = 0x1d;  // Ctrl-]
+constexpr unsigned char kQuitKey = 0x1d;                  // Ctrl-]
 constexpr std::string_view kAskForEcho = "\xff\xfd\x01";  // telnet IAC DO ECHO: "a person types here"
 
 constexpr OptionSpec kSpecs[] = {
-    {"--tcp", "HOST:PORT", "connect to a shell server (symb board ... --shell-port)"},
+    {"--tcp", "HOST:PORT", "connect to a node's TCP shell server"},
     {"--token", "T", "the server's token, sent as the first line"},
     {"--serial", "PATH", "open a serial device or pseudo-terminal carrying a shell"},
     {"--baud", "N", "serial speed (default 115200)"},
@@ -106,7 +106,8 @@ bool write_fd(int fd, std::string_view data) {
 // link closes; remembers when the last bytes came.
 class Printer {
  public:
-  Printer(io::IOStream& link, int out_fd) : link_(link), out_fd_(out_fd), last_(Clock::now().time_since_epoch().count()) {
+  Printer(io::IOStream& link, int out_fd)
+      : link_(link), out_fd_(out_fd), last_(Clock::now().time_since_epoch().count()) {
     thread_ = std::thread([this] { loop(); });
   }
   ~Printer() { stop(); }
@@ -219,7 +220,10 @@ std::variant<ShellClientOptions, UsageError> parse_shell_client_args(std::span<c
   ShellClientOptions o;
   bool baud_given = false;
   for (const auto& p : std::get<std::vector<ParsedOption>>(parsed)) {
-    if (p.name == "--help") return UsageError{"help"};
+    if (p.name == "--help") {
+      o.help = true;
+      return o;
+    }
     if (p.name == "--tcp") o.tcp = p.value;
     if (p.name == "--token") o.token = p.value;
     if (p.name == "--serial") o.serial = p.value;

@@ -28,16 +28,18 @@ struct ShellClientOptions {
   std::string token;   // sent as the first line when not empty
   std::string serial;  // a serial device or pseudo-terminal path
   int baud = 115200;
-  int input_fd = 0;   // what is typed or piped in
-  int output_fd = 1;  // where replies go
+  int input_fd = 0;             // what is typed or piped in
+  int output_fd = 1;            // where replies go
   std::ostream* err = nullptr;  // messages; null: std::cerr
   // Piped input: how long the replies must have been quiet after the end of input, and the most
   // the client waits for them altogether.
   std::chrono::milliseconds quiet{300};
   std::chrono::milliseconds drain_limit{10000};
+  bool help = false;  // -h or --help was given: print shell_client_help() instead of running
 };
 
-// Reads `symb shell` arguments (what follows "shell"): exactly one of --tcp and --serial.
+// Reads `symb shell` arguments (what follows "shell"): exactly one of --tcp and --serial, unless
+// --help.
 std::variant<ShellClientOptions, UsageError> parse_shell_client_args(std::span<const std::string_view> args);
 // The help text of `symb shell`.
 std::string shell_client_help();

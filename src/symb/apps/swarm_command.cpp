@@ -19,6 +19,7 @@ constexpr OptionSpec kOptions[] = {
     {"--duration", "D", "simulated time with a unit: 60s, 500ms, 2min, 1h (default 60s)"},
     {"--out", "DIR", "output folder (default out/swarm)"},
     {"--realtime", "", "run on OS threads against the wall clock (not deterministic)"},
+    {"--shell-port", "PORT", "with --realtime: open robot 0's command shell on 127.0.0.1:PORT (0: any free port)"},
     {"--print-hash", "", "print only 'trace-hash: <16 hex digits>' on stdout; files only with --out"},
     {"--quiet", "", "no progress line and no summary"},
     {"--help", "", "this help"},
@@ -80,12 +81,23 @@ int run_swarm_command(std::span<const std::string_view> args, const CliContext& 
       out_dir = o.value;
     } else if (o.name == "--realtime") {
       options.realtime = true;
+    } else if (o.name == "--shell-port") {
+      auto v = parse_count("--shell-port", o.value, 0, 65535);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.shell_port = static_cast<std::uint16_t>(std::get<std::uint64_t>(v));
     } else if (o.name == "--print-hash") {
       print_hash = true;
     } else if (o.name == "--quiet") {
       quiet = true;
     }
   }
+  if (options.shell_port && !options.realtime)
+    return usage_error(
+        ctx, kCommand,
+        UsageError{"--shell-port needs --realtime: a virtual-time run is over before anyone could type"});
+  options.on_shell = [&ctx](const std::string& where, const std::string& token) {
+    ctx.err << "shell: symb shell --tcp " << where << (token.empty() ? "" : " --token " + token) << "\n";
+  };
   if (options.realtime && options.nodes > kMaxRealtimeSwarmNodes)
     return usage_error(
         ctx, kCommand,

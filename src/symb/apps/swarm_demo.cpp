@@ -16,6 +16,7 @@
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
+#include "symb/shell/tcp_shell.hpp"
 
 namespace symb::apps {
 
@@ -160,6 +161,17 @@ kernel::Result<SwarmResult> run_swarm(const SwarmOptions& options) {
       return Error{node.name() + ": " + st.error()};
   }
 
+  std::unique_ptr<shell::TcpShellServer> shell_server;
+  if (options.shell_port) {
+    shell::TcpShellOptions so;
+    so.port = *options.shell_port;
+    auto server = shell::TcpShellServer::start(*nodes.front(), so);
+    if (!server) return Error{"shell: " + server.error()};
+    shell_server = std::move(server).value();
+    if (options.on_shell)
+      options.on_shell(shell_server->host() + ":" + std::to_string(shell_server->port()), shell_server->token());
+  }
+
   const double total = kernel::to_seconds(options.duration);
   const auto report = [&](double done, WallClock::time_point t0) {
     if (options.on_progress) options.on_progress(SwarmProgress{done, total, seconds_since(t0)});
@@ -194,6 +206,7 @@ kernel::Result<SwarmResult> run_swarm(const SwarmOptions& options) {
   nodes.front()->log().info("swarm", "run ended after " + fixed(total, 3) + " s");
   result.node0_log = nodes.front()->log().since(0);
 
+  shell_server.reset();  // its sessions are tasks of robot 0: close them while the node exists
   // Destroying the nodes stops every task (and, under threads, waits for their handlers), after
   // which the trajectories are ours alone to read.
   nodes.clear();

@@ -51,6 +51,10 @@ struct SwarmOptions {
   std::optional<std::filesystem::path> out_dir;
   // Called now and then from the running thread (every 100 ms of simulated or wall time).
   std::function<void(const SwarmProgress&)> on_progress;
+  // When set (realtime runs), robot 0's command shell listens on 127.0.0.1 at this port (0: any
+  // free one) while the swarm runs; on_shell is told "host:port" and the session token.
+  std::optional<std::uint16_t> shell_port;
+  std::function<void(const std::string& where, const std::string& token)> on_shell;
 };
 
 // One robot's figures, from every pose its kinematics sent.

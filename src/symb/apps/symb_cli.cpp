@@ -2,6 +2,7 @@
 
 #include <array>
 
+#include "symb/apps/shell_client.hpp"
 #include "symb/apps/swarm_command.hpp"
 
 #ifndef SYMB_VERSION
@@ -12,7 +13,7 @@ namespace symb::apps {
 
 namespace {
 
-constexpr std::string_view kCommands[] = {"demo", "version", "help"};
+constexpr std::string_view kCommands[] = {"demo", "shell", "version", "help"};
 constexpr std::string_view kDemos[] = {"swarm"};
 
 void print_help(std::ostream& out) {
@@ -21,6 +22,8 @@ void print_help(std::ostream& out) {
       << "Usage: symb <command> [options]\n\n"
       << "Commands:\n"
       << "  demo <name> [options]   run a built-in demo (symb demo --help lists them)\n"
+      << "  shell --tcp HOST:PORT | --serial PATH\n"
+      << "                          open a running node's command shell (like telnet or picocom)\n"
       << "  version                 print the version\n"
       << "  help                    print this help\n\n"
       << "Run 'symb <command> --help' for a command's options.\n"
@@ -76,6 +79,16 @@ int run_symb(std::span<const std::string_view> args, const CliContext& ctx) {
     return kExitOk;
   }
   if (command == "demo") return run_demo(rest, ctx);
+  if (command == "shell") {
+    auto parsed = parse_shell_client_args(rest);
+    if (auto* e = std::get_if<UsageError>(&parsed)) return usage_error(ctx, "symb shell", *e);
+    const auto& o = std::get<ShellClientOptions>(parsed);
+    if (o.help) {
+      ctx.out << shell_client_help();
+      return kExitOk;
+    }
+    return run_shell_client(o);
+  }
   if (command.starts_with("-")) {
     constexpr std::string_view kTopOptions[] = {"--help", "--version"};
     return usage_error(ctx, "symb",
