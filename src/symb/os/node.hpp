@@ -1,8 +1,10 @@
 // Node: one robot's operating-system instance (the paper's TaskManager, one per robot instead of
 // a process-wide singleton). It owns the robot's tasks and their hooks, its SysLog and its random
 // streams, and reads time from the clock of the executor it runs on. Every operation may be
-// called at runtime from any task's handler or from outside (a shell, a scenario, a test), on any
-// thread; tasks and hooks are named by handles, so rewiring never leaves a dangling reference.
+// called at runtime from any task's handler or from outside (a shell, a scenario, a test). Under
+// the thread executor that is any thread; under the single-threaded virtual-time executor it is
+// the executor's own thread (handlers, or between run_*() calls), and other threads go through
+// inject(). Tasks and hooks are named by handles, so rewiring never leaves a dangling reference.
 // Hooks join tasks of the same node.
 #pragma once
 
