@@ -112,33 +112,13 @@ std::variant<std::uint64_t, UsageError> parse_u64(std::string_view what, std::st
 std::variant<kernel::Duration, UsageError> parse_duration(std::string_view what, std::string_view text,
                                                           kernel::Duration max) {
   const std::string expected = "a duration with a unit, such as 60s, 500ms or 2min";
-  std::size_t unit_at = text.size();
-  while (unit_at > 0 && std::isalpha(static_cast<unsigned char>(text[unit_at - 1]))) --unit_at;
-  const std::string_view number = text.substr(0, unit_at), unit = text.substr(unit_at);
-  double scale = 0;
-  if (unit == "ns")
-    scale = 1;
-  else if (unit == "us")
-    scale = 1e3;
-  else if (unit == "ms")
-    scale = 1e6;
-  else if (unit == "s")
-    scale = 1e9;
-  else if (unit == "min")
-    scale = 60e9;
-  else if (unit == "h")
-    scale = 3600e9;
-  double v = 0;
-  auto r = std::from_chars(number.data(), number.data() + number.size(), v);
-  if (scale == 0 || number.empty() || number.front() == '-' || r.ec != std::errc{} ||
-      r.ptr != number.data() + number.size() || !std::isfinite(v))
-    return UsageError{std::string(what) + ": " + quote_arg(text) + " is not " + expected};
-  const double ns = v * scale;
-  if (ns < 1 || ns > static_cast<double>(max.count()))
+  auto d = os::parse_duration(text);
+  if (!d) return UsageError{std::string(what) + ": " + quote_arg(text) + " is not " + expected};
+  if (d->count() < 1 || *d > max)
     return UsageError{std::string(what) + ": " + quote_arg(text) +
                       " is out of range: expected more than 0 and at most " +
                       std::to_string(std::chrono::duration_cast<std::chrono::hours>(max).count()) + "h"};
-  return kernel::Duration{static_cast<std::int64_t>(std::llround(ns))};
+  return *d;
 }
 
 int usage_error(const CliContext& ctx, std::string_view command, const UsageError& e) {

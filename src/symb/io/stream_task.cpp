@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "symb/io/bytes.hpp"
+#include "symb/io/number_text.hpp"
 #include "symb/os/node.hpp"
 
 namespace symb::io {
@@ -174,13 +175,7 @@ void StreamTask::on_message(const os::Message& m) {
   } else if (options_.mode == StreamMode::kFrames) {
     encode_frame(encode_numbers(m.numbers()), out_);
   } else {
-    std::string text;
-    char buf[32];
-    for (float v : m.numbers()) {
-      if (!text.empty()) text.push_back(' ');
-      auto r = std::to_chars(buf, buf + sizeof buf, v);
-      text.append(buf, r.ptr);
-    }
+    std::string text = format_numbers(m.numbers());
     text.push_back('\n');
     out_.assign(reinterpret_cast<const std::byte*>(text.data()),
                 reinterpret_cast<const std::byte*>(text.data()) + text.size());

@@ -3,43 +3,11 @@
 #include <charconv>
 #include <stdexcept>
 
+#include "symb/io/number_text.hpp"
+
 namespace symb::robot {
 
 using kernel::Error;
-
-namespace {
-
-std::string numbers_text(std::span<const float> v) {
-  std::string text;
-  char buf[32];
-  for (float x : v) {
-    if (!text.empty()) text.push_back(' ');
-    auto r = std::to_chars(buf, buf + sizeof buf, x);
-    text.append(buf, r.ptr);
-  }
-  return text;
-}
-
-// "0.5 1 0" -> numbers; NaN text is let through so that set() rejects it the usual way.
-kernel::Result<std::vector<float>> parse_numbers(std::string_view text) {
-  std::vector<float> v;
-  std::size_t pos = 0;
-  while (pos < text.size()) {
-    if (text[pos] == ' ' || text[pos] == ',') {
-      ++pos;
-      continue;
-    }
-    float x = 0;
-    auto [ptr, ec] = std::from_chars(text.data() + pos, text.data() + text.size(), x);
-    if (ec != std::errc{} || ptr == text.data() + pos)
-      return Error{"column " + std::to_string(pos + 1) + ": expected a number"};
-    v.push_back(x);
-    pos = static_cast<std::size_t>(ptr - text.data());
-  }
-  return v;
-}
-
-}  // namespace
 
 // --- Actuator --------------------------------------------------------------------------------------
 
@@ -57,16 +25,16 @@ Actuator::Actuator(std::string name, std::vector<ChannelSpec> channels)
               return kernel::Result<std::string>(text);
             });
   add_ioctl({"output", std::nullopt, "the values last applied, one per channel"},
-            [this](const os::ParamValue*) { return kernel::Result<std::string>(numbers_text(output())); });
+            [this](const os::ParamValue*) { return kernel::Result<std::string>(io::format_numbers(output())); });
   add_ioctl(
       {"set", os::ParamSpec{"values", os::ParamType::kString, std::string(), 1.0, 1024.0, "one number per channel"},
        "applies values now (clamped to range; NaN or a wrong count is refused)"},
       [this](const os::ParamValue* arg) -> kernel::Result<std::string> {
-        auto v = parse_numbers(std::get<std::string>(*arg));
+        auto v = io::parse_numbers(std::get<std::string>(*arg));
         if (!v) return Error{v.error()};
         auto r = set(*v);
         if (!r) return Error{r.error()};
-        return numbers_text(output());
+        return io::format_numbers(output());
       });
   add_ioctl({"stats", std::nullopt, "command counters"}, [this](const os::ParamValue*) {
     const ActuatorStats s = stats();

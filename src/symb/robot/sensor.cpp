@@ -3,27 +3,13 @@
 #include <charconv>
 #include <stdexcept>
 
+#include "symb/io/number_text.hpp"
 #include "symb/os/node.hpp"
 #include "symb/robot/ports.hpp"
 
 namespace symb::robot {
 
 using kernel::Error;
-
-namespace {
-
-std::string numbers_text(std::span<const float> v) {
-  std::string text;
-  char buf[32];
-  for (float x : v) {
-    if (!text.empty()) text.push_back(' ');
-    auto r = std::to_chars(buf, buf + sizeof buf, x);
-    text.append(buf, r.ptr);
-  }
-  return text;
-}
-
-}  // namespace
 
 // --- Sensor ----------------------------------------------------------------------------------------
 
@@ -43,7 +29,7 @@ Sensor::Sensor(std::string name, std::vector<ChannelSpec> channels, Options opti
             [this](const os::ParamValue*) -> kernel::Result<std::string> {
               auto s = latest();
               if (!s) return Error{"sensor '" + this->name() + "' has no sample yet"};
-              return std::to_string(s->time.count()) + " " + numbers_text(s->numbers());
+              return std::to_string(s->time.count()) + " " + io::format_numbers(s->numbers());
             });
   add_ioctl({"stats", std::nullopt, "publish counters"}, [this](const os::ParamValue*) {
     const SensorStats s = stats();
