@@ -59,9 +59,10 @@ TEST(Stream, ReadLineKeepsPartialLinesAcrossTimeouts) {
 
 TEST(Stream, CloseIsSeenByThePeerAndWakesAReader) {
   auto [a, b] = make_loopback_pair("lb");
-  std::thread closer([&] {
+  IOStream* end_a = a.get();  // clang 14 cannot capture a structured binding
+  std::thread closer([end_a] {
     std::this_thread::sleep_for(20ms);
-    a->close();
+    end_a->close();
   });
   std::byte buf[8];
   const auto t0 = std::chrono::steady_clock::now();

@@ -1,0 +1,121 @@
+// MDL2e parser and compiler: accepted programs give the expected tree; every error names the line
+// and column of the offending token.
+#include <gtest/gtest.h>
+
+#include "symb/control/mdl2e/parser.hpp"
+
+#include "mdl2e_test_support.hpp"
+
+namespace symb::control::mdl2e {
+namespace {
+
+std::string error_of(std::string_view source) {
+  auto p = compile_source(source);
+  return p.ok() ? std::string("<accepted>") : p.error();
+}
+
+TEST(Mdl2eParser, ParsesDeclarationsAndNesting) {
+  auto a = parse(
+      "sensor ir[7]\n"
+      "interrupt near = ir[2] >= 1500.5\n"
+      "interrupt bump = external\n"
+      "behaviour b for 2s loop 3 { atom stop }\n"
+      "plan main until near or not bump { behavior inner until (near and bump) { do b } task start logger }\n");
+  ASSERT_TRUE(a.ok()) << a.error();
+  ASSERT_EQ(a->sensors.size(), 1u);
+  EXPECT_EQ(a->sensors[0].size, 7u);
+  ASSERT_EQ(a->interrupts.size(), 2u);
+  EXPECT_EQ(a->interrupts[0].op, ast::CmpOp::kGe);
+  EXPECT_DOUBLE_EQ(a->interrupts[0].threshold, 1500.5);
+  EXPECT_TRUE(a->interrupts[1].external);
+  ASSERT_EQ(a->behaviours.size(), 1u);
+  EXPECT_EQ(a->behaviours[0].mods.duration_ms, 2000u);
+  EXPECT_EQ(a->behaviours[0].mods.loop_count, 3u);
+  ASSERT_TRUE(a->plan);
+  EXPECT_EQ(a->plan->children.size(), 2u);
+  EXPECT_EQ(a->plan->children[0].kind, ast::Item::Kind::kBehaviour);
+  EXPECT_EQ(a->plan->children[0].children[0].kind, ast::Item::Kind::kCall);
+  EXPECT_EQ(a->plan->children[1].kind, ast::Item::Kind::kTask);
+  ASSERT_TRUE(a->plan->mods.until);
+  EXPECT_EQ(a->plan->mods.until->kind, ast::Expr::Kind::kOr);
+}
+
+TEST(Mdl2eParser, DurationsAndUnits) {
+  auto a = parse("plan p { atom stop for 1.5s atom stop for 250ms }");
+  ASSERT_TRUE(a.ok()) << a.error();
+  EXPECT_EQ(a->plan->children[0].mods.duration_ms, 1500u);
+  EXPECT_EQ(a->plan->children[1].mods.duration_ms, 250u);
+  EXPECT_EQ(error_of("plan p { atom stop for 10 }"), "1:24: duration '10' needs a unit: ms or s");
+  EXPECT_EQ(error_of("plan p { atom stop for 10h }"), "1:24: unknown duration unit 'h' (use ms or s)");
+  EXPECT_EQ(error_of("plan p { atom stop for 0.5ms }"), "1:24: duration '0.5ms' is not a whole number of ms");
+  EXPECT_EQ(error_of("plan p { atom stop for 0ms }"), "1:24: duration '0ms' must be in 1ms..4000000s");
+}
+
+TEST(Mdl2eParser, SyntaxErrorsNameLineAndColumn) {
+  EXPECT_EQ(error_of(""), "1:1: the program has no plan (add 'plan NAME { ... }')");
+  EXPECT_EQ(error_of("plan p {\n  atom forward(100\n}"), "3:1: expected ')' to close the arguments, got '}'");
+  EXPECT_EQ(error_of("plan p {\n  atom forward(100)\n"),
+            "3:1: expected '}' to close the body, got the end of the program");
+  EXPECT_EQ(error_of("plan p { }"), "1:10: a body needs at least one atom, behaviour, 'do' or 'task'");
+  EXPECT_EQ(error_of("plan p { atom stop }\n@"), "2:1: unexpected character '@'");
+  EXPECT_EQ(error_of("plan p { atom stop }\x01"), "1:21: unexpected byte 0x01");
+  EXPECT_EQ(error_of("plan p { atom stop until }"),
+            "1:26: expected an interrupt name, 'not', 'true', 'false' or '(', got '}'");
+  EXPECT_EQ(error_of("plan p { atom stop } plan q { atom stop }"),
+            "1:22: a program has exactly one plan; another was defined at line 1");
+  EXPECT_EQ(error_of("plan p { atom stop for 1s for 2s }"), "1:27: 'for' given twice");
+  EXPECT_EQ(error_of("plan loop { atom stop }"), "1:6: expected a plan name, got the keyword 'loop'");
+  EXPECT_EQ(error_of("sensor ir[0]\nplan p { atom stop }"), "1:11: channel size must be in 1..256, got '0'");
+  EXPECT_EQ(error_of("plan p { task stop x }"),
+            "1:15: expected start, suspend, resume or delete after 'task', got 'stop'");
+  EXPECT_EQ(error_of("plan p { atom stop } 12"),
+            "1:22: expected 'sensor', 'interrupt', 'behaviour' or 'plan', got '12'");
+  EXPECT_EQ(error_of("plan p { atom wheels(1.) }"), "1:24: expected a digit after the decimal point");
+}
+
+TEST(Mdl2eParser, NameErrorsNameLineColumnAndSuggest) {
+  EXPECT_EQ(error_of("plan p {\n  atom forwrd(1)\n}"),
+            "2:8: unknown primitive behaviour 'forwrd' (did you mean 'forward'?)");
+  EXPECT_EQ(error_of("plan p { atom forward }"),
+            "1:15: 'forward' takes 1 argument, got 0 (forward(speed): both wheels at speed)");
+  EXPECT_EQ(error_of("sensor ir[3]\ninterrupt near = ir[1] > 5\nplan p { atom stop until naer }"),
+            "3:26: unknown interrupt 'naer' (did you mean 'near'?)");
+  EXPECT_EQ(error_of("sensor ir[3]\ninterrupt near = ir[3] > 5\nplan p { atom stop }"),
+            "2:21: index 3 is out of range for ir[3]");
+  EXPECT_EQ(error_of("sensor ir[3]\ninterrupt near = it[1] > 5\nplan p { atom stop }"),
+            "2:18: unknown sensor channel 'it' (did you mean 'ir'?)");
+  EXPECT_EQ(error_of("behaviour avoid { atom stop }\nplan p { do aviod }"),
+            "2:13: unknown behaviour 'aviod' (did you mean 'avoid'?)");
+  EXPECT_EQ(error_of("behaviour a { do b }\nbehaviour b { do a }\nplan p { do a }"),
+            "2:18: behaviour 'a' calls itself (recursion is not allowed)");
+  EXPECT_EQ(error_of("plan p loop { task start x }"),
+            "1:8: 'p' loops forever but contains no atom, so it would never wait");
+  EXPECT_EQ(error_of("plan p { atom stop loop }"), "1:20: an atom cannot loop (put it in a behaviour)");
+  EXPECT_EQ(error_of("sensor ir[1]\nsensor ir[2]\nplan p { atom stop }"), "2:1: sensor 'ir' is declared twice");
+}
+
+TEST(Mdl2eParser, DeepNestingIsBoundedNotACrash) {
+  std::string deep = "plan p ";
+  for (int i = 0; i < 20; ++i) deep += "{ behaviour ";
+  deep += "{ atom stop }";
+  for (int i = 0; i < 20; ++i) deep += " }";
+  const std::string e = error_of(deep);
+  EXPECT_NE(e.find("nested deeper than 16 levels"), std::string::npos) << e;
+
+  std::string huge = "plan p ";
+  for (int i = 0; i < 10000; ++i) huge += "{ behaviour ";
+  EXPECT_NE(error_of(huge).find("behaviours nested too deeply"), std::string::npos);
+
+  std::string expr = "interrupt a = external\nplan p { atom stop until ";
+  for (int i = 0; i < 10000; ++i) expr += "not (";
+  EXPECT_NE(error_of(expr).find("interrupt expression nested too deeply"), std::string::npos);
+
+  std::string wide = "interrupt a = external\nplan p { atom stop until a";
+  for (int i = 0; i < 20; ++i) wide += " or (a";
+  for (int i = 0; i < 20; ++i) wide += ")";
+  wide += " }";
+  EXPECT_NE(error_of(wide).find("stack slots"), std::string::npos) << error_of(wide);
+}
+
+}  // namespace
+}  // namespace symb::control::mdl2e
