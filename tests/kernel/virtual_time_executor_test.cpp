@@ -3,8 +3,8 @@
 #include <atomic>
 #include <deque>
 #include <functional>
-#include <thread>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
