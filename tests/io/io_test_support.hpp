@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <fstream>
 #include <functional>
@@ -49,6 +50,32 @@ inline bool thread_sleeping(pid_t tid) {
 }
 
 // Reads from `in` until `want` bytes came or the deadline passed.
+// Blocks a reader thread in stream.read_some(), proves it really sleeps in the kernel, closes the
+// stream from this thread and checks that the reader returned promptly with a "closed" error.
+inline void expect_close_wakes_blocked_reader(InputDevice& stream) {
+  std::atomic<pid_t> tid{0};
+  std::atomic<bool> returned{false};
+  std::string error;
+  std::chrono::steady_clock::duration took{};
+  std::thread reader([&] {
+    tid = this_thread_tid();
+    std::byte buf[64];
+    const auto t0 = std::chrono::steady_clock::now();
+    auto r = stream.read_some(buf, 60s);
+    took = std::chrono::steady_clock::now() - t0;
+    if (!r) error = r.error();
+    returned = true;
+  });
+  const bool blocked = eventually([&] { return tid.load() != 0 && thread_sleeping(tid.load()); });
+  EXPECT_TRUE(blocked) << "the reader never blocked";
+  EXPECT_FALSE(returned.load());
+  stream.close();
+  reader.join();
+  EXPECT_LT(took, 10s) << "close did not wake the reader";
+  EXPECT_NE(error.find("closed"), std::string::npos) << error;
+  EXPECT_FALSE(stream.is_open());
+}
+
 inline std::vector<std::byte> read_exactly(InputDevice& in, std::size_t want,
                                            std::chrono::nanoseconds limit = kDeadline) {
   std::vector<std::byte> got;

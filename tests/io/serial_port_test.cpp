@@ -310,26 +310,7 @@ TEST(SerialPort, OpeningWhatIsNotATerminalFailsClearly) {
 
 TEST(SerialPort, CloseFromAnotherThreadWakesABlockedReader) {
   PtyPair pty = open_pty();
-  std::atomic<pid_t> tid{0};
-  std::atomic<bool> returned{false};
-  std::string error;
-  std::chrono::steady_clock::duration took{};
-  std::thread reader([&] {
-    tid = testing::this_thread_tid();
-    std::byte buf[16];
-    const auto t0 = std::chrono::steady_clock::now();
-    auto r = pty.slave->read_some(buf, 60s);
-    took = std::chrono::steady_clock::now() - t0;
-    if (!r) error = r.error();
-    returned = true;
-  });
-  ASSERT_TRUE(eventually([&] { return tid.load() != 0 && testing::thread_sleeping(tid.load()); }));
-  EXPECT_FALSE(returned.load());
-  pty.slave->close();
-  reader.join();
-  EXPECT_LT(took, 10s) << "close did not wake the reader";
-  EXPECT_NE(error.find("closed"), std::string::npos) << error;
-  EXPECT_FALSE(pty.slave->is_open());
+  testing::expect_close_wakes_blocked_reader(*pty.slave);
 }
 
 TEST(SerialPort, TheOtherEndGoingAwayIsEndOfStream) {

@@ -143,26 +143,7 @@ TEST(TcpStream, ConnectingToAClosedPortFailsClearly) {
 TEST(TcpStream, CloseFromAnotherThreadWakesABlockedReader) {
   Connected c = connect_pair();
   ASSERT_TRUE(c.client && c.server);
-  std::atomic<pid_t> tid{0};
-  std::atomic<bool> returned{false};
-  std::string error;
-  std::chrono::steady_clock::duration took{};
-  std::thread reader([&] {
-    tid = testing::this_thread_tid();
-    std::byte buf[64];
-    const auto t0 = std::chrono::steady_clock::now();
-    auto r = c.server->read_some(buf, 60s);
-    took = std::chrono::steady_clock::now() - t0;
-    if (!r) error = r.error();
-    returned = true;
-  });
-  ASSERT_TRUE(eventually([&] { return tid.load() != 0 && testing::thread_sleeping(tid.load()); }));
-  EXPECT_FALSE(returned.load());
-  c.server->close();
-  reader.join();
-  EXPECT_LT(took, 10s) << "close did not wake the reader";
-  EXPECT_NE(error.find("closed"), std::string::npos) << error;
-  EXPECT_FALSE(c.server->is_open());
+  testing::expect_close_wakes_blocked_reader(*c.server);
   EXPECT_FALSE(c.server->open()) << "an accepted connection cannot connect again";
 
   // The client sees the connection end.
