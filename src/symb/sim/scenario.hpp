@@ -1,0 +1,85 @@
+// Scenario: one experiment as plain data, read from a YAML file: the world (arena, maze walls),
+// the robots (where they start) and, for each robot, the tasks of its control system, their
+// parameters and the hooks between them. A scenario is checked completely before anything runs;
+// every error names the file, line and column of the offending value.
+//
+// Every robot gets two device tasks from whoever runs it, so a scenario's hooks can name them:
+//   ir      the 7 IR proximity sensors: one message of 7 values per control period (port 0)
+//   wheels  the wheel actuator: takes [left, right] in Thymio motor units, -500..500
+// In-process they sit on simulated drivers; on a board, on the serial link (see docs/scenarios.md).
+//
+// File format: docs/scenarios.md. Parsing: scenario_parser.cpp (yaml-cpp).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "symb/kernel/result.hpp"
+#include "symb/kernel/time.hpp"
+#include "symb/os/hook.hpp"
+#include "symb/os/param.hpp"
+#include "symb/os/task_type_registry.hpp"
+#include "symb/sim/world_spec.hpp"
+
+namespace symb::sim {
+
+// Names of the device tasks every robot has.
+inline constexpr std::string_view kIrTaskName = "ir";
+inline constexpr std::string_view kWheelsTaskName = "wheels";
+
+struct TaskSpec {
+  std::string name;
+  std::string type;
+  // Values as text, exactly as a shell line would give them; `column` is unused (see where).
+  std::vector<os::ParamAssignment> params;
+  std::vector<SourceLocation> param_where;  // one per params entry
+  std::optional<int> priority;
+  std::optional<kernel::Duration> period;
+  std::optional<std::size_t> queue_capacity;
+  bool autostart = true;
+  SourceLocation where;
+};
+
+struct HookSpec {
+  std::string from;
+  std::string to;
+  os::HookOptions options;
+  SourceLocation where;
+};
+
+struct RobotSpec {
+  std::string name;
+  RobotKind kind = RobotKind::kThymio2;
+  Pose start;
+  std::vector<TaskSpec> tasks;
+  std::vector<HookSpec> hooks;
+  SourceLocation where;
+};
+
+struct Scenario {
+  std::string name;
+  std::string description;
+  std::string file;      // as given to load_scenario / parse_scenario
+  std::string base_dir;  // directory relative file names in parameters are resolved against
+  std::uint64_t seed = 1;
+  kernel::Duration duration = std::chrono::minutes(10);
+  kernel::Duration control_period = std::chrono::milliseconds(30);
+  WorldSpec world;
+  std::vector<RobotSpec> robots;  // `count: N` entries are expanded, names made unique
+};
+
+// Structure, values and geometry: unknown or missing keys, wrong types, bad durations, walls
+// outside the arena, robots starting inside a wall or another robot, duplicate names, hooks to
+// tasks that the robot does not have. Never throws.
+kernel::Result<Scenario> parse_scenario(std::string_view yaml_text, std::string_view file_name);
+// Reads `path` and parses it; base_dir is the file's directory.
+kernel::Result<Scenario> load_scenario(const std::string& path);
+
+// Against the task types a runner offers: every task type exists and every parameter resolves
+// against its schema (names, types, ranges). Errors point at the task or the parameter.
+kernel::Status check_scenario(const Scenario& scenario, const os::TaskTypeRegistry& types);
+
+}  // namespace symb::sim

@@ -1,0 +1,46 @@
+// WorldSpec: a 2D world as plain data (the MuJoCo mjModel idea): a rectangular arena with walls
+// around it, straight inner wall segments (a maze), and where robots start. Backends (Enki today)
+// build their own running state from it; scenario files describe it; nothing here runs.
+//
+// Units are Enki's: centimetres and radians. The arena spans [0, width] x [0, height]; x grows to
+// the right, y upwards; an angle of 0 faces +x and grows counter-clockwise.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace symb::sim {
+
+// A point in a text file: where a value came from, for error messages ("file:line:column").
+struct SourceLocation {
+  std::string file;
+  int line = 0;             // 1-based; 0 when unknown
+  int column = 0;           // 1-based; 0 when unknown
+  std::string str() const;  // "file:line:column", or as much of it as is known
+};
+
+struct Pose {
+  double x = 0;
+  double y = 0;
+  double theta = 0;
+};
+
+// A straight wall from (x1, y1) to (x2, y2), `thickness` wide, centred on that segment.
+struct WallSpec {
+  double x1 = 0, y1 = 0, x2 = 0, y2 = 0;
+  double thickness = 2.0;
+  SourceLocation where;
+};
+
+struct WorldSpec {
+  double width = 0;             // cm
+  double height = 0;            // cm
+  double wall_height = 10.0;    // cm; Thymio2's IR sensors see objects at least as high as they are
+  std::vector<WallSpec> walls;  // inner walls; the arena's four sides are always walled
+};
+
+// The robot models a world can hold.
+enum class RobotKind : std::uint8_t { kThymio2 };
+
+}  // namespace symb::sim
