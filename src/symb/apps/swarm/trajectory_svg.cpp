@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <string>
 
+#include "symb/apps/svg.hpp"
+
 namespace symb::apps::swarm {
 
 namespace {
@@ -12,41 +14,6 @@ namespace {
 constexpr double kSide = 800;    // px for the arena
 constexpr double kMargin = 20;   // px around it
 constexpr double kCaption = 28;  // px below it
-
-// The i-th of a sequence of well-separated hues (golden-angle steps), as #rrggbb.
-std::string colour(std::size_t i) {
-  const double h = std::fmod(static_cast<double>(i) * 137.50776405, 360.0) / 60.0;
-  const double s = 0.75, l = i % 2 == 0 ? 0.42 : 0.55;
-  const double c = (1 - std::fabs(2 * l - 1)) * s;
-  const double x = c * (1 - std::fabs(std::fmod(h, 2.0) - 1));
-  double r = 0, g = 0, b = 0;
-  switch (static_cast<int>(h)) {
-    case 0: r = c, g = x; break;
-    case 1: r = x, g = c; break;
-    case 2: g = c, b = x; break;
-    case 3: g = x, b = c; break;
-    case 4: r = x, b = c; break;
-    default: r = c, b = x; break;
-  }
-  const double m = l - c / 2;
-  char buf[8];
-  const auto byte = [&](double v) { return static_cast<unsigned>(std::lround(std::clamp(v + m, 0.0, 1.0) * 255)); };
-  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", byte(r), byte(g), byte(b));
-  return buf;
-}
-
-std::string escape(std::string_view text) {
-  std::string s;
-  for (char ch : text) {
-    switch (ch) {
-      case '&': s += "&amp;"; break;
-      case '<': s += "&lt;"; break;
-      case '>': s += "&gt;"; break;
-      default: s += ch;
-    }
-  }
-  return s;
-}
 
 }  // namespace
 
@@ -79,7 +46,7 @@ void write_trajectory_svg(std::ostream& out, double arena, std::span<const Traje
     const TrajectoryLog& r = robots[i];
     const auto end = r.last();
     if (!end) continue;
-    const std::string c = colour(i);
+    const std::string c = svg_colour(i);
     std::snprintf(buf, sizeof buf, R"(<polyline stroke="%s" stroke-width="%.1f" stroke-opacity="%.2f" points=")",
                   c.c_str(), stroke, opacity);
     out << buf;
@@ -101,7 +68,7 @@ void write_trajectory_svg(std::ostream& out, double arena, std::span<const Traje
   out << "</g>\n";
   std::snprintf(buf, sizeof buf, R"(<text x="%.1f" y="%.1f" font-family="sans-serif" font-size="14" fill="#222">)",
                 kMargin, kSide + 2 * kMargin + 12);
-  out << buf << escape(caption) << "</text>\n</svg>\n";
+  out << buf << svg_escape(caption) << "</text>\n</svg>\n";
 }
 
 }  // namespace symb::apps::swarm

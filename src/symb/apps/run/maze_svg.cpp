@@ -1,0 +1,77 @@
+#include "symb/apps/run/maze_svg.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "symb/apps/svg.hpp"
+
+namespace symb::apps::run {
+
+namespace {
+
+constexpr double kLongSide = 900;  // px for the arena's longer side
+constexpr double kMargin = 20;     // px around it
+constexpr double kCaption = 28;    // px below it
+
+}  // namespace
+
+void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<const RobotPath> robots,
+                    std::string_view caption) {
+  const double longer = std::max({world.width, world.height, 1.0});
+  const double scale = kLongSide / longer;
+  const double w = world.width * scale, h = world.height * scale;
+  // SVG's y axis points down; the world's points up.
+  const auto px = [&](double x) { return kMargin + x * scale; };
+  const auto py = [&](double y) { return kMargin + (world.height - y) * scale; };
+  const double stroke = robots.size() > 30 ? 1.0 : 1.8;
+  char buf[200];
+
+  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  std::snprintf(buf, sizeof buf,
+                "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"%.0f\" height=\"%.0f\" "
+                "viewBox=\"0 0 %.0f %.0f\">\n",
+                w + 2 * kMargin, h + 2 * kMargin + kCaption, w + 2 * kMargin, h + 2 * kMargin + kCaption);
+  out << buf << "<rect x=\"0\" y=\"0\" width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  std::snprintf(buf, sizeof buf,
+                "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f7f7f2\" stroke=\"#333\" "
+                "stroke-width=\"%.1f\"/>\n",
+                kMargin, kMargin, w, h, std::max(2.0, 2.0 * scale));
+  out << buf;
+  out << "<g stroke=\"#333\" stroke-linecap=\"square\">\n";
+  for (const sim::WallSpec& wall : world.walls) {
+    std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke-width=\"%.1f\"/>\n",
+                  px(wall.x1), py(wall.y1), px(wall.x2), py(wall.y2), std::max(1.0, wall.thickness * scale));
+    out << buf;
+  }
+  out << "</g>\n<g fill=\"none\" stroke-linejoin=\"round\" stroke-linecap=\"round\">\n";
+  for (std::size_t i = 0; i < robots.size(); ++i) {
+    const RobotPath& r = robots[i];
+    if (r.points.empty()) continue;
+    const std::string c = svg_colour(i);
+    std::snprintf(buf, sizeof buf, R"(<polyline stroke="%s" stroke-width="%.1f" stroke-opacity="0.85" points=")",
+                  c.c_str(), stroke);
+    out << buf;
+    for (const PathPoint& p : r.points) {
+      std::snprintf(buf, sizeof buf, "%.1f,%.1f ", px(p.x), py(p.y));
+      out << buf;
+    }
+    out << "\"/>\n";
+    std::snprintf(buf, sizeof buf, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"5\" stroke=\"%s\" stroke-width=\"2\"/>\n",
+                  px(r.points.front().x), py(r.points.front().y), c.c_str());
+    out << buf;
+    std::snprintf(buf, sizeof buf, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"%s\" stroke=\"none\"/>\n",
+                  px(r.points.back().x), py(r.points.back().y), c.c_str());
+    out << buf;
+    for (const PathPoint& p : r.contacts) {
+      std::snprintf(buf, sizeof buf, "<path d=\"M%.1f %.1fl8 8m0 -8l-8 8\" stroke=\"#d00\" stroke-width=\"2\"/>\n",
+                    px(p.x) - 4, py(p.y) - 4);
+      out << buf;
+    }
+  }
+  out << "</g>\n";
+  std::snprintf(buf, sizeof buf, R"(<text x="%.1f" y="%.1f" font-family="sans-serif" font-size="14" fill="#222">)",
+                kMargin, h + 2 * kMargin + 14);
+  out << buf << svg_escape(caption) << "</text>\n</svg>\n";
+}
+
+}  // namespace symb::apps::run

@@ -1,0 +1,43 @@
+#include "symb/apps/svg.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace symb::apps {
+
+std::string svg_colour(std::size_t i) {
+  const double h = std::fmod(static_cast<double>(i) * 137.50776405, 360.0) / 60.0;
+  const double s = 0.75, l = i % 2 == 0 ? 0.42 : 0.55;
+  const double c = (1 - std::fabs(2 * l - 1)) * s;
+  const double x = c * (1 - std::fabs(std::fmod(h, 2.0) - 1));
+  double r = 0, g = 0, b = 0;
+  switch (static_cast<int>(h)) {
+    case 0: r = c, g = x; break;
+    case 1: r = x, g = c; break;
+    case 2: g = c, b = x; break;
+    case 3: g = x, b = c; break;
+    case 4: r = x, b = c; break;
+    default: r = c, b = x; break;
+  }
+  const double m = l - c / 2;
+  char buf[8];
+  const auto byte = [&](double v) { return static_cast<unsigned>(std::lround(std::clamp(v + m, 0.0, 1.0) * 255)); };
+  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", byte(r), byte(g), byte(b));
+  return buf;
+}
+
+std::string svg_escape(std::string_view text) {
+  std::string s;
+  for (char ch : text) {
+    switch (ch) {
+      case '&': s += "&amp;"; break;
+      case '<': s += "&lt;"; break;
+      case '>': s += "&gt;"; break;
+      default: s += ch;
+    }
+  }
+  return s;
+}
+
+}  // namespace symb::apps
