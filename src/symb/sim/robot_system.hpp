@@ -1,0 +1,76 @@
+// RobotSystem: one robot's control system built from its scenario entry: a Node (the robot's own
+// operating system instance), the task-type registry it creates tasks from, the two device
+// tasks every robot has (`ir`, `wheels`) and the scenario's tasks and hooks. The same builder
+// serves the in-process run (device tasks over simulated drivers) and the board of a
+// hardware-in-the-loop pair (device tasks over the serial link), which is what makes the two
+// run the same task graph.
+//
+// Build order, and why: registry first (the node keeps a pointer to it), then the device tasks
+// (hooks may name them), then the scenario's tasks in file order, then its hooks. Any failure
+// stops the build with an error located in the scenario file; the half-built node is destroyed
+// before the error is returned, so nothing of it keeps running.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "symb/kernel/executor.hpp"
+#include "symb/kernel/result.hpp"
+#include "symb/os/node.hpp"
+#include "symb/os/task_type_registry.hpp"
+#include "symb/robot/actuator.hpp"
+#include "symb/robot/sensor.hpp"
+#include "symb/sim/scenario.hpp"
+
+namespace symb::sim {
+
+// Resolves a program reference (an MDL2e file named in a task parameter) to its text.
+using ProgramReader = std::function<kernel::Result<std::string>(std::string_view)>;
+
+// Reads files relative to `base_dir` (absolute paths as they are), at most 1 MiB each.
+ProgramReader file_program_reader(std::string base_dir);
+
+// The devices behind the default device tasks.
+struct RobotDevices {
+  std::shared_ptr<robot::Sensor> ir;        // 7 channels
+  std::shared_ptr<robot::Actuator> wheels;  // 2 channels, Thymio motor units
+};
+
+struct RobotSystemOptions {
+  kernel::Duration control_period = std::chrono::milliseconds(30);
+  std::uint64_t seed = 1;  // the node's seed (its random streams)
+  std::size_t log_capacity = 1024;
+  ProgramReader read_program;
+  // When set, makes the device tasks instead of the defaults (a `sensor` task over devices.ir and
+  // an `actuator_sink` over devices.wheels whose watchdog stops the wheels 1.5 control periods
+  // after the last command). It must create tasks named kIrTaskName and kWheelsTaskName.
+  std::function<kernel::Status(os::Node&)> make_device_tasks;
+};
+
+// Registers every task type a scenario may name: the robot layer's (bound to `devices`, which
+// may be empty for checking only) and the control layer's (mdl2e, ...).
+kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, RobotDevices devices,
+                                            ProgramReader read_program);
+
+class RobotSystem {
+ public:
+  static kernel::Result<std::unique_ptr<RobotSystem>> build(kernel::Executor& executor, const RobotSpec& spec,
+                                                            RobotDevices devices, RobotSystemOptions options);
+  ~RobotSystem();
+  RobotSystem(const RobotSystem&) = delete;
+  RobotSystem& operator=(const RobotSystem&) = delete;
+
+  const std::string& name() const { return name_; }
+  os::Node& node() { return *node_; }
+  const os::TaskTypeRegistry& types() const { return *types_; }
+
+ private:
+  RobotSystem() = default;
+  std::string name_;
+  std::unique_ptr<os::TaskTypeRegistry> types_;  // declared before node_: outlives it
+  std::unique_ptr<os::Node> node_;
+};
+
+}  // namespace symb::sim
