@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "symb/io/number_text.hpp"
+#include "symb/os/node.hpp"
 
 namespace symb::robot {
 
@@ -101,8 +102,10 @@ ActuatorSinkTask::ActuatorSinkTask(std::shared_ptr<Actuator> actuator, Options o
     : actuator_(std::move(actuator)),
       options_(std::move(options)),
       fail_warning_(options_.warn_interval),
-      clamp_warning_(options_.warn_interval) {
+      clamp_warning_(options_.warn_interval),
+      timeout_warning_(options_.warn_interval) {
   if (!actuator_) throw std::invalid_argument("actuator sink: no actuator");
+  if (options_.timeout.count() < 0) throw std::invalid_argument("actuator sink: negative timeout");
   if (!options_.ranges.empty()) {
     if (options_.ranges.size() != actuator_->channels().size())
       throw std::invalid_argument("actuator sink: " + std::to_string(options_.ranges.size()) + " ranges for " +
@@ -114,10 +117,22 @@ ActuatorSinkTask::ActuatorSinkTask(std::shared_ptr<Actuator> actuator, Options o
 
 ActuatorSinkStats ActuatorSinkTask::stats() const {
   constexpr auto kRelaxed = std::memory_order_relaxed;
-  return {received_.load(kRelaxed), applied_.load(kRelaxed), failed_.load(kRelaxed), ignored_.load(kRelaxed)};
+  return {received_.load(kRelaxed), applied_.load(kRelaxed), failed_.load(kRelaxed), ignored_.load(kRelaxed),
+          timeouts_.load(kRelaxed)};
+}
+
+std::vector<float> ActuatorSinkTask::safe_output() const {
+  const auto& channels = options_.ranges.empty() ? actuator_->channels() : options_.ranges;
+  std::vector<float> out(channels.size());
+  for (std::size_t i = 0; i < channels.size(); ++i) out[i] = channels[i].clamp(0.0f);
+  return out;
 }
 
 void ActuatorSinkTask::on_start() {
+  last_applied_ = now();
+  if (options_.timeout.count() > 0)
+    if (auto info = node().info(id()); info && info->period.count() == 0)
+      log(os::LogLevel::kWarn, "timeout set but no period: the watchdog is never checked");
   if (!actuator_->is_open())
     if (auto st = actuator_->open(); !st)
       log(os::LogLevel::kWarn, "cannot open '" + actuator_->name() + "': " + st.error());
@@ -148,10 +163,26 @@ void ActuatorSinkTask::on_message(const os::Message& m) {
     return;
   }
   applied_.fetch_add(1, std::memory_order_relaxed);
+  last_applied_ = now();
+  timed_out_ = false;
   const std::size_t clamped = *r + narrowed_clamps;
   if (clamped > 0 && clamp_warning_.note(now(), clamped))
     log(os::LogLevel::kWarn, std::to_string(clamp_warning_.count()) + " value(s) for '" + actuator_->name() +
                                  "' outside their range, clamped");
+}
+
+void ActuatorSinkTask::on_tick() {
+  if (options_.timeout.count() <= 0 || timed_out_ || now() - last_applied_ < options_.timeout) return;
+  // Once per silence: re-applying every tick would bury the log and fight the shell's ioctls.
+  timed_out_ = true;
+  timeouts_.fetch_add(1, std::memory_order_relaxed);
+  const std::vector<float> safe = safe_output();
+  auto r = actuator_->set(safe);
+  if (timeout_warning_.note(now()))
+    log(os::LogLevel::kWarn,
+        std::to_string(timeout_warning_.count()) + " timeout(s): no command for " +
+            std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(options_.timeout).count()) + " ms, " +
+            (r ? std::string("safe output applied") : "safe output refused: " + r.error()));
 }
 
 kernel::Status ActuatorSinkTask::on_parameter(std::string_view name, const os::ParamValue& value) {
@@ -159,6 +190,16 @@ kernel::Status ActuatorSinkTask::on_parameter(std::string_view name, const os::P
     options_.warn_interval = std::get<kernel::Duration>(value);
     fail_warning_.set_interval(options_.warn_interval);
     clamp_warning_.set_interval(options_.warn_interval);
+    timeout_warning_.set_interval(options_.warn_interval);
+    return {};
+  }
+  if (name == "timeout") {
+    const auto t = std::get<kernel::Duration>(value);
+    if (t.count() < 0) return kernel::Error{"timeout must not be negative"};
+    // A new timeout counts from now, so changing it never stops the wheels at once.
+    options_.timeout = t;
+    last_applied_ = now();
+    timed_out_ = false;
     return {};
   }
   return os::Task::on_parameter(name, value);

@@ -13,6 +13,14 @@
 //    applied one at a time, in the order they take the actuator's lock.
 //  - The sink counts and logs (at a limited rate) what it had to clamp or reject; it never
 //    faults on bad input.
+//  - The sink's watchdog (Options::timeout, 0 = off): when no command has been applied for
+//    `timeout`, the sink applies the safe output (each channel's value closest to 0 within its
+//    range, the sink's narrower ranges if it has them) once, counts it and warns at a limited
+//    rate; the next command is applied as usual. So when the controller stops sending (suspended
+//    from the shell, faulted, deleted), the wheels stop. The check runs at the sink's ticks: the
+//    task needs a period (the actuator_sink type's default is 10 ms), and the wheels stop at the
+//    first tick at least `timeout` after the last applied command, so within timeout + period.
+//    The timer starts when the task starts; a refused command (NaN, wrong count) does not feed it.
 #pragma once
 
 #include <array>
@@ -79,6 +87,7 @@ struct ActuatorSinkStats {
   std::uint64_t applied = 0;   // commands the actuator took
   std::uint64_t failed = 0;    // commands it refused (see the actuator's stats for why)
   std::uint64_t ignored = 0;   // messages without numbers (a blob)
+  std::uint64_t timeouts = 0;  // watchdog expiries: the safe output was applied
 };
 
 class ActuatorSinkTask : public os::Task {
@@ -87,19 +96,26 @@ class ActuatorSinkTask : public os::Task {
     // Narrower ranges than the actuator's own (same channels), or empty.
     std::vector<ChannelSpec> ranges;
     kernel::Duration warn_interval = std::chrono::seconds(1);
+    // Watchdog: apply the safe output when no command was applied for this long; 0: off. Needs
+    // a period (checked at ticks).
+    kernel::Duration timeout{0};
   };
 
-  // Throws std::invalid_argument when there is no actuator or `ranges` does not match it.
+  // Throws std::invalid_argument when there is no actuator, `ranges` does not match it, or the
+  // timeout is negative.
   explicit ActuatorSinkTask(std::shared_ptr<Actuator> actuator) : ActuatorSinkTask(std::move(actuator), Options{}) {}
   ActuatorSinkTask(std::shared_ptr<Actuator> actuator, Options options);
 
   Actuator& actuator() { return *actuator_; }
+  // What the watchdog applies: each channel's value closest to 0 within its range.
+  std::vector<float> safe_output() const;
   // Safe from any thread.
   ActuatorSinkStats stats() const;
 
  protected:
   void on_start() override;
   void on_message(const os::Message& m) override;
+  void on_tick() override;
   kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
@@ -108,7 +124,10 @@ class ActuatorSinkTask : public os::Task {
   std::array<float, os::Payload::kInlineValues> narrowed_{};
   WarningLimiter fail_warning_;
   WarningLimiter clamp_warning_;
-  std::atomic<std::uint64_t> received_{0}, applied_{0}, failed_{0}, ignored_{0};
+  WarningLimiter timeout_warning_;
+  kernel::Time last_applied_{0};  // the watchdog's reference: start, last applied command
+  bool timed_out_ = false;        // the safe output is on since the last expiry
+  std::atomic<std::uint64_t> received_{0}, applied_{0}, failed_{0}, ignored_{0}, timeouts_{0};
 };
 
 }  // namespace symb::robot

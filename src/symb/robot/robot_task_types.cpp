@@ -88,13 +88,20 @@ kernel::Status register_robot_task_types(os::TaskTypeRegistry& registry, RobotDe
   os::TaskType sink;
   sink.name = "actuator_sink";
   sink.doc = "applies every message it receives (one number per channel) to an actuator at once";
-  sink.params = {device_param("the actuator"), ranges_param(), warn_param()};
+  sink.params = {device_param("the actuator"),
+                 ranges_param(),
+                 warn_param(),
+                 {"timeout", ParamType::kDuration, kernel::Duration{0}, 0.0, 3600.0,
+                  "watchdog: apply the safe output (closest to 0) when no command came for this long; 0: off"}};
   sink.defaults.queue_capacity = 8;
+  // The watchdog is checked at ticks: it stops the wheels within timeout + period.
+  sink.defaults.period = 10ms;
   sink.make = [shared](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
     auto dev = find_device(shared->actuator, p.string("device"), "actuator");
     ActuatorSinkTask::Options o;
     o.ranges = ranges_for(dev->channels(), p.string("ranges"));
     o.warn_interval = p.duration("warn_interval");
+    o.timeout = p.duration("timeout");
     return std::make_unique<ActuatorSinkTask>(std::move(dev), std::move(o));
   };
 

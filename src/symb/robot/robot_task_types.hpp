@@ -3,7 +3,7 @@
 //
 //   sensor          forwards an active Sensor's samples          device, ranges, warn_interval
 //   polling_sensor  polls a PollingSensor at its period          device, ranges, warn_interval
-//   actuator_sink   applies every message to an Actuator         device, ranges, warn_interval
+//   actuator_sink   applies every message to an Actuator         device, ranges, warn_interval, timeout
 //   actuator_task   drives a DifferentialDrive towards goals     drive, gains, tolerances, ...
 //
 // Tasks bind to hardware, and hardware is not a parameter: a node's devices are made by whoever
