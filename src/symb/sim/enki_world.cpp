@@ -1,0 +1,242 @@
+#include "symb/sim/enki_world.hpp"
+
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <mutex>
+#include <new>
+#include <numbers>
+#include <stdexcept>
+
+#include <enki/PhysicalEngine.h>
+#include <enki/robots/thymio2/Thymio2.h>
+
+namespace symb::sim {
+
+using kernel::Error;
+
+namespace {
+
+// Guards Enki's process-wide state: Enki::random (motor noise), the C library's rand() (IR
+// noise) and the object id counter every PhysicalObject constructor bumps. See the header.
+std::mutex& enki_mutex() {
+  static std::mutex mu;
+  return mu;
+}
+
+bool finite(double v) { return std::isfinite(v); }
+
+double normalize_angle(double a) {
+  a = std::remainder(a, 2 * std::numbers::pi);
+  return a <= -std::numbers::pi ? a + 2 * std::numbers::pi : a;
+}
+
+constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to - 1) / to * to; }
+
+}  // namespace
+
+// Enki's Thymio2, counting the steps in which it touched anything. Enki calls collisionEvent()
+// for every object-object contact, static walls included (with a null or a wall argument).
+class EnkiWorld::Thymio final : public Enki::Thymio2 {
+ public:
+  bool touched = false;
+
+ protected:
+  void collisionEvent(Enki::PhysicalObject* /*other*/) override { touched = true; }
+};
+
+// A bump allocator over one address range reserved with mmap when the world is made. Pages are
+// committed by the kernel only when first touched, so reserving room for thousands of robots
+// costs address space, not memory. Objects are never moved or freed one by one: they all go when
+// the arena goes, newest first.
+class EnkiWorld::Arena {
+ public:
+  explicit Arena(std::size_t bytes) : size_(round_up(std::max<std::size_t>(bytes, 1), 4096)) {
+    void* p = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    if (p == MAP_FAILED) throw std::bad_alloc();
+    base_ = static_cast<unsigned char*>(p);
+  }
+  ~Arena() {
+    for (auto it = objects_.rbegin(); it != objects_.rend(); ++it) (*it)->~PhysicalObject();
+    munmap(base_, size_);
+  }
+  Arena(const Arena&) = delete;
+  Arena& operator=(const Arena&) = delete;
+
+  bool has_room(std::size_t bytes) const { return used_ + round_up(bytes, kAlign) <= size_; }
+
+  template <class T>
+  T* make() {
+    if (!has_room(sizeof(T))) throw std::length_error("enki world: object arena full");
+    T* object = new (base_ + used_) T();
+    used_ += round_up(sizeof(T), kAlign);
+    objects_.push_back(object);
+    return object;
+  }
+
+ private:
+  static constexpr std::size_t kAlign = 64;  // >= alignof of every Enki object
+  std::size_t size_;
+  unsigned char* base_ = nullptr;
+  std::size_t used_ = 0;
+  std::vector<Enki::PhysicalObject*> objects_;
+};
+
+struct EnkiWorld::EnkiState {
+  Enki::World world;  // no walls of its own: ours are objects
+};
+
+kernel::Status EnkiWorld::check_spec(const WorldSpec& spec) {
+  if (!finite(spec.width) || !finite(spec.height) || spec.width <= 0 || spec.height <= 0)
+    return Error{"world: the arena must have a finite, positive width and height (got " + std::to_string(spec.width) +
+                 " x " + std::to_string(spec.height) + ")"};
+  if (!finite(spec.wall_height) || spec.wall_height <= 0)
+    return Error{"world: wall_height must be finite and positive (got " + std::to_string(spec.wall_height) + ")"};
+  for (std::size_t i = 0; i < spec.walls.size(); ++i) {
+    const WallSpec& w = spec.walls[i];
+    const std::string where = w.where.line > 0 || !w.where.file.empty() ? w.where.str() + ": " : std::string();
+    if (!finite(w.x1) || !finite(w.y1) || !finite(w.x2) || !finite(w.y2))
+      return Error{where + "wall " + std::to_string(i) + ": coordinates must be finite"};
+    if (!finite(w.thickness) || w.thickness <= 0)
+      return Error{where + "wall " + std::to_string(i) + ": thickness must be finite and positive (got " +
+                   std::to_string(w.thickness) + ")"};
+  }
+  return {};
+}
+
+EnkiWorld::EnkiWorld(const WorldSpec& spec, std::uint64_t seed, Options options)
+    : spec_(spec), options_(options), random_(seed, 0x454e4b49 /* "ENKI" */) {
+  if (auto st = check_spec(spec_); !st) throw std::invalid_argument(st.error());
+  if (options_.physics_oversampling == 0 || options_.physics_oversampling > 100)
+    throw std::invalid_argument("enki world: physics_oversampling must be 1..100");
+  if (!finite(options_.outer_wall_thickness) || options_.outer_wall_thickness <= 0)
+    throw std::invalid_argument("enki world: outer_wall_thickness must be finite and positive");
+  if (options_.max_robots > (std::size_t{1} << 24)) throw std::invalid_argument("enki world: max_robots above 2^24");
+
+  const std::size_t walls = 4 + spec_.walls.size();
+  arena_ = std::make_unique<Arena>(walls * round_up(sizeof(Enki::PhysicalObject), 64) +
+                                   options_.max_robots * round_up(sizeof(Thymio), 64));
+  robots_.reserve(std::min<std::size_t>(options_.max_robots, 1024));
+
+  std::lock_guard lock(enki_mutex());
+  enki_ = std::make_unique<EnkiState>();
+  // The world does not own the objects: they live in (and die with) the arena.
+  enki_->world.takeObjectOwnership = false;
+
+  const double w = spec_.width, h = spec_.height, t = options_.outer_wall_thickness;
+  auto add_wall = [&](double cx, double cy, double length, double width, double angle) {
+    Enki::PhysicalObject* o = arena_->make<Enki::PhysicalObject>();
+    o->setRectangular(length, width, spec_.wall_height, -1);
+    o->pos = Enki::Point(cx, cy);
+    o->angle = angle;
+    o->setColor(Enki::Color::gray);
+    enki_->world.addObject(o);
+    ++wall_count_;
+  };
+  // The sides, outside the arena, long enough to close the corners.
+  add_wall(w / 2, -t / 2, w + 2 * t, t, 0);
+  add_wall(w / 2, h + t / 2, w + 2 * t, t, 0);
+  add_wall(-t / 2, h / 2, t, h + 2 * t, 0);
+  add_wall(w + t / 2, h / 2, t, h + 2 * t, 0);
+  for (const WallSpec& s : spec_.walls) {
+    const double dx = s.x2 - s.x1, dy = s.y2 - s.y1;
+    const double length = std::hypot(dx, dy);
+    const double angle = length > 0 ? std::atan2(dy, dx) : 0.0;
+    add_wall((s.x1 + s.x2) / 2, (s.y1 + s.y2) / 2, length + s.thickness, s.thickness, angle);
+  }
+}
+
+EnkiWorld::~EnkiWorld() {
+  std::lock_guard lock(enki_mutex());
+  enki_.reset();  // first: it refers to objects in the arena
+  arena_.reset();
+}
+
+const EnkiWorld::Robot& EnkiWorld::robot_at(std::size_t robot, const char* what) const {
+  if (robot >= robots_.size())
+    throw std::out_of_range(std::string("enki world: ") + what + ": no robot " + std::to_string(robot) +
+                            " (there are " + std::to_string(robots_.size()) + ")");
+  return robots_[robot];
+}
+
+std::size_t EnkiWorld::add_robot(const std::string& name, RobotKind kind, const Pose& start) {
+  if (kind != RobotKind::kThymio2) throw std::invalid_argument("enki world: robot '" + name + "': unknown kind");
+  if (!finite(start.x) || !finite(start.y) || !finite(start.theta))
+    throw std::invalid_argument("enki world: robot '" + name + "': start pose must be finite");
+  if (start.x < 0 || start.x > spec_.width || start.y < 0 || start.y > spec_.height)
+    throw std::invalid_argument("enki world: robot '" + name + "' starts at (" + std::to_string(start.x) + ", " +
+                                std::to_string(start.y) + "), outside the arena [0, " + std::to_string(spec_.width) +
+                                "] x [0, " + std::to_string(spec_.height) + "]");
+  if (robots_.size() >= options_.max_robots || !arena_->has_room(sizeof(Thymio)))
+    throw std::length_error("enki world: robot '" + name + "': the world holds at most " +
+                            std::to_string(options_.max_robots) + " robots (Options::max_robots)");
+  std::lock_guard lock(enki_mutex());
+  Thymio* body = arena_->make<Thymio>();
+  body->pos = Enki::Point(start.x, start.y);
+  body->angle = start.theta;
+  body->leftSpeed = body->rightSpeed = 0;
+  enki_->world.addObject(body);
+  Robot r;
+  r.name = name;
+  r.body = body;
+  r.state.pose = Pose{start.x, start.y, normalize_angle(start.theta)};
+  robots_.push_back(std::move(r));
+  return robots_.size() - 1;
+}
+
+const std::string& EnkiWorld::robot_name(std::size_t robot) const { return robot_at(robot, "robot_name").name; }
+
+void EnkiWorld::step(double dt) {
+  if (!(dt > 0 && dt <= 1))
+    throw std::invalid_argument("enki world: step dt must be in (0, 1] s, got " + std::to_string(dt));
+  std::lock_guard lock(enki_mutex());
+  // Both of Enki's generators restart from this world's own stream, so what other worlds drew
+  // in between changes nothing here.
+  const std::uint64_t s = random_.next_u64();
+  Enki::random.setSeed(static_cast<unsigned long>(s));
+  std::srand(static_cast<unsigned>(s >> 32));
+  for (Robot& r : robots_) r.body->touched = false;
+  enki_->world.step(dt, options_.physics_oversampling);
+  for (Robot& r : robots_) {
+    RobotState& st = r.state;
+    const Pose now{r.body->pos.x, r.body->pos.y, normalize_angle(r.body->angle)};
+    st.distance += std::hypot(now.x - st.pose.x, now.y - st.pose.y);
+    st.pose = now;
+    st.in_contact = r.body->touched;
+    if (st.in_contact) ++st.contact_steps;
+  }
+  ++steps_;
+  time_ += dt;
+}
+
+void EnkiWorld::set_wheels(std::size_t robot, double left, double right) {
+  const Robot& r = robot_at(robot, "set_wheels");
+  if (std::isnan(left) || std::isnan(right))
+    throw std::invalid_argument("enki world: set_wheels: NaN speed for robot '" + r.name + "'");
+  left = std::clamp(left, -kMaxWheelSpeed, kMaxWheelSpeed);
+  right = std::clamp(right, -kMaxWheelSpeed, kMaxWheelSpeed);
+  Robot& mr = robots_[robot];
+  mr.body->leftSpeed = left;
+  mr.body->rightSpeed = right;
+  mr.state.left_speed = left;
+  mr.state.right_speed = right;
+}
+
+IrReadings EnkiWorld::ir(std::size_t robot) const {
+  const Thymio& b = *robot_at(robot, "ir").body;
+  if (steps_ == 0) return IrReadings{};  // Enki computes readings during a step
+  const double raw[kIrCount] = {b.infraredSensor0.getValue(), b.infraredSensor1.getValue(),
+                                b.infraredSensor2.getValue(), b.infraredSensor3.getValue(),
+                                b.infraredSensor4.getValue(), b.infraredSensor5.getValue(),
+                                b.infraredSensor6.getValue()};
+  IrReadings out{};
+  for (std::size_t i = 0; i < kIrCount; ++i)
+    out[i] = static_cast<float>(std::isfinite(raw[i]) ? std::clamp(raw[i], 0.0, kIrMax) : 0.0);
+  return out;
+}
+
+RobotState EnkiWorld::state(std::size_t robot) const { return robot_at(robot, "state").state; }
+
+}  // namespace symb::sim

@@ -1,0 +1,42 @@
+#include "symb/sim/sim_drivers.hpp"
+
+namespace symb::sim {
+
+std::vector<robot::ChannelSpec> SimIrSensor::channel_specs() {
+  std::vector<robot::ChannelSpec> c;
+  for (std::size_t i = 0; i < kIrCount; ++i)
+    c.push_back(robot::ChannelSpec{"ir" + std::to_string(i), "raw", 0.0f, static_cast<float>(kIrMax)});
+  return c;
+}
+
+SimIrSensor::SimIrSensor(std::string name) : robot::Sensor(std::move(name), channel_specs()) {}
+
+std::vector<robot::ChannelSpec> SimWheels::channel_specs() {
+  return {robot::ChannelSpec{"left", "thymio", -kWheelUnitsMax, kWheelUnitsMax},
+          robot::ChannelSpec{"right", "thymio", -kWheelUnitsMax, kWheelUnitsMax}};
+}
+
+SimWheels::SimWheels(std::string name) : robot::Actuator(std::move(name), channel_specs()) {}
+
+WheelCommand SimWheels::command() const {
+  std::lock_guard lock(mu_);
+  return cmd_;
+}
+
+void SimWheels::close() {
+  robot::Actuator::close();
+  std::lock_guard lock(mu_);
+  cmd_.left = cmd_.right = 0;
+}
+
+kernel::Status SimWheels::apply(std::span<const float> values) {
+  std::lock_guard lock(mu_);
+  // A close() that raced with this command wins: the wheels of a closed device stand still.
+  if (!is_open()) return kernel::Error{"closed while the command was applied"};
+  cmd_.left = wheel_units_to_cm_per_s(values[0]);
+  cmd_.right = wheel_units_to_cm_per_s(values[1]);
+  ++cmd_.sequence;
+  return {};
+}
+
+}  // namespace symb::sim

@@ -1,0 +1,74 @@
+// Simulated device drivers: the robot layer's Sensor and Actuator for a robot that lives in a
+// World. The task graph above them (SensorTask, controllers, ActuatorSinkTask) cannot tell them
+// from real hardware drivers; the WorldRunner is their "hardware": it publishes each step's IR
+// readings to the SimIrSensor and reads the newest command from the SimWheels.
+//
+//   SimIrSensor  7 channels ir0..ir6, raw units, [0, kIrMax]: Thymio2's horizontal proximity
+//                sensors (see world.hpp for their placement)
+//   SimWheels    2 channels left, right, Thymio motor units, [-500, 500]. The real Thymio's
+//                firmware takes wheel targets in these units; here 500 is mapped to the simulated
+//                top speed kMaxWheelSpeed (16.6 cm/s), linearly, so a controller written for the
+//                full range uses the full range. (On a real Thymio 500 is about 20 cm/s.)
+//
+// Both are thread-safe: the runner and the tasks may run on different threads (ThreadExecutor).
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "symb/kernel/time.hpp"
+#include "symb/robot/actuator.hpp"
+#include "symb/robot/channel_spec.hpp"
+#include "symb/robot/sensor.hpp"
+#include "symb/sim/world.hpp"
+
+namespace symb::sim {
+
+// Thymio motor units at full speed, and their scale to the world's cm/s.
+inline constexpr float kWheelUnitsMax = 500.0f;
+inline constexpr double kCmPerSecondPerWheelUnit = kMaxWheelSpeed / kWheelUnitsMax;
+
+inline double wheel_units_to_cm_per_s(double units) { return units * kCmPerSecondPerWheelUnit; }
+inline double cm_per_s_to_wheel_units(double cm_per_s) { return cm_per_s / kCmPerSecondPerWheelUnit; }
+
+class SimIrSensor final : public robot::Sensor {
+ public:
+  explicit SimIrSensor(std::string name = "ir");
+
+  static std::vector<robot::ChannelSpec> channel_specs();
+  // For the runner: one reading of all 7 sensors at node time `time`.
+  robot::PublishResult publish_readings(const IrReadings& readings, kernel::Time time) {
+    return publish(std::span<const float>(readings.data(), readings.size()), time);
+  }
+};
+
+// The newest wheel command, in the world's units.
+struct WheelCommand {
+  double left = 0;             // cm/s
+  double right = 0;            // cm/s
+  std::uint64_t sequence = 0;  // commands applied so far; 0: none yet (the wheels stand still)
+};
+
+class SimWheels final : public robot::Actuator {
+ public:
+  explicit SimWheels(std::string name = "wheels");
+
+  static std::vector<robot::ChannelSpec> channel_specs();
+  // What the runner applies at its next step. Any thread.
+  WheelCommand command() const;
+  // Closing the device stops the wheels, as a motor driver that loses its enable line does.
+  void close() override;
+
+ protected:
+  // `values` are conditioned already (clamped to +-500, no NaN): scale and hand over.
+  kernel::Status apply(std::span<const float> values) override;
+
+ private:
+  mutable std::mutex mu_;  // cmd_ (apply runs under the actuator's own lock, this one is inner)
+  WheelCommand cmd_;
+};
+
+}  // namespace symb::sim

@@ -1,0 +1,138 @@
+#include "symb/sim/world_runner.hpp"
+
+#include <stdexcept>
+
+namespace symb::sim {
+
+WorldRunner::WorldRunner(kernel::Executor& executor, World& world, Options options)
+    : executor_(executor),
+      world_(world),
+      options_(std::move(options)),
+      dt_(std::chrono::duration<double>(options_.period).count()) {
+  if (options_.period <= kernel::Duration::zero() || options_.period > std::chrono::seconds(1))
+    throw std::invalid_argument("world runner: the period must be in (0, 1 s]");
+  const std::size_t n = world_.robot_count();
+  for (std::size_t i = 0; i < n; ++i) {
+    ir_.push_back(std::make_shared<SimIrSensor>("ir"));
+    wheels_.push_back(std::make_shared<SimWheels>("wheels"));
+  }
+  record_.robots.resize(n);
+}
+
+WorldRunner::~WorldRunner() {
+  stop();
+  // stop() waits under the thread executor; a virtual-time executor outside its run has released
+  // us already. Anything else would be a runner destroyed from inside a handler.
+  std::unique_lock lock(state_mu_);
+  released_cv_.wait(lock, [&] { return !attached_; });
+}
+
+std::shared_ptr<SimIrSensor> WorldRunner::ir_sensor(std::size_t robot) const {
+  if (robot >= ir_.size()) throw std::out_of_range("world runner: no robot " + std::to_string(robot));
+  return ir_[robot];
+}
+
+std::shared_ptr<SimWheels> WorldRunner::wheels(std::size_t robot) const {
+  if (robot >= wheels_.size()) throw std::out_of_range("world runner: no robot " + std::to_string(robot));
+  return wheels_[robot];
+}
+
+void WorldRunner::add_observer(StepObserver observer) {
+  std::lock_guard lock(observers_mu_);
+  observers_.push_back(std::move(observer));
+}
+
+kernel::Status WorldRunner::start() {
+  {
+    std::lock_guard lock(state_mu_);
+    if (attached_) return kernel::Error{"world runner '" + options_.name + "' is already running"};
+    attached_ = true;
+    error_.clear();
+  }
+  // Not under state_mu_: attach() calls on_activity_attached(), and a thread executor may already
+  // run the first handler.
+  executor_.attach(*this, kernel::ActivityOptions{options_.priority, options_.period, options_.name});
+  return {};
+}
+
+void WorldRunner::stop() {
+  kernel::ActivitySlot* slot = nullptr;
+  {
+    std::lock_guard lock(state_mu_);
+    if (!attached_) return;
+    slot = slot_;
+    slot_ = nullptr;  // the slot is the executor's again once we are released
+  }
+  if (slot != nullptr) slot->detach();
+  if (executor_.concurrent() && std::this_thread::get_id() != runner_thread_.load()) {
+    std::unique_lock lock(state_mu_);
+    released_cv_.wait(lock, [&] { return !attached_; });
+  }
+}
+
+bool WorldRunner::running() const {
+  std::lock_guard lock(state_mu_);
+  return attached_ && slot_ != nullptr;
+}
+
+std::string WorldRunner::error() const {
+  std::lock_guard lock(state_mu_);
+  return error_;
+}
+
+void WorldRunner::on_activity_attached(kernel::ActivitySlot& slot) {
+  std::lock_guard lock(state_mu_);
+  slot_ = &slot;
+}
+
+void WorldRunner::on_activity_start() { runner_thread_.store(std::this_thread::get_id()); }
+
+void WorldRunner::on_activity_released() {
+  std::lock_guard lock(state_mu_);
+  slot_ = nullptr;
+  attached_ = false;
+  runner_thread_.store(std::thread::id{});
+  // Notified under the lock: a waiter may destroy the runner as soon as it gets the lock back.
+  released_cv_.notify_all();
+}
+
+void WorldRunner::on_activity_tick() {
+  try {
+    tick();
+  } catch (const std::exception& e) {
+    kernel::ActivitySlot* slot = nullptr;
+    {
+      std::lock_guard lock(state_mu_);
+      error_ = std::string("world runner '") + options_.name + "' stopped: " + e.what();
+      slot = slot_;
+      slot_ = nullptr;
+    }
+    if (slot != nullptr) slot->detach();
+  }
+}
+
+void WorldRunner::tick() {
+  const kernel::Time now = executor_.clock().now();
+  {
+    std::lock_guard lock(world_mu_);
+    for (std::size_t i = 0; i < wheels_.size(); ++i) {
+      const WheelCommand c = wheels_[i]->command();
+      world_.set_wheels(i, c.left, c.right);
+    }
+    world_.step(dt_);
+    record_.step = world_.steps();
+    record_.time = now;
+    for (std::size_t i = 0; i < record_.robots.size(); ++i) {
+      record_.robots[i].state = world_.state(i);
+      record_.robots[i].ir = world_.ir(i);
+    }
+  }
+  // Outside the world lock: under the thread executor this runs the sensor tasks' injected work
+  // right here, and a handler further down the chain may well look at the world.
+  for (std::size_t i = 0; i < ir_.size(); ++i) ir_[i]->publish_readings(record_.robots[i].ir, now);
+  steps_.fetch_add(1, std::memory_order_acq_rel);
+  std::lock_guard lock(observers_mu_);
+  for (const StepObserver& observer : observers_) observer(record_);
+}
+
+}  // namespace symb::sim
