@@ -215,6 +215,15 @@ TEST(Mdl2eTask, VectorThenTickAtOneInstantStepsOnce) {
   ASSERT_EQ(one.size(), 1u);
   EXPECT_EQ(one[0].left, -80);
   EXPECT_EQ(rig.ctl->stats().skipped_ticks, 1u);
+
+  // A bad vector waiting at a tick: the tick's step is not lost, it is taken on the last good one.
+  rig.sensor->script(at(180), {1, 2, 3});
+  rig.ex.run_until(at(180));
+  const auto kept = rig.rec->at(at(180));
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_EQ(kept[0].left, -80);
+  EXPECT_EQ(rig.ctl->stats().wrong_count, 1u);
+  EXPECT_EQ(rig.ctl->stats().skipped_ticks, 2u);
 }
 
 TEST(Mdl2eTask, ExternalBitsReactAtOnceAndThePlanEndGivesZeros) {

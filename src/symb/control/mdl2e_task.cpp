@@ -92,6 +92,8 @@ void Mdl2eTask::ignore(std::uint64_t Mdl2eStats::*counter, const std::string& wh
     log(os::LogLevel::kWarn, count_text(ignored_warning_.held, "message") + " ignored, latest: " + why);
     ignored_warning_.held = 0;
   }
+  // A tick of this instant left its step to this message; it must not be lost to bad input.
+  if (deferred_tick_ && deferred_at_ == now() && !(stepped_ && last_step_ == now())) step(true);
 }
 
 void Mdl2eTask::on_message(const os::Message& m) {
@@ -149,8 +151,14 @@ void Mdl2eTask::on_tick() {
     ++stats_.idle_ticks;
     return;
   }
-  const auto info = node().info(id());
-  if ((stepped_ && last_step_ == now()) || (info && info->queue_depth > 0)) {
+  if (stepped_ && last_step_ == now()) {
+    std::lock_guard lock(mu_);
+    ++stats_.skipped_ticks;
+    return;
+  }
+  if (const auto info = node().info(id()); info && info->queue_depth > 0) {
+    deferred_tick_ = true;
+    deferred_at_ = now();
     std::lock_guard lock(mu_);
     ++stats_.skipped_ticks;
     return;

@@ -18,7 +18,8 @@
 //    the queue (that message steps right after, at the same instant) or when a step was already
 //    taken at this instant. So when a vector and a tick meet at one instant, what happens depends
 //    on who runs first, which under virtual time is the higher priority:
-//      - the sensor task above the controller: the vector is queued before the tick, one step;
+//      - the sensor task above the controller: the vector is queued before the tick, one step
+//        (should the waiting message turn out to be bad, the tick's step is taken then);
 //      - the controller above the sensor (the type defaults: 2 and 1): the tick steps on the
 //        previous vector, then the vector steps again; two commands at one instant, the last one
 //        computed from the newest data.
@@ -126,6 +127,8 @@ class Mdl2eTask : public os::Task {
   bool have_input_ = false;  // a sensor vector arrived (or the program needs none)
   bool stepped_ = false;
   kernel::Time last_step_{0};
+  bool deferred_tick_ = false;  // a tick left its step to a message waiting at deferred_at_
+  kernel::Time deferred_at_{0};
   bool plan_end_logged_ = false;
   Limiter ignored_warning_;
   Limiter action_warning_;
