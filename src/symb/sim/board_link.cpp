@@ -1,0 +1,304 @@
+#include "symb/sim/board_link.hpp"
+
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "symb/io/bytes.hpp"
+#include "symb/io/stream_task.hpp"
+#include "symb/robot/channel_spec.hpp"
+#include "symb/robot/ports.hpp"
+#include "symb/robot/warning_limiter.hpp"
+#include "symb/sim/hil_protocol.hpp"
+#include "symb/sim/scenario.hpp"
+#include "symb/sim/sim_drivers.hpp"
+
+namespace symb::sim {
+
+namespace {
+
+using LinkShared = BoardLink::Shared;
+
+std::int64_t ms(kernel::Duration d) { return std::chrono::duration_cast<std::chrono::milliseconds>(d).count(); }
+
+// The serial line. A StreamTask in frames mode that also copies its counters into the shared
+// stats (at every message and tick) and reports bad frames in the node's log.
+class HilLinkTask final : public io::StreamTask {
+ public:
+  HilLinkTask(std::shared_ptr<io::IOStream> port, std::shared_ptr<LinkShared> shared, kernel::Duration warn)
+      : io::StreamTask(std::move(port), Options{io::StreamMode::kFrames, 4096, 256, std::chrono::milliseconds(20)}),
+        shared_(std::move(shared)),
+        bad_warning_(warn) {}
+
+ protected:
+  void on_message(const os::Message& m) override {
+    io::StreamTask::on_message(m);
+    refresh();
+  }
+  void on_tick() override { refresh(); }
+  void on_stop() override {
+    io::StreamTask::on_stop();
+    refresh();
+  }
+
+ private:
+  void refresh() {
+    const io::StreamStats s = stats();
+    {
+      std::lock_guard lock(shared_->mu);
+      shared_->stats.bytes_in = s.bytes_in;
+      shared_->stats.bytes_out = s.bytes_out;
+      shared_->stats.write_errors = s.write_errors;
+      shared_->stats.decoder = s.frames;
+    }
+    const std::uint64_t bad = s.frames.dropped();
+    if (bad > reported_bad_) {
+      if (bad_warning_.note(now(), bad - reported_bad_)) {
+        char buf[200];
+        std::snprintf(
+            buf, sizeof buf,
+            "%llu bad frame(s) dropped (so far: crc %llu, truncated %llu, encoding %llu, version %llu, "
+            "oversized %llu)",
+            static_cast<unsigned long long>(bad_warning_.count()), static_cast<unsigned long long>(s.frames.crc_errors),
+            static_cast<unsigned long long>(s.frames.truncated), static_cast<unsigned long long>(s.frames.bad_encoding),
+            static_cast<unsigned long long>(s.frames.bad_version), static_cast<unsigned long long>(s.frames.oversized));
+        log(os::LogLevel::kWarn, buf);
+      }
+      reported_bad_ = bad;
+    }
+  }
+
+  std::shared_ptr<LinkShared> shared_;
+  robot::WarningLimiter bad_warning_;
+  std::uint64_t reported_bad_ = 0;
+};
+
+// IR frames in, the 7 values out on port 0; sequence checks and the lost-link report.
+class HilIrTask final : public os::Task {
+ public:
+  HilIrTask(std::shared_ptr<LinkShared> shared, const BoardLinkOptions& o)
+      : shared_(std::move(shared)),
+        channels_(SimIrSensor::channel_specs()),
+        lost_after_(o.control_period * o.lost_periods),
+        malformed_warning_(o.warn_interval),
+        order_warning_(o.warn_interval) {}
+
+ protected:
+  void on_start() override { last_frame_ = now(); }
+
+  void on_message(const os::Message& m) override {
+    const io::Bytes* bytes = io::bytes_of(m);
+    auto frame = bytes ? decode_ir_payload(bytes->data) : kernel::Error{"a message without frame bytes"};
+    if (!frame) {
+      bump([](BoardLinkStats& s) { ++s.malformed; });
+      if (malformed_warning_.note(now()))
+        log(os::LogLevel::kWarn,
+            std::to_string(malformed_warning_.count()) + " malformed frame(s), latest: " + frame.error());
+      return;
+    }
+    const std::uint32_t seq = frame->seq;
+    std::uint64_t missed = 0;
+    bool restart = false;
+    if (seq == 0) {
+      restart = have_seq_ && last_seq_ != 0;
+    } else if (have_seq_ && seq <= last_seq_) {
+      bump([](BoardLinkStats& s) { ++s.out_of_order; });
+      if (order_warning_.note(now()))
+        log(os::LogLevel::kWarn, std::to_string(order_warning_.count()) +
+                                     " out-of-order frame(s) dropped, latest: seq " + std::to_string(seq) + " after " +
+                                     std::to_string(last_seq_));
+      return;
+    } else if (have_seq_) {
+      missed = seq - last_seq_ - 1;
+    }
+    if (restart) log(os::LogLevel::kInfo, "seq 0 after " + std::to_string(last_seq_) + ": the simulator started anew");
+    const kernel::Time t = now();
+    if (!up_) {
+      if (ever_up_)
+        log(os::LogLevel::kInfo, "link back after " + std::to_string(ms(t - last_frame_)) + " ms without frames (seq " +
+                                     std::to_string(seq) + ")");
+      else
+        log(os::LogLevel::kInfo, "link up: first IR frame, seq " + std::to_string(seq));
+    }
+    const bool recovered = !up_ && ever_up_;
+    up_ = ever_up_ = true;
+    have_seq_ = true;
+    last_seq_ = seq;
+    last_frame_ = t;
+
+    float out[kIrCount];
+    const robot::Conditioned c = robot::condition_sample(channels_, frame->ir, out);
+    bump([&](BoardLinkStats& s) {
+      ++s.ir_frames;
+      s.missed += missed;
+      s.restarts += restart ? 1 : 0;
+      s.clamped += c.clamped;
+      s.link_recoveries += recovered ? 1 : 0;
+      s.link_up = true;
+      s.last_seq = seq;
+    });
+    if (c.ok()) send(robot::kDataPort, std::span<const float>(out, kIrCount));
+  }
+
+  void on_tick() override {
+    if (!up_ || now() - last_frame_ < lost_after_) return;
+    up_ = false;
+    bump([](BoardLinkStats& s) {
+      ++s.link_losses;
+      s.link_up = false;
+    });
+    log(os::LogLevel::kWarn, "link lost: no IR frame for " + std::to_string(ms(now() - last_frame_)) +
+                                 " ms (last seq " + std::to_string(last_seq_) + "); waiting for frames");
+  }
+
+ private:
+  template <class F>
+  void bump(F&& f) {
+    std::lock_guard lock(shared_->mu);
+    f(shared_->stats);
+  }
+
+  std::shared_ptr<LinkShared> shared_;
+  const std::vector<robot::ChannelSpec> channels_;
+  const kernel::Duration lost_after_;
+  robot::WarningLimiter malformed_warning_;
+  robot::WarningLimiter order_warning_;
+  kernel::Time last_frame_{0};
+  std::uint32_t last_seq_ = 0;
+  bool have_seq_ = false;
+  bool up_ = false;
+  bool ever_up_ = false;
+};
+
+// [left, right] in, [seq, left, right] out to the link; the watchdog stops a silent controller.
+class HilWheelsTask final : public os::Task {
+ public:
+  HilWheelsTask(std::shared_ptr<LinkShared> shared, const BoardLinkOptions& o)
+      : shared_(std::move(shared)),
+        channels_(SimWheels::channel_specs()),
+        timeout_(std::chrono::duration_cast<kernel::Duration>(o.control_period * o.watchdog_periods)),
+        reject_warning_(o.warn_interval),
+        clamp_warning_(o.warn_interval),
+        timeout_warning_(o.warn_interval) {}
+
+ protected:
+  void on_start() override { last_command_ = now(); }
+
+  void on_message(const os::Message& m) override {
+    float out[2];
+    robot::Conditioned c;
+    if (m.payload.blob)
+      c.fault = robot::SampleFault::kWrongCount;
+    else
+      c = robot::condition_sample(channels_, m.numbers(), out);
+    if (!c.ok()) {
+      {
+        std::lock_guard lock(shared_->mu);
+        ++shared_->stats.wheel_rejected;
+      }
+      if (reject_warning_.note(now()))
+        log(os::LogLevel::kWarn, std::to_string(reject_warning_.count()) +
+                                     " wheel command(s) refused, latest: " + robot::to_string(c.fault) + " (" +
+                                     std::to_string(m.numbers().size()) + " values); previous speeds kept");
+      return;
+    }
+    if (c.clamped > 0 && clamp_warning_.note(now(), c.clamped))
+      log(os::LogLevel::kWarn, std::to_string(clamp_warning_.count()) + " wheel value(s) outside +-500, clamped");
+    last_command_ = now();
+    timed_out_ = false;
+    transmit(out[0], out[1], [&](BoardLinkStats& s) {
+      ++s.wheel_commands;
+      s.wheel_clamped += c.clamped;
+    });
+  }
+
+  void on_tick() override {
+    if (timeout_.count() <= 0 || timed_out_ || now() - last_command_ < timeout_) return;
+    // Once per silence, as the in-process actuator_sink does.
+    timed_out_ = true;
+    transmit(0.0f, 0.0f, [](BoardLinkStats& s) { ++s.watchdog_stops; });
+    if (timeout_warning_.note(now()))
+      log(os::LogLevel::kWarn, std::to_string(timeout_warning_.count()) + " timeout(s): no command for " +
+                                   std::to_string(ms(timeout_)) + " ms, wheels stopped");
+  }
+
+ private:
+  template <class F>
+  void transmit(float left, float right, F&& count) {
+    std::uint32_t seq = 0;
+    {
+      std::lock_guard lock(shared_->mu);
+      seq = shared_->stats.last_seq;
+      count(shared_->stats);
+    }
+    send(robot::kDataPort, {static_cast<float>(seq), left, right});
+  }
+
+  std::shared_ptr<LinkShared> shared_;
+  const std::vector<robot::ChannelSpec> channels_;
+  const kernel::Duration timeout_;
+  robot::WarningLimiter reject_warning_;
+  robot::WarningLimiter clamp_warning_;
+  robot::WarningLimiter timeout_warning_;
+  kernel::Time last_command_{0};
+  bool timed_out_ = false;
+};
+
+}  // namespace
+
+BoardLink::BoardLink(std::shared_ptr<io::IOStream> port, BoardLinkOptions options)
+    : port_(std::move(port)), options_(options), shared_(std::make_shared<Shared>()) {}
+
+std::shared_ptr<BoardLink> BoardLink::create(std::shared_ptr<io::IOStream> port, BoardLinkOptions options) {
+  if (!port) throw std::invalid_argument("BoardLink: no port");
+  if (options.control_period.count() <= 0 || options.lost_periods < 1 || !(options.watchdog_periods >= 0))
+    throw std::invalid_argument("BoardLink: control period, lost_periods and watchdog_periods must be positive");
+  return std::shared_ptr<BoardLink>(new BoardLink(std::move(port), options));
+}
+
+kernel::Status BoardLink::make_device_tasks(os::Node& node) {
+  os::TaskOptions link_options;
+  link_options.period = options_.control_period;
+  link_options.queue_capacity = 64;
+  os::TaskOptions device_options;
+  device_options.period = options_.control_period;
+  device_options.queue_capacity = 8;
+  auto link = node.create(std::string(kLinkTaskName),
+                          std::make_unique<HilLinkTask>(port_, shared_, options_.warn_interval), link_options);
+  if (!link) return kernel::Error{"link: " + link.error()};
+  auto ir = node.create(std::string(kIrTaskName), std::make_unique<HilIrTask>(shared_, options_), device_options);
+  if (!ir) return kernel::Error{"ir: " + ir.error()};
+  auto wheels =
+      node.create(std::string(kWheelsTaskName), std::make_unique<HilWheelsTask>(shared_, options_), device_options);
+  if (!wheels) return kernel::Error{"wheels: " + wheels.error()};
+  // Sensor data keeps the newest; wheel commands too: a stale speed is worth less than a new one.
+  if (auto h = node.hook(*link, *ir); !h) return kernel::Error{"hook link -> ir: " + h.error()};
+  if (auto h = node.hook(*wheels, *link); !h) return kernel::Error{"hook wheels -> link: " + h.error()};
+  return {};
+}
+
+std::function<kernel::Status(os::Node&)> BoardLink::device_tasks() {
+  return [self = shared_from_this()](os::Node& node) { return self->make_device_tasks(node); };
+}
+
+BoardLinkStats BoardLink::stats() const {
+  std::lock_guard lock(shared_->mu);
+  return shared_->stats;
+}
+
+std::string describe(const BoardLinkStats& s) {
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "frames %llu good, %llu bad (crc %llu), %llu missed, %llu out of order; link %s (%llu lost, "
+                "%llu back), last seq %u; wheels %llu sent, %llu refused, %llu watchdog stops",
+                static_cast<unsigned long long>(s.ir_frames), static_cast<unsigned long long>(s.bad_frames()),
+                static_cast<unsigned long long>(s.decoder.crc_errors), static_cast<unsigned long long>(s.missed),
+                static_cast<unsigned long long>(s.out_of_order), s.link_up ? "up" : "down",
+                static_cast<unsigned long long>(s.link_losses), static_cast<unsigned long long>(s.link_recoveries),
+                static_cast<unsigned>(s.last_seq), static_cast<unsigned long long>(s.wheel_commands),
+                static_cast<unsigned long long>(s.wheel_rejected), static_cast<unsigned long long>(s.watchdog_stops));
+  return buf;
+}
+
+}  // namespace symb::sim

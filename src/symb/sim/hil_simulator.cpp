@@ -1,0 +1,243 @@
+#include "symb/sim/hil_simulator.hpp"
+
+#include <cstdio>
+#include <stdexcept>
+#include <thread>
+
+#include "symb/io/fd_stream.hpp"
+#include "symb/sim/sim_drivers.hpp"
+
+namespace symb::sim {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string u(std::uint64_t v) { return std::to_string(v); }
+
+}  // namespace
+
+struct HilSimulator::Robot {
+  io::FrameDecoder decoder{256};
+  HilRobotStats stats;
+  std::uint64_t quiet_steps = 0;  // steps since the last applied frame
+};
+
+std::string describe(const HilRobotStats& s) {
+  return "sent " + u(s.frames_sent) + " (" + u(s.corrupted) + " corrupted, " + u(s.write_errors) +
+         " not taken); received " + u(s.received) + " good, " + u(s.bad_frames()) + " bad; applied " + u(s.applied) +
+         " (" + u(s.late) + " late), " + u(s.stale) + " stale, " + u(s.missing) + " steps without a new frame, " +
+         u(s.silences) + " silences, " + u(s.recoveries) + " recoveries";
+}
+
+HilSimulator::HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStream>> ports, HilSimulatorOptions options)
+    : world_(world),
+      options_(std::move(options)),
+      dt_(std::chrono::duration<double>(options_.period).count()),
+      hold_steps_(0),
+      ports_(std::move(ports)),
+      robots_(world.robot_count()),
+      corruptor_(options_.corrupt, options_.seed, 0x48494c),
+      buf_(4096) {
+  if (ports_.size() != world.robot_count())
+    throw std::invalid_argument("HilSimulator: " + u(ports_.size()) + " ports for " + u(world.robot_count()) +
+                                " robots");
+  for (const auto& p : ports_)
+    if (!p) throw std::invalid_argument("HilSimulator: a port is missing");
+  if (options_.period.count() <= 0 || options_.period > std::chrono::seconds(1))
+    throw std::invalid_argument("HilSimulator: the period must be in (0, 1 s]");
+  if (!(options_.corrupt >= 0 && options_.corrupt <= 1))
+    throw std::invalid_argument("HilSimulator: corrupt must be in [0, 1]");
+  hold_steps_ = static_cast<std::uint64_t>(std::max<std::int64_t>(1, options_.hold / options_.period));
+  for (std::size_t i = 0; i < robots_.size(); ++i) robots_[i].stats.robot = world.robot_name(i);
+}
+
+HilSimulator::~HilSimulator() = default;
+
+void HilSimulator::add_observer(StepObserver observer) { observers_.push_back(std::move(observer)); }
+
+void HilSimulator::event(const std::string& text) {
+  if (options_.on_event) options_.on_event(text);
+}
+
+std::vector<HilRobotStats> HilSimulator::stats() const {
+  std::lock_guard lock(stats_mu_);
+  std::vector<HilRobotStats> out;
+  out.reserve(robots_.size());
+  for (const Robot& r : robots_) out.push_back(r.stats);
+  return out;
+}
+
+kernel::Status HilSimulator::open_ports() {
+  if (opened_) return {};
+  for (auto& p : ports_) {
+    if (!p->is_open())
+      if (auto st = p->open(); !st) return kernel::Error{"cannot open '" + p->name() + "': " + st.error()};
+    // What a previous run left in the line is not an answer to this one.
+    (void)p->ioctl("flush");
+    if (auto* fd = dynamic_cast<io::FdStream*>(p.get())) fd->set_write_timeout(options_.period / 4);
+  }
+  opened_ = true;
+  return {};
+}
+
+void HilSimulator::send_ir(std::size_t i, std::uint32_t seq) {
+  HilIrFrame f;
+  f.seq = seq;
+  f.ir = world_.ir(i);
+  frame_.clear();
+  io::encode_frame(encode_ir_payload(f), frame_);
+  const bool hit = corruptor_.roll() && corrupt_frame(frame_, corruptor_.random());
+  corruptor_.count(hit);
+  const auto st = ports_[i]->write_all(frame_);
+  std::lock_guard lock(stats_mu_);
+  HilRobotStats& s = robots_[i].stats;
+  ++s.frames_sent;
+  s.corrupted += hit ? 1 : 0;
+  s.write_errors += st ? 0 : 1;
+}
+
+std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_frame) {
+  Robot& r = robots_[i];
+  std::optional<HilWheelFrame> best;
+  std::uint64_t received = 0, malformed = 0, stale = 0;
+  any_frame = false;
+  // Non-blocking: a zero timeout polls; the loop ends as soon as nothing more is there.
+  for (int rounds = 0; rounds < 64; ++rounds) {
+    auto got = ports_[i]->read_some(buf_, kernel::Duration{0});
+    if (!got || *got == 0) break;
+    r.decoder.feed(std::span<const std::byte>(buf_.data(), *got), [&](std::span<const std::byte> payload) {
+      auto f = decode_wheel_payload(payload);
+      if (!f) {
+        ++malformed;
+        return;
+      }
+      ++received;
+      any_frame = true;
+      if (f->seq == 0) return;  // an answer to the handshake: never applied
+      if (f->seq < r.stats.last_applied) {
+        ++stale;
+        return;
+      }
+      if (!best || f->seq >= best->seq) best = *f;
+    });
+  }
+  std::lock_guard lock(stats_mu_);
+  r.stats.received += received;
+  r.stats.malformed += malformed;
+  r.stats.stale += stale;
+  r.stats.decoder = r.decoder.stats();
+  return best;
+}
+
+kernel::Status HilSimulator::wait_for_boards(kernel::Duration timeout) {
+  if (auto st = open_ports(); !st) return st;
+  const auto deadline = Clock::now() + timeout;
+  auto due = Clock::now();
+  for (;;) {
+    bool all = true;
+    for (std::size_t i = 0; i < robots_.size(); ++i) {
+      bool any = false;
+      (void)read_wheels(i, any);
+      bool answered = false;
+      {
+        std::lock_guard lock(stats_mu_);
+        if (any && !robots_[i].stats.answered) robots_[i].stats.answered = answered = true;
+        all = all && robots_[i].stats.answered;
+      }
+      if (answered) event("robot " + robots_[i].stats.robot + ": board answered");
+    }
+    if (all) return {};
+    if (stop_.load()) return kernel::Error{"stopped while waiting for the boards"};
+    if (Clock::now() >= deadline) {
+      std::string missing;
+      for (const Robot& r : robots_)
+        if (!r.stats.answered) missing += (missing.empty() ? "" : ", ") + r.stats.robot;
+      return kernel::Error{"no answer from the board of " + missing + " within " +
+                           u(std::chrono::duration_cast<std::chrono::milliseconds>(timeout).count()) + " ms"};
+    }
+    for (std::size_t i = 0; i < robots_.size(); ++i)
+      if (!robots_[i].stats.answered) send_ir(i, 0);
+    due += options_.period;
+    std::this_thread::sleep_until(due);
+  }
+}
+
+kernel::Result<std::uint64_t> HilSimulator::run_for(kernel::Duration duration) {
+  if (auto st = open_ports(); !st) return kernel::Error{st.error()};
+  const auto total = static_cast<std::uint64_t>(duration / options_.period);
+  auto start = Clock::now();
+  std::uint64_t done = 0;
+  StepRecord record;
+  record.robots.resize(robots_.size());
+  for (std::uint64_t k = 1; k <= total && !stop_.load(); ++k) {
+    if (seq_ >= kHilMaxSequence)
+      return kernel::Error{"the sequence numbers are used up (" + u(kHilMaxSequence) + " steps)"};
+    const auto due =
+        start + std::chrono::duration_cast<Clock::duration>(options_.period * static_cast<std::int64_t>(k));
+    std::this_thread::sleep_until(due);
+    if (Clock::now() - due > options_.period) {
+      // Far behind (a stopped process, a loaded machine): resume the beat from now instead of
+      // stepping in a burst, which the boards could not follow.
+      overruns_.fetch_add(1);
+      start =
+          Clock::now() - std::chrono::duration_cast<Clock::duration>(options_.period * static_cast<std::int64_t>(k));
+    }
+
+    // 1. wheels from the newest answer, or the last speeds, or a stop after `hold`.
+    for (std::size_t i = 0; i < robots_.size(); ++i) {
+      bool any = false;
+      const auto f = read_wheels(i, any);
+      Robot& r = robots_[i];
+      std::string note;
+      {
+        std::lock_guard lock(stats_mu_);
+        HilRobotStats& s = r.stats;
+        if (any) s.answered = true;
+        if (f) {
+          ++s.applied;
+          s.late += f->seq < seq_ ? 1 : 0;
+          s.last_applied = f->seq;
+          if (s.silent) {
+            s.silent = false;
+            ++s.recoveries;
+            note = "robot " + s.robot + ": board answers again after " + u(r.quiet_steps) + " steps";
+          }
+          r.quiet_steps = 0;
+        } else {
+          ++s.missing;
+          ++r.quiet_steps;
+          if (!s.silent && r.quiet_steps >= hold_steps_ && s.applied > 0) {
+            s.silent = true;
+            ++s.silences;
+            note = "robot " + s.robot + ": board silent for " + u(r.quiet_steps) + " steps: wheels stopped";
+          }
+        }
+      }
+      if (f)
+        world_.set_wheels(i, wheel_units_to_cm_per_s(f->left), wheel_units_to_cm_per_s(f->right));
+      else if (!note.empty())
+        world_.set_wheels(i, 0, 0);
+      if (!note.empty()) event(note);
+    }
+
+    // 2. physics.
+    world_.step(dt_);
+    seq_ = static_cast<std::uint32_t>(k);
+
+    // 3. the boards' next input; 4. the observers.
+    record.step = world_.steps();
+    record.time = kernel::Time{options_.period * static_cast<std::int64_t>(k)};
+    for (std::size_t i = 0; i < robots_.size(); ++i) {
+      send_ir(i, seq_);
+      record.robots[i].state = world_.state(i);
+      record.robots[i].ir = world_.ir(i);
+    }
+    for (const auto& o : observers_) o(record);
+    ++done;
+    steps_.store(done);
+  }
+  return done;
+}
+
+}  // namespace symb::sim
