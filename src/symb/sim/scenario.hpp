@@ -11,6 +11,7 @@
 // File format: docs/scenarios.md. Parsing: scenario_parser.cpp (yaml-cpp).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -30,17 +31,29 @@ namespace symb::sim {
 inline constexpr std::string_view kIrTaskName = "ir";
 inline constexpr std::string_view kWheelsTaskName = "wheels";
 
+// Every robot keeps a disc of this radius (cm) around its start point free: no wall surface and
+// no other robot's disc may reach into it. Thymio2 is about 11 cm across, so 8 cm leaves it
+// room to turn on the spot before it first senses anything.
+inline constexpr double kStartClearance = 8.0;
+
+// Bounds that keep a hostile file from costing more than a moment to read.
+inline constexpr std::size_t kMaxScenarioBytes = 1 << 20;
+inline constexpr int kMaxNesting = 64;           // mappings and sequences inside each other
+inline constexpr std::size_t kMaxRobots = 1000;  // after `count` expansion
+inline constexpr std::size_t kMaxWalls = 2000;
+
 struct TaskSpec {
   std::string name;
   std::string type;
   // Values as text, exactly as a shell line would give them; `column` is unused (see where).
   std::vector<os::ParamAssignment> params;
-  std::vector<SourceLocation> param_where;  // one per params entry
+  std::vector<SourceLocation> param_where;  // one per params entry (the value)
   std::optional<int> priority;
   std::optional<kernel::Duration> period;
   std::optional<std::size_t> queue_capacity;
   bool autostart = true;
-  SourceLocation where;
+  SourceLocation where;       // the task's entry
+  SourceLocation type_where;  // its `type` value
 };
 
 struct HookSpec {
@@ -53,7 +66,7 @@ struct HookSpec {
 struct RobotSpec {
   std::string name;
   RobotKind kind = RobotKind::kThymio2;
-  Pose start;
+  Pose start;  // theta in radians; the file gives degrees
   std::vector<TaskSpec> tasks;
   std::vector<HookSpec> hooks;
   SourceLocation where;
