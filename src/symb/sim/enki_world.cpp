@@ -55,7 +55,9 @@ class EnkiWorld::Arena {
  public:
   explicit Arena(std::size_t bytes) : size_(round_up(std::max<std::size_t>(bytes, 1), 4096)) {
     void* p = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
-    if (p == MAP_FAILED) throw std::bad_alloc();
+    if (p == MAP_FAILED)
+      throw std::length_error("enki world: cannot reserve " + std::to_string(size_ >> 20) +
+                              " MiB of address space for its objects (lower Options::max_robots)");
     base_ = static_cast<unsigned char*>(p);
   }
   ~Arena() {

@@ -44,6 +44,8 @@ class EnkiWorld final : public World {
   struct Options {
     // Robots this world can ever hold: their address space is reserved (not committed) up front,
     // which is what makes object addresses grow in creation order. add_robot() beyond it throws.
+    // About 5 KB of address space per robot; the constructor throws std::length_error when the
+    // system refuses the reservation.
     std::size_t max_robots = 4096;
     // Physics substeps per step (Enki's physicsOversampling); 1 as in the reference benchmark.
     unsigned physics_oversampling = 1;
