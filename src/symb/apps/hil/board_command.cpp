@@ -1,0 +1,183 @@
+// `symb board SCENARIO --serial PATH`: the board side of hardware-in-the-loop, the paper's
+// evaluation board. One robot's control system from the scenario runs here on OS threads; its
+// IR sensor and wheel tasks talk to the simulator over the serial line, and its command shell
+// listens on a second line.
+#include <thread>
+
+#include "symb/apps/hil/hil_commands.hpp"
+#include "symb/apps/hil/hil_common.hpp"
+#include "symb/io/serial_port.hpp"
+#include "symb/kernel/thread_executor.hpp"
+#include "symb/shell/shell_task.hpp"
+#include "symb/sim/board_link.hpp"
+#include "symb/sim/robot_system.hpp"
+#include "symb/sim/scenario.hpp"
+
+namespace symb::apps::hil {
+
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr std::string_view kCommand = "symb board";
+
+constexpr OptionSpec kOptions[] = {
+    {"--serial", "PATH", "the data line to the simulator"},
+    {"--shell", "PATH", "a second serial line for the command shell (symb shell --serial ...)"},
+    {"--robot", "NAME", "the scenario's robot this board runs (default: the first)"},
+    {"--duration", "D", "stop after this long (default: at Ctrl-C)"},
+    {"--seed", "S", "the run's seed, for the node's random streams (default: the scenario's)"},
+    {"--stats-every", "D", "print the link statistics this often (default 5s)"},
+    {"--quiet", "", "print only the final statistics, not the robot's log"},
+    {"--help", "", "this help"},
+};
+
+void print_help(std::ostream& out) {
+  out << "Usage: " << kCommand << " SCENARIO --serial PATH [options]\n\n"
+      << "The board side of hardware-in-the-loop (docs/hil.md): builds one robot's control system\n"
+      << "from the scenario and runs it on OS threads at wall-clock time, with its device tasks on\n"
+      << "the serial line: link (frames) -> ir -> the scenario's controller -> wheels -> link. The\n"
+      << "simulator (symb sim) sends IR frames and reads the wheel speeds back. The robot's log and\n"
+      << "the link statistics (frames good, bad, missed) are printed as it runs.\n\n"
+      << "Options:\n"
+      << describe_options(kOptions) << "\n"
+      << "Runs until Ctrl-C (or --duration); it keeps running when the link goes silent.\n";
+}
+
+}  // namespace
+
+int run_board_command(std::span<const std::string_view> args, const CliContext& ctx) {
+  auto split = split_args(args, kOptions, 1);
+  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
+  const SplitArgs& a = std::get<SplitArgs>(split);
+  if (a.help) {
+    print_help(ctx.out);
+    return kExitOk;
+  }
+  if (a.positional.empty()) return usage_error(ctx, kCommand, UsageError{"missing SCENARIO (a .yaml file)"});
+  std::string serial, shell_path, robot_name;
+  std::optional<kernel::Duration> duration;
+  std::optional<std::uint64_t> seed;
+  kernel::Duration stats_every = 5s;
+  bool quiet = false;
+  for (const ParsedOption& o : a.options) {
+    if (o.name == "--serial" || o.name == "--shell" || o.name == "--robot") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{std::string(o.name) + ": empty value"});
+      (o.name == "--serial" ? serial : o.name == "--shell" ? shell_path : robot_name) = o.value;
+    } else if (o.name == "--duration" || o.name == "--stats-every") {
+      auto v = parse_duration(o.name, o.value, std::chrono::hours(24 * 365));
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (o.name == "--duration")
+        duration = std::get<kernel::Duration>(v);
+      else
+        stats_every = std::get<kernel::Duration>(v);
+    } else if (o.name == "--seed") {
+      auto v = parse_u64("--seed", o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      seed = std::get<std::uint64_t>(v);
+    } else if (o.name == "--quiet") {
+      quiet = true;
+    }
+  }
+  if (serial.empty()) return usage_error(ctx, kCommand, UsageError{"missing --serial PATH (the data line)"});
+
+  auto loaded = sim::load_scenario(std::string(a.positional.front()));
+  if (!loaded) {
+    ctx.err << kCommand << ": " << loaded.error() << "\n";
+    return kExitFailure;
+  }
+  const sim::Scenario& sc = *loaded;
+  std::size_t index = 0;
+  if (!robot_name.empty()) {
+    while (index < sc.robots.size() && sc.robots[index].name != robot_name) ++index;
+    if (index == sc.robots.size()) {
+      std::string names;
+      for (const auto& r : sc.robots) names += (names.empty() ? "" : ", ") + r.name;
+      ctx.err << kCommand << ": --robot: the scenario has no robot " << quote_arg(robot_name) << " (it has " << names
+              << ")\n";
+      return kExitUsage;
+    }
+  }
+  if (sc.robots.empty()) {
+    ctx.err << kCommand << ": " << sc.file << ": the scenario has no robots\n";
+    return kExitFailure;
+  }
+  const sim::RobotSpec& spec = sc.robots[index];
+
+  auto port = std::make_shared<io::SerialPort>("uart0", serial);
+  if (auto st = port->open(); !st) {
+    ctx.err << kCommand << ": " << st.error() << "\n";
+    return kExitFailure;
+  }
+  (void)port->ioctl("flush");  // frames from before this board started answer nothing
+  std::shared_ptr<io::SerialPort> shell_port;
+  if (!shell_path.empty()) {
+    shell_port = std::make_shared<io::SerialPort>("uart1", shell_path);
+    if (auto st = shell_port->open(); !st) {
+      ctx.err << kCommand << ": " << st.error() << "\n";
+      return kExitFailure;
+    }
+  }
+
+  kernel::ThreadExecutor executor;
+  sim::BoardLinkOptions lo;
+  lo.control_period = sc.control_period;
+  auto link = sim::BoardLink::create(port, lo);
+  sim::RobotSystemOptions ro;
+  ro.control_period = sc.control_period;
+  ro.seed = robot_seed(seed.value_or(sc.seed), index);
+  ro.read_program = sim::file_program_reader(sc.base_dir);
+  ro.make_device_tasks = link->device_tasks();
+  auto log_sink = std::make_shared<PrefixedLogSink>(ctx.err, "board " + spec.name + ": ");
+  auto built = sim::RobotSystem::build(executor, spec, sim::RobotDevices{}, ro);
+  if (!built) {
+    ctx.err << kCommand << ": " << built.error() << "\n";
+    return kExitFailure;
+  }
+  std::unique_ptr<sim::RobotSystem> system = std::move(built).value();
+  // What happened while building is in the log already; from now on it is printed as it comes.
+  if (!quiet) {
+    for (const os::LogEntry& e : system->node().log().since(0)) log_sink->write(e);
+    system->node().log().add_sink(log_sink);
+  }
+  if (shell_port) {
+    auto devices = std::make_shared<shell::DeviceTable>();
+    (*devices)["uart0"] = port;
+    (*devices)["uart1"] = shell_port;
+    shell::ShellOptions so;
+    so.devices = devices;
+    auto attached = shell::attach_shell(system->node(), shell_port, so);
+    if (!attached) {
+      ctx.err << kCommand << ": shell: " << attached.error() << "\n";
+      return kExitFailure;
+    }
+  }
+  ctx.out << "board: robot " << spec.name << " of " << sc.name << " on " << serial
+          << (shell_port ? ", shell on " + shell_path : std::string()) << "; " << system->node().task_count()
+          << " tasks; Ctrl-C to stop\n"
+          << std::flush;
+
+  InterruptFlag interrupt;
+  const auto start = std::chrono::steady_clock::now();
+  auto next_stats = start + stats_every;
+  while (!interrupt.raised() && (!duration || std::chrono::steady_clock::now() - start < *duration)) {
+    std::this_thread::sleep_for(20ms);
+    if (std::chrono::steady_clock::now() >= next_stats) {
+      next_stats += stats_every;
+      ctx.err << "board: " << sim::describe(link->stats()) << "\n" << std::flush;
+    }
+  }
+  system->node().log().remove_sink(log_sink);
+  system.reset();  // every task stopped: the link's counters are final
+  const sim::BoardLinkStats s = link->stats();
+  ctx.out << "board: " << sim::describe(s) << "\n"
+          << "board-stats: good=" << s.ir_frames << " bad=" << s.bad_frames() << " missed=" << s.missed
+          << " out_of_order=" << s.out_of_order << " malformed=" << s.malformed << " losses=" << s.link_losses
+          << " recoveries=" << s.link_recoveries << " wheels=" << s.wheel_commands << " watchdog=" << s.watchdog_stops
+          << " bytes_in=" << s.bytes_in << "\n";
+  port->close();
+  if (shell_port) shell_port->close();
+  return kExitOk;
+}
+
+}  // namespace symb::apps::hil

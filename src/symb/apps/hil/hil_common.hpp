@@ -1,0 +1,61 @@
+// What the hardware-in-the-loop commands (`symb link`, `symb sim`, `symb board`) share: reading a
+// command line with one positional SCENARIO among options, Ctrl-C as a request to stop and
+// finish cleanly, and the seed a robot's node gets (the same as in-process, so the board's
+// random streams are the in-process run's).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <ostream>
+#include <span>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "symb/apps/cli_args.hpp"
+#include "symb/os/syslog.hpp"
+
+namespace symb::apps::hil {
+
+struct SplitArgs {
+  std::vector<ParsedOption> options;
+  std::vector<std::string_view> positional;
+  bool help = false;
+};
+
+// Options of `specs` anywhere, positional arguments (up to `max_positional`) anywhere else.
+std::variant<SplitArgs, UsageError> split_args(std::span<const std::string_view> args,
+                                               std::span<const OptionSpec> specs, std::size_t max_positional);
+
+// While alive, SIGINT and SIGTERM set a flag instead of ending the process (a handler can reach
+// only a static, which is why this flag is one: it belongs to the process, as signals do).
+class InterruptFlag {
+ public:
+  InterruptFlag();
+  ~InterruptFlag();
+  InterruptFlag(const InterruptFlag&) = delete;
+  InterruptFlag& operator=(const InterruptFlag&) = delete;
+  bool raised() const;
+};
+
+// The node seed of robot `index` in a run seeded with `seed` (ScenarioSession's mixing).
+std::uint64_t robot_seed(std::uint64_t seed, std::size_t index);
+
+// Writes a node's log entries to a stream, one line each, prefixed with the node's name;
+// serialised, as tasks on several threads log at once.
+class PrefixedLogSink final : public os::LogSink {
+ public:
+  PrefixedLogSink(std::ostream& out, std::string prefix) : out_(out), prefix_(std::move(prefix)) {}
+  void write(const os::LogEntry& e) override;
+
+ private:
+  std::mutex mu_;
+  std::ostream& out_;
+  std::string prefix_;
+};
+
+std::string fixed(double v, int decimals);
+
+}  // namespace symb::apps::hil

@@ -1,0 +1,267 @@
+// Hardware in the loop through the real `symb` binary: `symb link` makes the pseudo-terminals,
+// `symb board` runs the robot's task graph, `symb sim` runs the world, three processes as on a
+// bench. Checked:
+//  - the HIL run of scenarios/maze.yaml follows the in-process run (`symb run`, same seed) within
+//    the tolerance docs/hil.md states: no contacts in either, distance travelled within 15%, and
+//    the two paths, compared step by step, at most 3 cm apart on average over the first 15 s;
+//  - with 5% of the IR frames corrupted the robot still drives without contacts, and the board's
+//    bad-frame count equals exactly the number of frames the injector corrupted;
+//  - the board keeps running when the simulator goes away and when it comes back, and says so.
+// Real time: 60 s for the comparison in the release build, 15 s under the sanitizers.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+#ifdef SYMB_SANITIZER
+constexpr int kCompareSeconds = 15;
+constexpr int kCorruptSeconds = 10;
+#else
+constexpr int kCompareSeconds = 60;
+constexpr int kCorruptSeconds = 20;
+#endif
+constexpr int kPathWindowSeconds = 15;  // the paths are compared step by step over this
+
+const std::string kScenario = std::string(SYMB_SCENARIO_DIR) + "/maze.yaml";
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A child process running `symb args`, its stdout and stderr in `log`.
+class Child {
+ public:
+  Child(const std::string& args, fs::path log) : log_(std::move(log)) {
+    const std::string command = "exec '" + std::string(SYMB_BINARY) + "' " + args + " > '" + log_.string() + "' 2>&1";
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+  }
+  ~Child() {
+    if (pid_ > 0 && !done_) {
+      ::kill(pid_, SIGKILL);
+      wait();
+    }
+  }
+  // Ctrl-C, as a person would stop it.
+  void interrupt() const { ::kill(pid_, SIGINT); }
+  int wait() {
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    done_ = true;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  std::string output() const { return read_file(log_); }
+
+ private:
+  fs::path log_;
+  pid_t pid_ = -1;
+  bool done_ = false;
+};
+
+struct Point {
+  double x, y;
+  bool contact;
+};
+
+std::vector<Point> path_of(const fs::path& csv) {
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<Point> out;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::stringstream s(line);
+    for (std::string cell; std::getline(s, cell, ',');) f.push_back(cell);
+    if (f.size() < 15) continue;
+    out.push_back({std::stod(f[2]), std::stod(f[3]), f[14] == "1"});
+  }
+  return out;
+}
+
+double travelled(const std::vector<Point>& p) {
+  double d = 0;
+  for (std::size_t i = 1; i < p.size(); ++i) d += std::hypot(p[i].x - p[i - 1].x, p[i].y - p[i - 1].y);
+  return d;
+}
+
+std::size_t contacts(const std::vector<Point>& p) {
+  std::size_t n = 0;
+  for (const Point& q : p) n += q.contact ? 1 : 0;
+  return n;
+}
+
+// "key=value" pairs of the line starting with `prefix`.
+std::map<std::string, long long> fields(const std::string& text, const std::string& prefix) {
+  std::map<std::string, long long> out;
+  const auto at = text.find(prefix);
+  if (at == std::string::npos) return out;
+  std::stringstream s(text.substr(at + prefix.size(), text.find('\n', at) - at - prefix.size()));
+  for (std::string kv; s >> kv;)
+    if (auto eq = kv.find('='); eq != std::string::npos) out[kv.substr(0, eq)] = std::stoll(kv.substr(eq + 1));
+  return out;
+}
+
+// The link CSV row of `symb sim`'s summary.txt, by column name.
+std::map<std::string, long long> sim_link_stats(const fs::path& summary) {
+  std::stringstream s(read_file(summary));
+  std::string line, header;
+  std::map<std::string, long long> out;
+  while (std::getline(s, line)) {
+    if (line.starts_with("robot,frames_sent")) {
+      header = line;
+      continue;
+    }
+    if (header.empty() || line.empty()) continue;
+    std::stringstream h(header), v(line);
+    for (std::string k, x; std::getline(h, k, ',') && std::getline(v, x, ',');)
+      if (k != "robot") out[k] = std::stoll(x);
+    break;
+  }
+  return out;
+}
+
+class Hil : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("symb-hil-test-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    link_ = std::make_unique<Child>("link --dir '" + (dir_ / "tty").string() + "'", dir_ / "link.log");
+    // The link's paths appear once its pseudo-terminals are up.
+    for (int i = 0; i < 200 && !fs::exists(dir_ / "tty" / "shell"); ++i) std::this_thread::sleep_for(20ms);
+    ASSERT_TRUE(fs::exists(dir_ / "tty" / "shell")) << link_->output();
+  }
+  void TearDown() override {
+    if (link_) {
+      link_->interrupt();
+      EXPECT_EQ(link_->wait(), 0) << link_->output();
+    }
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  std::unique_ptr<Child> board(const std::string& extra = "") {
+    return std::make_unique<Child>("board '" + kScenario + "' --serial '" + (dir_ / "tty" / "board").string() +
+                                       "' --shell '" + (dir_ / "tty" / "board-shell").string() + "' " + extra,
+                                   dir_ / ("board" + std::to_string(boards_++) + ".log"));
+  }
+  int sim(const std::string& out, const std::string& extra) {
+    Child c("sim '" + kScenario + "' --serial '" + (dir_ / "tty" / "sim").string() + "' --out '" +
+                (dir_ / out).string() + "' --quiet " + extra,
+            dir_ / (out + ".log"));
+    const int rc = c.wait();
+    sim_output_ = c.output();
+    return rc;
+  }
+
+  fs::path dir_;
+  std::unique_ptr<Child> link_;
+  std::string sim_output_;
+  int boards_ = 0;
+};
+
+TEST_F(Hil, FollowsTheInProcessRunOfTheMaze) {
+  const std::string d = "--duration " + std::to_string(kCompareSeconds) + "s";
+  Child run("run '" + kScenario + "' --seed 1 --quiet --out '" + (dir_ / "inproc").string() + "' " + d,
+            dir_ / "inproc.log");
+  ASSERT_EQ(run.wait(), 0) << run.output();
+
+  auto b = board();
+  ASSERT_EQ(sim("hil", "--seed 1 " + d), 0) << sim_output_;
+  b->interrupt();
+  ASSERT_EQ(b->wait(), 0) << b->output();
+
+  const auto in = path_of(dir_ / "inproc" / "steps.csv");
+  const auto hil = path_of(dir_ / "hil" / "steps.csv");
+  const std::size_t steps = static_cast<std::size_t>(kCompareSeconds) * 1000 / 30;
+  ASSERT_GE(in.size(), steps - 1);
+  ASSERT_GE(hil.size(), steps - 1);
+  EXPECT_EQ(contacts(in), 0u);
+  EXPECT_EQ(contacts(hil), 0u);
+  const double din = travelled(in), dhil = travelled(hil);
+  EXPECT_GT(din, 10.0) << "the in-process robot hardly moved";
+  EXPECT_NEAR(dhil, din, 0.15 * din);
+  const std::size_t window = std::min({in.size(), hil.size(), std::size_t{kPathWindowSeconds * 1000 / 30}});
+  double sum = 0;
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < window; ++i) {
+    sum += std::hypot(in[i].x - hil[i].x, in[i].y - hil[i].y);
+    same += (in[i].x == hil[i].x && in[i].y == hil[i].y) ? 1 : 0;
+  }
+  const auto link = sim_link_stats(dir_ / "hil" / "summary.txt");
+  EXPECT_LT(sum / static_cast<double>(window), 3.0)
+      << "identical steps " << same << " of " << window << ", late answers " << link.at("late");
+  std::printf("in-process %.1f cm, HIL %.1f cm; first %zu steps: %zu identical, mean distance %.3f cm; late %lld\n",
+              din, dhil, window, same, sum / static_cast<double>(window), link.at("late"));
+}
+
+TEST_F(Hil, CorruptedFramesAreCountedExactlyAndTheRobotStillNavigates) {
+  auto b = board();
+  ASSERT_EQ(sim("hil", "--seed 1 --corrupt 0.05 --duration " + std::to_string(kCorruptSeconds) + "s"), 0)
+      << sim_output_;
+  // Let the board read the last frames before it is stopped.
+  std::this_thread::sleep_for(300ms);
+  b->interrupt();
+  ASSERT_EQ(b->wait(), 0) << b->output();
+  const std::string board_out = b->output();
+  const auto board_stats = fields(board_out, "board-stats:");
+  const auto sim_stats = sim_link_stats(dir_ / "hil" / "summary.txt");
+  ASSERT_FALSE(board_stats.empty()) << board_out;
+  ASSERT_FALSE(sim_stats.empty());
+  const long long sent = sim_stats.at("frames_sent"), corrupted = sim_stats.at("corrupted");
+  // About 5% of the frames (binomial: 4 standard deviations either way).
+  const double expect = 0.05 * static_cast<double>(sent), sd = std::sqrt(expect * 0.95);
+  EXPECT_NEAR(static_cast<double>(corrupted), expect, 4 * sd + 1);
+  EXPECT_GT(corrupted, 0);
+  // Every corrupted frame is exactly one bad frame at the board, and every other one arrives.
+  EXPECT_EQ(board_stats.at("bad"), corrupted) << board_out;
+  EXPECT_EQ(board_stats.at("good"), sent - corrupted) << board_out;
+  EXPECT_EQ(board_stats.at("malformed"), 0);
+  const auto hil = path_of(dir_ / "hil" / "steps.csv");
+  EXPECT_EQ(contacts(hil), 0u);
+  EXPECT_GT(travelled(hil), 0.5 * 3.32 * kCorruptSeconds) << "the robot should drive most of the time";
+}
+
+TEST_F(Hil, BoardKeepsRunningWhenTheLinkGoesSilentAndComesBack) {
+  auto b = board();
+  ASSERT_EQ(sim("first", "--duration 2s"), 0) << sim_output_;
+  std::this_thread::sleep_for(800ms);  // > 10 control periods of silence
+  ASSERT_EQ(sim("second", "--duration 2s"), 0) << sim_output_;
+  std::this_thread::sleep_for(300ms);
+  b->interrupt();
+  ASSERT_EQ(b->wait(), 0) << b->output();
+  const std::string out = b->output();
+  EXPECT_NE(out.find("link lost: no IR frame"), std::string::npos) << out;
+  EXPECT_NE(out.find("the simulator started anew"), std::string::npos) << out;
+  EXPECT_NE(out.find("link back after"), std::string::npos) << out;
+  const auto s = fields(out, "board-stats:");
+  EXPECT_GE(s.at("losses"), 1);
+  EXPECT_GE(s.at("recoveries"), 1);
+  // Both runs were answered: the second simulator drove the robot too.
+  const auto second = path_of(dir_ / "second" / "steps.csv");
+  EXPECT_GT(travelled(second), 2.0);
+}
+
+}  // namespace
