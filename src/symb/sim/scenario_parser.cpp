@@ -449,7 +449,8 @@ struct Parser {
       for (std::size_t i = 0; i < entries[k].count; ++i) {
         bool found = false;
         while (next < free.size() && !found) {
-          const auto [x, y] = free[next++];
+          const double x = free[next].first, y = free[next].second;
+          ++next;
           found = std::all_of(placed.begin(), placed.end(),
                               [&](const Pose& p) { return std::hypot(p.x - x, p.y - y) >= 2 * kStartClearance; });
           if (found) {
