@@ -61,7 +61,7 @@ class EnkiWorld::Arena {
     base_ = static_cast<unsigned char*>(p);
   }
   ~Arena() {
-    for (auto it = objects_.rbegin(); it != objects_.rend(); ++it) (*it)->~PhysicalObject();
+    for (std::size_t i = objects_.size(); i-- > 0;) objects_[i]->~PhysicalObject();
     munmap(base_, size_);
   }
   Arena(const Arena&) = delete;
@@ -108,8 +108,8 @@ kernel::Status EnkiWorld::check_spec(const WorldSpec& spec) {
   return {};
 }
 
-EnkiWorld::EnkiWorld(const WorldSpec& spec, std::uint64_t seed, Options options)
-    : spec_(spec), options_(options), random_(seed, 0x454e4b49 /* "ENKI" */) {
+EnkiWorld::EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options)
+    : spec_(std::move(spec)), options_(options), random_(seed, 0x454e4b49 /* "ENKI" */) {
   if (auto st = check_spec(spec_); !st) throw std::invalid_argument(st.error());
   if (options_.physics_oversampling == 0 || options_.physics_oversampling > 100)
     throw std::invalid_argument("enki world: physics_oversampling must be 1..100");
@@ -129,7 +129,7 @@ EnkiWorld::EnkiWorld(const WorldSpec& spec, std::uint64_t seed, Options options)
 
   const double w = spec_.width, h = spec_.height, t = options_.outer_wall_thickness;
   auto add_wall = [&](double cx, double cy, double length, double width, double angle) {
-    Enki::PhysicalObject* o = arena_->make<Enki::PhysicalObject>();
+    auto* o = arena_->make<Enki::PhysicalObject>();
     o->setRectangular(length, width, spec_.wall_height, -1);
     o->pos = Enki::Point(cx, cy);
     o->angle = angle;
@@ -175,7 +175,7 @@ std::size_t EnkiWorld::add_robot(const std::string& name, RobotKind kind, const 
     throw std::length_error("enki world: robot '" + name + "': the world holds at most " +
                             std::to_string(options_.max_robots) + " robots (Options::max_robots)");
   std::lock_guard lock(enki_mutex());
-  Thymio* body = arena_->make<Thymio>();
+  auto* body = arena_->make<Thymio>();
   body->pos = Enki::Point(start.x, start.y);
   body->angle = start.theta;
   body->leftSpeed = body->rightSpeed = 0;

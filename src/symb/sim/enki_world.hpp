@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "symb/kernel/random_stream.hpp"
@@ -54,8 +55,8 @@ class EnkiWorld final : public World {
 
   // Throws std::invalid_argument (naming the wall's location) when check_spec() fails or the
   // options are out of range.
-  EnkiWorld(const WorldSpec& spec, std::uint64_t seed) : EnkiWorld(spec, seed, Options{}) {}
-  EnkiWorld(const WorldSpec& spec, std::uint64_t seed, Options options);
+  EnkiWorld(WorldSpec spec, std::uint64_t seed) : EnkiWorld(std::move(spec), seed, Options{}) {}
+  EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options);
   ~EnkiWorld() override;
   EnkiWorld(const EnkiWorld&) = delete;
   EnkiWorld& operator=(const EnkiWorld&) = delete;

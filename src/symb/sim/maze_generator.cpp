@@ -21,7 +21,7 @@ namespace {
 struct Borders {
   std::size_t k;
   std::vector<char> h, v;
-  explicit Borders(std::size_t k_) : k(k_), h(k_ * k_, 1), v(k_ * k_, 1) {}
+  explicit Borders(std::size_t size) : k(size), h(size * size, 1), v(size * size, 1) {}
 };
 
 void carve(Borders& b, kernel::RandomStream& random) {
@@ -29,7 +29,7 @@ void carve(Borders& b, kernel::RandomStream& random) {
   std::vector<char> visited(k * k, 0);
   std::vector<std::size_t> stack;
   stack.reserve(k * k);
-  const std::size_t first = static_cast<std::size_t>(random.below(k * k));
+  const auto first = static_cast<std::size_t>(random.below(k * k));
   visited[first] = 1;
   stack.push_back(first);
   while (!stack.empty()) {
