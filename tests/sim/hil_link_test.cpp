@@ -1,0 +1,299 @@
+// The hardware-in-the-loop pieces of the sim layer, without processes: the protocol's frames and
+// their refusals, the fault injector's promise (one corrupted frame = exactly one bad frame at a
+// decoder, nothing lost around it), the board's device tasks over a real pseudo-terminal driven
+// by a hand-written simulator, and the HilSimulator against a silent board.
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "symb/io/pty_pair.hpp"
+#include "symb/io/stream_task.hpp"
+#include "symb/kernel/thread_executor.hpp"
+#include "symb/os/node.hpp"
+#include "symb/sim/board_link.hpp"
+#include "symb/sim/enki_world.hpp"
+#include "symb/sim/hil_protocol.hpp"
+#include "symb/sim/hil_simulator.hpp"
+#include "symb/sim/scenario.hpp"
+
+namespace symb::sim {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(HilProtocol, FramesRoundTripAndBadOnesAreRefusedWithAReason) {
+  HilIrFrame f;
+  f.seq = 12345;
+  for (std::size_t i = 0; i < kIrCount; ++i) f.ir[i] = 100.5f * static_cast<float>(i);
+  auto back = decode_ir_payload(encode_ir_payload(f));
+  ASSERT_TRUE(back.ok()) << back.error();
+  EXPECT_EQ(back->seq, 12345u);
+  EXPECT_EQ(back->ir, f.ir);
+
+  auto w = decode_wheel_payload(encode_wheel_payload({7, 900.0f, -20.0f}));
+  ASSERT_TRUE(w.ok());
+  EXPECT_EQ(w->seq, 7u);
+  EXPECT_EQ(w->left, 500.0f);  // clamped
+  EXPECT_EQ(w->right, -20.0f);
+
+  const float wrong_count[] = {1, 2};
+  EXPECT_NE(decode_wheel_payload(io::encode_numbers(wrong_count)).error().find("expected 3 numbers, got 2"),
+            std::string::npos);
+  const float bad_seq[] = {1.5f, 0, 0};
+  EXPECT_NE(decode_wheel_payload(io::encode_numbers(bad_seq)).error().find("bad sequence"), std::string::npos);
+  const float nan_speed[] = {3, NAN, 0};
+  EXPECT_FALSE(decode_wheel_payload(io::encode_numbers(nan_speed)).ok());
+  HilIrFrame n = f;
+  n.ir[3] = NAN;
+  EXPECT_NE(decode_ir_payload(encode_ir_payload(n)).error().find("ir3 is NaN"), std::string::npos);
+  const std::byte text[] = {std::byte{'h'}, std::byte{'i'}};
+  EXPECT_NE(decode_ir_payload(text).error().find("not a number frame"), std::string::npos);
+  EXPECT_FALSE(sequence_of(-1.0f));
+  EXPECT_FALSE(sequence_of(static_cast<float>(kHilMaxSequence) + 2.0f));
+  EXPECT_EQ(sequence_of(16777215.0f), 16777215u);
+}
+
+TEST(HilProtocol, EveryCorruptedFrameIsExactlyOneBadFrameAndNoOtherIsLost) {
+  kernel::RandomStream data(5), split(6);
+  FrameCorruptor corruptor(0.3, 42);
+  std::vector<std::byte> stream, relayed;
+  std::size_t sent = 0;
+  // Frames of every shape: zeros in the values (COBS code bytes), large and tiny numbers.
+  for (std::uint32_t seq = 0; seq < 3000; ++seq) {
+    HilIrFrame f;
+    f.seq = seq;
+    for (float& v : f.ir) v = data.below(3) == 0 ? 0.0f : static_cast<float>(data.uniform(0, kIrMax));
+    io::encode_frame(encode_ir_payload(f), stream);
+    ++sent;
+  }
+  // Through the corruptor in random chunks, as a relay reads them.
+  for (std::size_t at = 0; at < stream.size();) {
+    const std::size_t n = std::min<std::size_t>(stream.size() - at, 1 + split.below(100));
+    corruptor.feed(std::span<const std::byte>(stream.data() + at, n), relayed);
+    at += n;
+  }
+  ASSERT_EQ(relayed.size(), stream.size());
+  io::FrameDecoder decoder;
+  std::size_t good = 0;
+  std::uint32_t expect_at_least = 0;
+  decoder.feed(relayed, [&](std::span<const std::byte> p) {
+    auto f = decode_ir_payload(p);
+    ASSERT_TRUE(f.ok());
+    EXPECT_GE(f->seq, expect_at_least);
+    expect_at_least = f->seq + 1;
+    ++good;
+  });
+  EXPECT_EQ(corruptor.frames(), sent);
+  EXPECT_GT(corruptor.corrupted(), 700u);
+  EXPECT_LT(corruptor.corrupted(), 1100u);
+  EXPECT_EQ(decoder.stats().dropped(), corruptor.corrupted());
+  EXPECT_EQ(good + corruptor.corrupted(), sent);
+}
+
+// A controller for the board tests: drives [ir0, -ir1] from each IR vector.
+class EchoController final : public os::Task {
+ protected:
+  void on_message(const os::Message& m) override {
+    if (m.numbers().size() == kIrCount) send(0, {m.numbers()[0], -m.numbers()[1]});
+  }
+};
+
+struct Board {
+  kernel::ThreadExecutor executor;
+  os::Node node{executor, os::NodeConfig{"board", 1, 256, nullptr}};
+  std::shared_ptr<BoardLink> link;
+
+  explicit Board(std::shared_ptr<io::IOStream> port) {
+    BoardLinkOptions o;
+    o.control_period = 30ms;
+    link = BoardLink::create(std::move(port), o);
+    EXPECT_TRUE(link->make_device_tasks(node).ok());
+    auto ctrl = node.create("controller", std::make_unique<EchoController>());
+    EXPECT_TRUE(ctrl.ok());
+    EXPECT_TRUE(node.hook(*node.find("ir"), *ctrl).ok());
+    EXPECT_TRUE(node.hook(*ctrl, *node.find("wheels")).ok());
+  }
+  ~Board() { node.clear(); }
+  bool logged(std::string_view text) {
+    for (const auto& e : node.log().since(0))
+      if (e.text.find(text) != std::string::npos) return true;
+    return false;
+  }
+};
+
+// The simulator's end, by hand.
+struct FakeSim {
+  std::shared_ptr<io::SerialPort> port;
+  io::FrameDecoder decoder;
+  std::vector<HilWheelFrame> got;
+
+  // Whether a frame [seq, left, ...] came; the watchdog's [seq, 0, 0] may follow it.
+  bool answered(std::uint32_t seq, float left) const {
+    for (const auto& f : got)
+      if (f.seq == seq && f.left == left) return true;
+    return false;
+  }
+
+  void send(std::uint32_t seq, float ir0, float ir1) {
+    HilIrFrame f;
+    f.seq = seq;
+    f.ir[0] = ir0;
+    f.ir[1] = ir1;
+    ASSERT_TRUE(port->write_all(io::encode_frame(encode_ir_payload(f))).ok());
+  }
+  void send_raw(std::span<const std::byte> payload) { ASSERT_TRUE(port->write_all(io::encode_frame(payload)).ok()); }
+  // Reads wheel frames for `d`.
+  void read_for(kernel::Duration d) {
+    std::vector<std::byte> buf(1024);
+    for (auto end = std::chrono::steady_clock::now() + d; std::chrono::steady_clock::now() < end;) {
+      auto n = port->read_some(buf, 5ms);
+      if (!n || *n == 0) continue;
+      decoder.feed(std::span<const std::byte>(buf.data(), *n), [&](std::span<const std::byte> p) {
+        auto f = decode_wheel_payload(p);
+        ASSERT_TRUE(f.ok()) << f.error();
+        got.push_back(*f);
+      });
+    }
+  }
+};
+
+TEST(BoardLinkTest, AnswersEchoTheSequenceAndBadInputIsCountedNotFatal) {
+  auto pty = io::PtyPair::open("hil");
+  ASSERT_TRUE(pty.ok()) << pty.error();
+  Board board(pty->slave);
+  FakeSim sim{pty->master, io::FrameDecoder(256), {}};
+
+  for (std::uint32_t seq = 0; seq <= 5; ++seq) {
+    sim.send(seq, 100.0f * static_cast<float>(seq), 5000.0f);  // ir1 above kIrMax: clamped
+    sim.read_for(30ms);
+  }
+  ASSERT_FALSE(sim.got.empty());
+  const HilWheelFrame last = sim.got.back();
+  EXPECT_EQ(last.seq, 5u);
+  EXPECT_EQ(last.left, 500.0f);    // 100 * 5, in range
+  EXPECT_EQ(last.right, -500.0f);  // -kIrMax clamped to the wheel range
+  bool saw_three = false;
+  for (const auto& f : sim.got) saw_three = saw_three || (f.seq == 3 && f.left == 300.0f);
+  EXPECT_TRUE(saw_three);
+
+  // Out of order, a gap, a malformed frame, a corrupted frame.
+  sim.send(4, 0, 0);
+  sim.send(9, 10, 0);
+  const float two[] = {1, 2};
+  sim.send_raw(io::encode_numbers(two));
+  std::vector<std::byte> bad = io::encode_frame(encode_ir_payload(HilIrFrame{10, {}}));
+  kernel::RandomStream r(3);
+  ASSERT_TRUE(corrupt_frame(bad, r));
+  ASSERT_TRUE(pty->master->write_all(bad).ok());
+  sim.send(11, 20, 0);
+  sim.read_for(150ms);
+  const BoardLinkStats s = board.link->stats();
+  EXPECT_EQ(s.ir_frames, 8u);  // 0..5, 9, 11
+  EXPECT_EQ(s.out_of_order, 1u);
+  EXPECT_EQ(s.missed, 4u);  // 6, 7, 8, 10
+  EXPECT_EQ(s.malformed, 1u);
+  EXPECT_EQ(s.decoder.dropped(), 1u);
+  EXPECT_EQ(s.bad_frames(), 2u);
+  EXPECT_EQ(s.last_seq, 11u);
+  EXPECT_TRUE(sim.answered(11, 20.0f));
+  // The controller sends only on input, so the watchdog stops the wheels 45 ms later.
+  EXPECT_EQ(sim.got.back().seq, 11u);
+  EXPECT_EQ(sim.got.back().left, 0.0f);
+  EXPECT_TRUE(board.logged("out-of-order"));
+  EXPECT_TRUE(board.logged("malformed"));
+}
+
+TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
+  auto pty = io::PtyPair::open("hil");
+  ASSERT_TRUE(pty.ok()) << pty.error();
+  Board board(pty->slave);
+  FakeSim sim{pty->master, io::FrameDecoder(256), {}};
+  for (std::uint32_t seq = 0; seq < 5; ++seq) {
+    sim.send(seq, 250, 0);
+    sim.read_for(30ms);
+  }
+  sim.got.clear();
+  sim.read_for(500ms);  // silence: more than 10 periods
+  BoardLinkStats s = board.link->stats();
+  EXPECT_FALSE(s.link_up);
+  EXPECT_EQ(s.link_losses, 1u);
+  EXPECT_GE(s.watchdog_stops, 1u);
+  EXPECT_TRUE(board.logged("link lost: no IR frame"));
+  // The watchdog's stop went out on the line, with the last sequence number.
+  ASSERT_FALSE(sim.got.empty());
+  EXPECT_EQ(sim.got.back().seq, 4u);
+  EXPECT_EQ(sim.got.back().left, 0.0f);
+  EXPECT_EQ(sim.got.back().right, 0.0f);
+
+  sim.send(5, 120, 0);
+  sim.read_for(100ms);
+  s = board.link->stats();
+  EXPECT_TRUE(s.link_up);
+  EXPECT_EQ(s.link_recoveries, 1u);
+  EXPECT_TRUE(board.logged("link back after"));
+  EXPECT_TRUE(sim.answered(5, 120.0f));
+
+  // A new simulator run starts at seq 0 again: accepted, and said.
+  sim.send(0, 30, 0);
+  sim.read_for(100ms);
+  EXPECT_EQ(board.link->stats().restarts, 1u);
+  EXPECT_TRUE(board.logged("started anew"));
+  EXPECT_TRUE(sim.answered(0, 30.0f));
+}
+
+TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
+  WorldSpec spec;
+  spec.width = 200;
+  spec.height = 200;
+  EnkiWorld world(spec, 1);
+  world.add_robot("r", RobotKind::kThymio2, Pose{100, 100, 0});
+  auto pty = io::PtyPair::open("hil");
+  ASSERT_TRUE(pty.ok()) << pty.error();
+  HilSimulatorOptions o;
+  o.period = 30ms;
+  o.hold = 150ms;  // 5 steps
+  std::vector<std::string> events;
+  o.on_event = [&](const std::string& e) { events.push_back(e); };
+  HilSimulator simulator(world, {pty->master}, o);
+  std::vector<double> left;
+  simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
+
+  // A board that answers the handshake and the first 10 steps with 300 units, then falls silent.
+  std::atomic<bool> stop{false};
+  std::thread board([&] {
+    io::FrameDecoder d(256);
+    std::vector<std::byte> buf(1024);
+    while (!stop) {
+      auto n = pty->slave->read_some(buf, 5ms);
+      if (!n || *n == 0) continue;
+      d.feed(std::span<const std::byte>(buf.data(), *n), [&](std::span<const std::byte> p) {
+        auto f = decode_ir_payload(p);
+        if (f && f->seq <= 10) (void)pty->slave->write_all(io::encode_frame(encode_wheel_payload({f->seq, 300, 300})));
+      });
+    }
+  });
+  ASSERT_TRUE(simulator.wait_for_boards(2s).ok());
+  auto steps = simulator.run_for(900ms);  // 30 steps
+  stop = true;
+  board.join();
+  ASSERT_TRUE(steps.ok()) << steps.error();
+  ASSERT_EQ(left.size(), 30u);
+  const double v = 300 * kCmPerSecondPerWheelUnit;
+  EXPECT_EQ(left[0], 0.0);  // step 1 runs at rest: the handshake's answer is never applied
+  EXPECT_NEAR(left[1], v, 1e-9);
+  EXPECT_NEAR(left[12], v, 1e-9);  // held after the board's last answer (for step 11)
+  EXPECT_EQ(left[29], 0.0);        // then stopped
+  const auto s = simulator.stats()[0];
+  EXPECT_EQ(s.silences, 1u);
+  EXPECT_TRUE(s.silent);
+  EXPECT_EQ(s.applied, 10u);
+  EXPECT_GE(s.frames_sent, 31u);  // the handshake (once per period until answered) and one per step
+  EXPECT_LE(s.frames_sent, 35u);
+  ASSERT_FALSE(events.empty());
+  EXPECT_NE(events.back().find("board silent"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace symb::sim
