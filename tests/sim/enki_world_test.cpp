@@ -98,6 +98,27 @@ TEST(EnkiWorld, InfraredSeesAWallAheadAndNothingOnAnEmptySide) {
   }
 }
 
+TEST(EnkiWorld, InfraredForgetsAWallOnceTheRobotTurnsAway) {
+  // Facing a wall, then turning on the spot until the wall is behind: the front sensors must fall
+  // back to (nearly) nothing and the back ones take over. Debian's Enki 1.6.99 keeps the front
+  // readings of its Thymio2 stuck near their last value here.
+  EnkiWorld world(with_wall(vertical_wall(70, 0, 100)), 7);
+  const std::size_t r = world.add_robot("a", RobotKind::kThymio2, {55, 50, 0});
+  world.step(kDt);
+  EXPECT_GT(world.ir(r)[2], 2000.0f);
+  world.set_wheels(r, -5, 5);
+  int steps = 0;
+  while (std::abs(world.state(r).pose.theta) < 3.0) {
+    world.step(kDt);
+    ASSERT_LT(++steps, 500) << "the robot did not turn";
+  }
+  world.set_wheels(r, 0, 0);
+  world.step(kDt);
+  const IrReadings ir = world.ir(r);
+  for (std::size_t i = 0; i < 5; ++i) EXPECT_LT(ir[i], 100.0f) << "front sensor " << i << " sees the wall behind";
+  EXPECT_GT(ir[5] + ir[6], 1000.0f) << "the back sensors see it";
+}
+
 TEST(EnkiWorld, InfraredGrowsAsTheWallComesCloser) {
   EnkiWorld world(with_wall(vertical_wall(100, 0, 100)), 2);
   const std::size_t r = world.add_robot("a", RobotKind::kThymio2, {60, 50, 0});
