@@ -162,10 +162,16 @@ class Hil : public ::testing::Test {
     }
     if (!HasFailure()) fs::remove_all(dir_);
   }
+  // Starts a board and waits until its tasks run: frames the simulator sent before the board
+  // opened its line would be flushed unread, and the exact counts below could not hold.
   std::unique_ptr<Child> board(const std::string& extra = "") {
-    return std::make_unique<Child>("board '" + kScenario + "' --serial '" + (dir_ / "tty" / "board").string() +
-                                       "' --shell '" + (dir_ / "tty" / "board-shell").string() + "' " + extra,
-                                   dir_ / ("board" + std::to_string(boards_++) + ".log"));
+    auto b = std::make_unique<Child>("board '" + kScenario + "' --serial '" + (dir_ / "tty" / "board").string() +
+                                         "' --shell '" + (dir_ / "tty" / "board-shell").string() + "' " + extra,
+                                     dir_ / ("board" + std::to_string(boards_++) + ".log"));
+    for (int i = 0; i < 1500 && b->output().find("Ctrl-C to stop") == std::string::npos; ++i)
+      std::this_thread::sleep_for(20ms);
+    EXPECT_NE(b->output().find("Ctrl-C to stop"), std::string::npos) << b->output();
+    return b;
   }
   int sim(const std::string& out, const std::string& extra) {
     Child c("sim '" + kScenario + "' --serial '" + (dir_ / "tty" / "sim").string() + "' --out '" +
