@@ -542,6 +542,25 @@ TEST(ScenarioErrors, HostileInput) {
   expect_error(alias, "t.yaml:", "more than 1000 robots");
 }
 
+TEST(ScenarioErrors, CopiesCannotMultiplyTheWork) {
+  // One task with 64 parameters, copied into 1000 robots, is more than a scenario may hold.
+  std::string params;
+  for (int k = 0; k < 64; ++k) params += "p" + std::to_string(k) + ": 1, ";
+  expect_error(
+      "name: t\nworld: {arena: {width: 1000, height: 1000}}\nrobots:\n"
+      "  - {name: r, count: 1000, start: random, tasks: [{name: a, type: x, params: {" +
+          params + "}}, {name: b, type: x, params: {" + params + "}}, {name: c, type: x, params: {" + params +
+          "}}, {name: d, type: x, params: {" + params + "}}]}\n",
+      "t.yaml:4:5: ", "too big: more than");
+  // The most walls and robots there may be: placement stays quick and correct.
+  std::string walls = "name: t\nworld:\n  arena: {width: 5000, height: 5000}\n  walls:\n    - &d [0, 0, 5000, 5000]\n";
+  for (int i = 1; i < static_cast<int>(kMaxWalls); ++i) walls += "    - *d\n";
+  const Scenario sc = parse_ok(walls + "robots:\n  - {name: r, count: 1000, start: random}\n");
+  ASSERT_EQ(sc.robots.size(), 1000u);
+  for (const auto& r : sc.robots)
+    EXPECT_GE(std::abs(r.start.x - r.start.y) / std::numbers::sqrt2, kStartClearance + 1) << r.name;
+}
+
 TEST(LoadScenario, MissingFileAndDirectory) {
   auto r = load_scenario(kDir + "/no_such.yaml");
   ASSERT_FALSE(r.ok());

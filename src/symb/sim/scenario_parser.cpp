@@ -41,8 +41,9 @@ constexpr std::size_t kMaxParamsPerTask = 64;
 // After `count` expansion; a file can only make this many objects whatever its aliases say.
 constexpr std::size_t kMaxTotalTasks = 100000;
 constexpr std::size_t kMaxTotalHooks = 100000;
+constexpr std::size_t kMaxTotalParams = 200000;
 // Random starts are picked from a grid of at most about this many points.
-constexpr double kMaxPlacementCandidates = 40000;
+constexpr double kMaxPlacementCandidates = 10000;
 constexpr std::uint64_t kPlacementStream = 0x5ce7a810;
 
 struct Failure {
@@ -338,6 +339,7 @@ struct Parser {
   Scenario sc;
   std::size_t total_tasks = 0;
   std::size_t total_hooks = 0;
+  std::size_t total_params = 0;
 
   explicit Parser(const Source& s) : src(s), rd(s) {}
 
@@ -412,10 +414,14 @@ struct Parser {
       entries.push_back(robot(item));
       total += entries.back().count;
       if (total > kMaxRobots) src.fail(item, "more than " + std::to_string(kMaxRobots) + " robots in one scenario");
-      total_tasks += entries.back().count * entries.back().proto.tasks.size();
-      total_hooks += entries.back().count * entries.back().proto.hooks.size();
-      if (total_tasks > kMaxTotalTasks || total_hooks > kMaxTotalHooks)
-        src.fail(item, "more than " + std::to_string(kMaxTotalTasks) + " tasks or hooks in one scenario");
+      const Entry& e = entries.back();
+      total_tasks += e.count * e.proto.tasks.size();
+      total_hooks += e.count * e.proto.hooks.size();
+      for (const auto& t : e.proto.tasks) total_params += e.count * t.params.size();
+      if (total_tasks > kMaxTotalTasks || total_hooks > kMaxTotalHooks || total_params > kMaxTotalParams)
+        src.fail(item, "too big: more than " + std::to_string(kMaxTotalTasks) + " tasks, " +
+                           std::to_string(kMaxTotalHooks) + " hooks or " + std::to_string(kMaxTotalParams) +
+                           " task parameters in one scenario, counting every copy `count` makes");
     }
     // Names, all expanded, unique across the file.
     std::map<std::string, SourceLocation, std::less<>> names;
@@ -451,8 +457,9 @@ struct Parser {
         while (next < free.size() && !found) {
           const double x = free[next].first, y = free[next].second;
           ++next;
+          constexpr double kApart2 = 4 * kStartClearance * kStartClearance;
           found = std::all_of(placed.begin(), placed.end(),
-                              [&](const Pose& p) { return std::hypot(p.x - x, p.y - y) >= 2 * kStartClearance; });
+                              [&](const Pose& p) { return (p.x - x) * (p.x - x) + (p.y - y) * (p.y - y) >= kApart2; });
           if (found) {
             const Pose p{x, y, rng.uniform(-std::numbers::pi, std::numbers::pi)};
             placed.push_back(p);
@@ -575,12 +582,35 @@ struct Parser {
   // Grid points with 8 cm clear of every wall, in an order shuffled by the seed.
   std::vector<std::pair<double, double>> free_cells(kernel::RandomStream& rng) {
     const WorldSpec& w = sc.world;
+    // Each wall as the box outside which no point can be too close, and the squared distance a
+    // point must keep from its centre line. Copies of one wall (aliases make them cheaply) count
+    // once; the box test keeps a maze's many short walls from costing a square root each.
+    struct Keepout {
+      double x1, y1, x2, y2, r2, lox, loy, hix, hiy;
+      bool operator==(const Keepout&) const = default;
+    };
+    std::vector<Keepout> walls;
+    for (const auto& s : w.walls) {
+      const double r = kStartClearance + s.thickness / 2;
+      const Keepout k{s.x1,
+                      s.y1,
+                      s.x2,
+                      s.y2,
+                      r * r,
+                      std::min(s.x1, s.x2) - r,
+                      std::min(s.y1, s.y2) - r,
+                      std::max(s.x1, s.x2) + r,
+                      std::max(s.y1, s.y2) + r};
+      if (std::find(walls.begin(), walls.end(), k) == walls.end()) walls.push_back(k);
+    }
     const double step = std::max(2.0, std::sqrt(w.width * w.height / kMaxPlacementCandidates));
     std::vector<std::pair<double, double>> out;
     for (double y = kStartClearance; y <= w.height - kStartClearance; y += step)
       for (double x = kStartClearance; x <= w.width - kStartClearance; x += step) {
-        const bool clear = std::all_of(w.walls.begin(), w.walls.end(), [&](const WallSpec& s) {
-          return segment_distance(x, y, s.x1, s.y1, s.x2, s.y2) - s.thickness / 2 >= kStartClearance;
+        const bool clear = std::all_of(walls.begin(), walls.end(), [&](const Keepout& k) {
+          if (x < k.lox || x > k.hix || y < k.loy || y > k.hiy) return true;
+          const double d = segment_distance(x, y, k.x1, k.y1, k.x2, k.y2);
+          return d * d >= k.r2;
         });
         if (clear) out.emplace_back(x, y);
       }
