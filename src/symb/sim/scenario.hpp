@@ -47,7 +47,7 @@ struct TaskSpec {
   std::string type;
   // Values as text, exactly as a shell line would give them; `column` is unused (see where).
   std::vector<os::ParamAssignment> params;
-  std::vector<SourceLocation> param_where;  // one per params entry (the value)
+  std::vector<SourceLocation> param_where;  // one per params entry: where its name is
   std::optional<int> priority;
   std::optional<kernel::Duration> period;
   std::optional<std::size_t> queue_capacity;
