@@ -2,6 +2,8 @@
 
 #include <array>
 
+#include "symb/apps/hil/hil_commands.hpp"
+#include "symb/apps/run/run_command.hpp"
 #include "symb/apps/shell_client.hpp"
 #include "symb/apps/swarm_command.hpp"
 
@@ -13,7 +15,7 @@ namespace symb::apps {
 
 namespace {
 
-constexpr std::string_view kCommands[] = {"demo", "shell", "version", "help"};
+constexpr std::string_view kCommands[] = {"run", "sim", "board", "link", "demo", "shell", "version", "help"};
 constexpr std::string_view kDemos[] = {"swarm"};
 
 void print_help(std::ostream& out) {
@@ -21,6 +23,10 @@ void print_help(std::ostream& out) {
       << " - Symbricator: bio-inspired robot control and evolution (SymbricatorRTOS re-implemented)\n\n"
       << "Usage: symb <command> [options]\n\n"
       << "Commands:\n"
+      << "  run SCENARIO [options]  run a scenario file in-process (the main job: scenarios/maze.yaml)\n"
+      << "  sim SCENARIO --serial PATH   hardware in the loop: the simulator side (docs/hil.md)\n"
+      << "  board SCENARIO --serial PATH [--shell PATH]   ... the board side: one robot's tasks\n"
+      << "  link [--dir DIR]        ... the serial lines between them, from pseudo-terminals\n"
       << "  demo <name> [options]   run a built-in demo (symb demo --help lists them)\n"
       << "  shell --tcp HOST:PORT | --serial PATH\n"
       << "                          open a running node's command shell (like telnet or picocom)\n"
@@ -78,6 +84,10 @@ int run_symb(std::span<const std::string_view> args, const CliContext& ctx) {
     ctx.out << "symb " << symb_version() << "\n";
     return kExitOk;
   }
+  if (command == "run") return run::run_run_command(rest, ctx);
+  if (command == "sim") return hil::run_sim_command(rest, ctx);
+  if (command == "board") return hil::run_board_command(rest, ctx);
+  if (command == "link") return hil::run_link_command(rest, ctx);
   if (command == "demo") return run_demo(rest, ctx);
   if (command == "shell") {
     auto parsed = parse_shell_client_args(rest);

@@ -41,6 +41,10 @@ constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to -
 // for every object-object contact, static walls included (with a null or a wall argument).
 class EnkiWorld::Thymio final : public Enki::Thymio2 {
  public:
+  // Enki's own IR computation is switched off: its readings go stale (see ir_model.hpp), and
+  // IrModel computes them instead after each step.
+  Thymio() { localInteractions.clear(); }
+
   bool touched = false;
 
  protected:
@@ -109,7 +113,10 @@ kernel::Status EnkiWorld::check_spec(const WorldSpec& spec) {
 }
 
 EnkiWorld::EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options)
-    : spec_(std::move(spec)), options_(options), random_(seed, 0x454e4b49 /* "ENKI" */) {
+    : spec_(std::move(spec)),
+      options_(options),
+      random_(seed, 0x454e4b49 /* "ENKI" */),
+      ir_noise_(seed, 0x4952 /* "IR" */) {
   if (auto st = check_spec(spec_); !st) throw std::invalid_argument(st.error());
   if (options_.physics_oversampling == 0 || options_.physics_oversampling > 100)
     throw std::invalid_argument("enki world: physics_oversampling must be 1..100");
@@ -128,6 +135,7 @@ EnkiWorld::EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options)
   enki_->world.takeObjectOwnership = false;
 
   const double w = spec_.width, h = spec_.height, t = options_.outer_wall_thickness;
+  std::vector<IrModel::Rect> ir_walls;
   auto add_wall = [&](double cx, double cy, double length, double width, double angle) {
     auto* o = arena_->make<Enki::PhysicalObject>();
     o->setRectangular(length, width, spec_.wall_height, -1);
@@ -135,6 +143,7 @@ EnkiWorld::EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options)
     o->angle = angle;
     o->setColor(Enki::Color::gray);
     enki_->world.addObject(o);
+    ir_walls.push_back({cx, cy, length / 2, width / 2, angle});
     ++wall_count_;
   };
   // The sides, outside the arena, long enough to close the corners.
@@ -148,6 +157,7 @@ EnkiWorld::EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options)
     const double angle = length > 0 ? std::atan2(dy, dx) : 0.0;
     add_wall((s.x1 + s.x2) / 2, (s.y1 + s.y2) / 2, length + s.thickness, s.thickness, angle);
   }
+  ir_model_ = std::make_unique<IrModel>(std::move(ir_walls));
 }
 
 EnkiWorld::~EnkiWorld() {
@@ -209,6 +219,10 @@ void EnkiWorld::step(double dt) {
     st.in_contact = r.body->touched;
     if (st.in_contact) ++st.contact_steps;
   }
+  // IR after the bodies have moved, from every robot's new pose.
+  poses_.resize(robots_.size());
+  for (std::size_t i = 0; i < robots_.size(); ++i) poses_[i] = robots_[i].state.pose;
+  for (std::size_t i = 0; i < robots_.size(); ++i) robots_[i].ir = ir_model_->read(i, poses_, ir_noise_);
   ++steps_;
   time_ += dt;
 }
@@ -226,18 +240,7 @@ void EnkiWorld::set_wheels(std::size_t robot, double left, double right) {
   mr.state.right_speed = right;
 }
 
-IrReadings EnkiWorld::ir(std::size_t robot) const {
-  const Thymio& b = *robot_at(robot, "ir").body;
-  if (steps_ == 0) return IrReadings{};  // Enki computes readings during a step
-  const double raw[kIrCount] = {b.infraredSensor0.getValue(), b.infraredSensor1.getValue(),
-                                b.infraredSensor2.getValue(), b.infraredSensor3.getValue(),
-                                b.infraredSensor4.getValue(), b.infraredSensor5.getValue(),
-                                b.infraredSensor6.getValue()};
-  IrReadings out{};
-  for (std::size_t i = 0; i < kIrCount; ++i)
-    out[i] = static_cast<float>(std::isfinite(raw[i]) ? std::clamp(raw[i], 0.0, kIrMax) : 0.0);
-  return out;
-}
+IrReadings EnkiWorld::ir(std::size_t robot) const { return robot_at(robot, "ir").ir; }
 
 RobotState EnkiWorld::state(std::size_t robot) const { return robot_at(robot, "state").state; }
 

@@ -12,7 +12,9 @@
 // Determinism, within one process too. Enki is deterministic for a given object order and random
 // state, but (a) it keeps its objects in a std::set ordered by pointer value and iterates it for
 // collisions, sensors and noise draws, and (b) its noise comes from process-wide generators:
-// motor noise from Enki::random, IR noise from the C library's rand(). So:
+// motor noise from Enki::random (Enki's own IR sensors would draw from the C library's rand(),
+// but their readings go stale in Debian's Enki 1.6.99, so IrModel computes IR instead, with its
+// own noise stream: see ir_model.hpp). So:
 //  - every Enki object of a world is placed in one address range reserved when the world is made
 //    (see Options::max_robots), bump-allocated, so addresses increase in creation order and two
 //    worlds built alike iterate alike, whatever the heap looked like;
@@ -20,8 +22,7 @@
 //    the constructor's seed), and every Enki call that touches them (construction of objects,
 //    step) holds one process-wide mutex. That mutex is the one justified global of the framework:
 //    it stands for the globals inside Enki. Several worlds in one process, on any threads, are
-//    then each deterministic and independent of the others. Code that calls rand() on another
-//    thread while a world steps would still perturb it; the framework itself never does.
+//    then each deterministic and independent of the others.
 //
 // Thread safety: one world is not thread-safe (World's rule); different worlds may be used from
 // different threads at once.
@@ -36,6 +37,7 @@
 
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/result.hpp"
+#include "symb/sim/ir_model.hpp"
 #include "symb/sim/world.hpp"
 
 namespace symb::sim {
@@ -95,6 +97,7 @@ class EnkiWorld final : public World {
     std::string name;
     Thymio* body = nullptr;  // lives in arena_
     RobotState state;
+    IrReadings ir{};  // after the last step (all 0 before the first)
   };
 
   const Robot& robot_at(std::size_t robot, const char* what) const;
@@ -102,6 +105,9 @@ class EnkiWorld final : public World {
   WorldSpec spec_;
   Options options_;
   kernel::RandomStream random_;
+  kernel::RandomStream ir_noise_;
+  std::unique_ptr<IrModel> ir_model_;
+  std::vector<Pose> poses_;  // scratch for the IR model
   // Declared before enki_ so that it outlives it: the Enki world holds pointers into the arena.
   std::unique_ptr<Arena> arena_;
   struct EnkiState;

@@ -1,0 +1,222 @@
+#include "symb/apps/run/run_command.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "symb/apps/progress_line.hpp"
+#include "symb/apps/run/scenario_run.hpp"
+
+namespace symb::apps::run {
+
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr std::string_view kCommand = "symb run";
+constexpr kernel::Duration kMaxDuration = std::chrono::hours(24 * 7);
+
+constexpr OptionSpec kOptions[] = {
+    {"--out", "DIR", "output folder (default out/<scenario name>)"},
+    {"--seed", "S", "seed, unsigned 64-bit (default: the scenario's)"},
+    {"--duration", "D", "simulated time: 60s, 10min, ... (default: the scenario's)"},
+    {"--realtime", "", "run on OS threads against the wall clock (not deterministic)"},
+    {"--speed", "X", "virtual time at X times the wall clock (default: as fast as possible)"},
+    {"--shell", "WHERE", "open a robot's command shell while it runs: stdio, or tcp:PORT / tcp:HOST:PORT"},
+    {"--shell-robot", "NAME", "the robot whose shell it is (default: the first)"},
+    {"--token", "T", "the TCP shell's token (default: a random one, printed)"},
+    {"--csv-every", "N", "record every N-th step in steps.csv (default 1)"},
+    {"--print-hash", "", "print 'trajectory-hash: <16 hex digits>' on stdout"},
+    {"--quiet", "", "no progress line and no summary"},
+    {"--help", "", "this help"},
+};
+
+void print_help(std::ostream& out) {
+  out << "Usage: " << kCommand << " SCENARIO [options]\n\n"
+      << "Runs a scenario file (a world, robots and each robot's task graph; see docs/scenarios.md)\n"
+      << "in this process, on the Enki simulator, headless. Each robot is a node running its task\n"
+      << "graph against simulated IR sensor and wheel drivers, as the paper's Fig. 3 wires it:\n"
+      << "ir (sensor task) -> controller -> wheels (actuator task). Virtual time by default: same\n"
+      << "seed, same run, far faster than real time.\n\n"
+      << "Options:\n"
+      << describe_options(kOptions) << "\n"
+      << "Writes trajectory.svg, steps.csv, summary.txt and syslog.txt into the output folder.\n"
+      << "A shell needs --realtime or --speed (a virtual-time run is over before anyone could type);\n"
+      << "with --shell and neither, --speed 1 is implied.\n\n"
+      << "Example: symb run scenarios/maze.yaml --out out/maze\n";
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string progress_text(const RunProgress& p, bool realtime) {
+  std::string s = "run: " + fixed(p.simulated_seconds, 1) + " / " + fixed(p.total_seconds, 1) + " s " +
+                  (realtime ? "real time" : "simulated") + " (" + fixed(100 * p.fraction(), 0) + "%)";
+  if (!realtime && p.wall_seconds > 0) s += ", " + fixed(p.simulated_seconds / p.wall_seconds, 1) + "x real time";
+  return s;
+}
+
+std::variant<ShellRequest, UsageError> parse_shell(std::string_view text) {
+  ShellRequest r;
+  if (text == "stdio") {
+    r.kind = ShellRequest::Kind::kStdio;
+    return r;
+  }
+  if (!text.starts_with("tcp:"))
+    return UsageError{"--shell: expected stdio, tcp:PORT or tcp:HOST:PORT, not " + quote_arg(text)};
+  std::string_view rest = text.substr(4);
+  const auto colon = rest.rfind(':');
+  if (colon != std::string_view::npos) {
+    r.host = std::string(rest.substr(0, colon));
+    rest = rest.substr(colon + 1);
+    if (r.host.empty()) return UsageError{"--shell: empty host in " + quote_arg(text)};
+  }
+  auto port = parse_count("--shell port", rest, 0, 65535);
+  if (auto* e = std::get_if<UsageError>(&port)) return *e;
+  r.kind = ShellRequest::Kind::kTcp;
+  r.port = static_cast<std::uint16_t>(std::get<std::uint64_t>(port));
+  return r;
+}
+
+std::string hex64(std::uint64_t v) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+}  // namespace
+
+int run_run_command(std::span<const std::string_view> args, const CliContext& ctx) {
+  RunOptions options;
+  // The scenario is the one positional argument; it may come anywhere.
+  std::vector<std::string_view> rest;
+  std::vector<std::string_view> positional;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string_view a = args[i];
+    if (a.starts_with("-")) {
+      rest.push_back(a);
+      const bool has_value = a.find('=') == std::string_view::npos &&
+                             std::any_of(std::begin(kOptions), std::end(kOptions),
+                                         [&](const OptionSpec& s) { return s.name == a && !s.value_name.empty(); });
+      if (has_value && i + 1 < args.size()) rest.push_back(args[++i]);
+    } else {
+      positional.push_back(a);
+    }
+  }
+  auto parsed = parse_options(rest, kOptions);
+  if (auto* e = std::get_if<UsageError>(&parsed)) return usage_error(ctx, kCommand, *e);
+  const auto& opts = std::get<std::vector<ParsedOption>>(parsed);
+  for (const ParsedOption& o : opts)
+    if (o.name == "--help") {
+      print_help(ctx.out);
+      return kExitOk;
+    }
+  if (positional.empty()) return usage_error(ctx, kCommand, UsageError{"missing SCENARIO (a .yaml file)"});
+  if (positional.size() > 1)
+    return usage_error(ctx, kCommand, UsageError{"unexpected argument " + quote_arg(positional[1])});
+  options.scenario_path = std::string(positional.front());
+
+  bool print_hash = false, quiet = false, speed_given = false;
+  std::optional<std::string> token, shell_robot;
+  for (const ParsedOption& o : opts) {
+    if (o.name == "--out") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--out: empty folder name"});
+      options.out_dir = o.value;
+    } else if (o.name == "--seed") {
+      auto v = parse_u64("--seed", o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.seed = std::get<std::uint64_t>(v);
+    } else if (o.name == "--duration") {
+      auto v = parse_duration("--duration", o.value, kMaxDuration);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.duration = std::get<kernel::Duration>(v);
+    } else if (o.name == "--realtime") {
+      options.realtime = true;
+    } else if (o.name == "--speed") {
+      char* end = nullptr;
+      const std::string text(o.value);
+      const double v = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || v <= 0 || v > 1e6)
+        return usage_error(ctx, kCommand,
+                           UsageError{"--speed: expected a number above 0 and at most 1e6, not " + quote_arg(text)});
+      options.speed = v;
+      speed_given = true;
+    } else if (o.name == "--shell") {
+      auto v = parse_shell(o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.shell = std::get<ShellRequest>(v);
+    } else if (o.name == "--shell-robot") {
+      shell_robot = o.value;
+    } else if (o.name == "--token") {
+      token = o.value;
+    } else if (o.name == "--csv-every") {
+      auto v = parse_count("--csv-every", o.value, 1, 1'000'000);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.csv_every = static_cast<std::uint32_t>(std::get<std::uint64_t>(v));
+    } else if (o.name == "--print-hash") {
+      print_hash = true;
+    } else if (o.name == "--quiet") {
+      quiet = true;
+    }
+  }
+  if (options.realtime && speed_given)
+    return usage_error(ctx, kCommand, UsageError{"--speed is for virtual time; --realtime runs at the wall clock"});
+  const bool has_shell = options.shell.kind != ShellRequest::Kind::kNone;
+  if ((shell_robot || token) && !has_shell)
+    return usage_error(ctx, kCommand, UsageError{"--shell-robot and --token need --shell"});
+  if (token && options.shell.kind != ShellRequest::Kind::kTcp)
+    return usage_error(ctx, kCommand, UsageError{"--token is for --shell tcp:..."});
+  if (shell_robot) options.shell.robot = *shell_robot;
+  if (token) options.shell.token = *token;
+  if (has_shell && !options.realtime && !speed_given) options.speed = 1.0;
+  // A stdio shell owns stdout; the progress line and the summary then stay off it.
+  if (options.shell.kind == ShellRequest::Kind::kStdio) quiet = true;
+
+  ProgressLine progress(ctx.err, !quiet, ctx.err_is_terminal);
+  options.on_progress = [&](const RunProgress& p) {
+    progress.update(p.fraction(), progress_text(p, options.realtime));
+  };
+  options.on_notice = [&ctx](const std::string& line) { ctx.err << line << "\n" << std::flush; };
+  // The default folder needs the scenario's name, which only the run knows.
+  if (!options.out_dir) options.out_under = std::filesystem::path("out");
+
+  auto result = run_scenario(options);
+  if (!result) {
+    progress.finish("run: stopped");
+    ctx.err << kCommand << ": " << result.error() << "\n";
+    return kExitFailure;
+  }
+  const RunResult& r = *result;
+  progress.finish(progress_text(RunProgress{r.simulated_seconds, r.simulated_seconds, r.wall_seconds}, r.realtime));
+  if (print_hash) ctx.out << "trajectory-hash: " << hex64(r.trajectory_hash) << "\n";
+  if (!quiet && !print_hash) {
+    ctx.out << "run: " << r.scenario << ", seed " << r.seed << ", " << r.robots.size() << " robot"
+            << (r.robots.size() == 1 ? "" : "s") << ", " << fixed(r.simulated_seconds, 1) << " s "
+            << (r.realtime ? "on the wall clock"
+                           : "simulated in " + fixed(r.wall_seconds, 2) + " s (" + fixed(r.real_time_factor, 0) +
+                                 "x real time)")
+            << "\n";
+    const std::size_t shown = std::min<std::size_t>(r.robots.size(), 10);
+    for (std::size_t i = 0; i < shown; ++i) {
+      const RobotSummary& s = r.robots[i];
+      ctx.out << "  " << s.name << ": " << fixed(s.distance / 100.0, 2) << " m travelled, " << s.contact_events
+              << " contacts (" << s.contact_steps << " steps touching), moving " << fixed(s.moving_seconds, 1)
+              << " s\n";
+    }
+    if (shown < r.robots.size()) ctx.out << "  ... " << r.robots.size() - shown << " more in summary.txt\n";
+  }
+  if (!r.files.empty() && !(print_hash && quiet)) {
+    std::ostream& where = print_hash || options.shell.kind == ShellRequest::Kind::kStdio ? ctx.err : ctx.out;
+    where << "results in " << r.out_dir.string() << "/\n";
+    for (const auto& f : r.files) where << "  " << f.string() << "\n";
+    where << std::flush;
+  }
+  return kExitOk;
+}
+
+}  // namespace symb::apps::run

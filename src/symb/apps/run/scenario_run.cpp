@@ -1,0 +1,204 @@
+#include "symb/apps/run/scenario_run.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include "symb/apps/run/maze_svg.hpp"
+#include "symb/apps/run/run_recorder.hpp"
+#include "symb/io/stdio_stream.hpp"
+#include "symb/kernel/thread_executor.hpp"
+#include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/os/syslog.hpp"
+#include "symb/shell/shell_task.hpp"
+#include "symb/shell/tcp_shell.hpp"
+#include "symb/sim/scenario_session.hpp"
+
+namespace symb::apps::run {
+
+namespace {
+
+namespace fs = std::filesystem;
+using kernel::Error;
+
+double seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+kernel::Status write_file(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) return Error{"cannot write " + path.string()};
+  return {};
+}
+
+std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
+  std::ostringstream s;
+  s << "scenario: " << sc.name << " (" << sc.file << ")\n"
+    << "seed: " << r.seed << "\n"
+    << "executor: " << (r.realtime ? "threads, wall clock" : "virtual time") << "\n"
+    << "control period: " << fixed(seconds(sc.control_period) * 1000, 1) << " ms\n"
+    << "simulated: " << fixed(r.simulated_seconds, 2) << " s in " << r.steps << " steps\n"
+    << "wall clock: " << fixed(r.wall_seconds, 3) << " s\n"
+    << "real-time factor: " << fixed(r.real_time_factor, 1) << "\n";
+  char hash[24];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(r.trajectory_hash));
+  s << "trajectory hash: " << hash << "\n\n"
+    << "robot,distance_m,contacts,contact_steps,moving_s,time_in_maze_s,end_x_cm,end_y_cm\n";
+  for (const RobotSummary& x : r.robots)
+    s << x.name << "," << fixed(x.distance / 100, 3) << "," << x.contact_events << "," << x.contact_steps << ","
+      << fixed(x.moving_seconds, 2) << "," << fixed(r.simulated_seconds, 2) << "," << fixed(x.end.x, 1) << ","
+      << fixed(x.end.y, 1) << "\n";
+  return s.str();
+}
+
+}  // namespace
+
+kernel::Result<RunResult> run_scenario(const RunOptions& options) {
+  auto loaded = sim::load_scenario(options.scenario_path);
+  if (!loaded) return Error{loaded.error()};
+  sim::Scenario scenario = std::move(loaded).value();
+  if (options.duration) scenario.duration = *options.duration;
+
+  RunResult result;
+  result.scenario = scenario.name;
+  result.realtime = options.realtime;
+  if (options.out_dir)
+    result.out_dir = *options.out_dir;
+  else if (options.out_under)
+    result.out_dir = *options.out_under / scenario.name;
+  const bool write_files = !result.out_dir.empty();
+  std::ofstream csv;
+  if (write_files) {
+    std::error_code ec;
+    fs::create_directories(result.out_dir, ec);
+    if (ec) return Error{"cannot create " + result.out_dir.string() + ": " + ec.message()};
+    csv.open(result.out_dir / "steps.csv", std::ios::binary);
+    if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
+  }
+
+  std::unique_ptr<kernel::Executor> executor;
+  kernel::VirtualTimeExecutor* virtual_time = nullptr;
+  if (options.realtime) {
+    executor = std::make_unique<kernel::ThreadExecutor>(kernel::ThreadExecutor::Options{});
+  } else {
+    auto v = std::make_unique<kernel::VirtualTimeExecutor>();
+    virtual_time = v.get();
+    executor = std::move(v);
+  }
+
+  sim::SessionOptions session_options;
+  session_options.seed = options.seed;
+  auto created = sim::ScenarioSession::create(scenario, *executor, session_options);
+  if (!created) return Error{created.error()};
+  std::unique_ptr<sim::ScenarioSession> session = std::move(created).value();
+  result.seed = session->seed();
+
+  RunRecorder recorder(session->world(), write_files ? &csv : nullptr, options.csv_every,
+                       seconds(scenario.control_period));
+  session->runner().add_observer([&recorder](const sim::StepRecord& r) { recorder.on_step(r); });
+
+  // The shell's tasks live on the robot's node: closed before the session (and its nodes) go.
+  std::unique_ptr<shell::TcpShellServer> tcp_shell;
+  if (options.shell.kind != ShellRequest::Kind::kNone) {
+    sim::RobotSystem* robot =
+        options.shell.robot.empty() ? &session->robot(0) : session->find_robot(options.shell.robot);
+    if (!robot) return Error{"--shell-robot: the scenario has no robot '" + options.shell.robot + "'"};
+    if (options.shell.kind == ShellRequest::Kind::kTcp) {
+      shell::TcpShellOptions so;
+      so.host = options.shell.host;
+      so.port = options.shell.port;
+      if (!options.shell.token.empty()) so.token = options.shell.token;
+      auto server = shell::TcpShellServer::start(robot->node(), so);
+      if (!server) return Error{"shell: " + server.error()};
+      tcp_shell = std::move(server).value();
+      if (options.on_notice)
+        options.on_notice("shell: symb shell --tcp " + tcp_shell->host() + ":" + std::to_string(tcp_shell->port()) +
+                          " --token " + tcp_shell->token() + "   (robot " + robot->name() + ")");
+    } else {
+      auto attached = shell::attach_shell(robot->node(), std::make_shared<io::StdioStream>(), shell::ShellOptions{});
+      if (!attached) return Error{"shell: " + attached.error()};
+    }
+  }
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  const auto wall_seconds = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  };
+  const double total = seconds(scenario.duration);
+  const auto report = [&](double simulated) {
+    if (options.on_progress) options.on_progress(RunProgress{simulated, total, wall_seconds()});
+  };
+
+  session->start();
+  if (virtual_time) {
+    // Slices: a progress report per slice; with a speed, the wall clock paces each slice and
+    // shell commands (injected work) are served while waiting.
+    const kernel::Duration slice = options.speed > 0 ? std::chrono::milliseconds(20) : std::chrono::milliseconds(1000);
+    const kernel::Time start = virtual_time->clock().now();
+    const kernel::Time end = start + scenario.duration;
+    auto last_report = std::chrono::steady_clock::now();
+    for (kernel::Time t = start; t < end;) {
+      t = std::min(end, t + slice);
+      virtual_time->run_until(t);
+      if (options.speed > 0) {
+        const auto due = wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                          std::chrono::duration<double>(seconds(t - start) / options.speed));
+        for (auto now = std::chrono::steady_clock::now(); now < due; now = std::chrono::steady_clock::now())
+          virtual_time->wait_injected(due - now);
+      }
+      if (std::chrono::steady_clock::now() - last_report > std::chrono::milliseconds(100) || t == end) {
+        report(seconds(t - start));
+        last_report = std::chrono::steady_clock::now();
+      }
+    }
+  } else {
+    for (double elapsed = wall_seconds(); elapsed < total; elapsed = wall_seconds()) {
+      std::this_thread::sleep_for(std::chrono::duration<double>(std::min(0.1, total - elapsed)));
+      report(std::min(total, wall_seconds()));
+    }
+  }
+  session->stop();
+  result.wall_seconds = wall_seconds();
+  tcp_shell.reset();
+
+  result.steps = recorder.steps();
+  result.simulated_seconds = session->world().time();
+  result.real_time_factor = result.wall_seconds > 0 ? result.simulated_seconds / result.wall_seconds : 0;
+  result.trajectory_hash = recorder.hash();
+  result.robots = recorder.summaries();
+
+  if (write_files) {
+    csv.close();
+    if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
+    std::ostringstream svg;
+    write_maze_svg(svg, scenario.world, recorder.paths(),
+                   scenario.name + ", seed " + std::to_string(result.seed) + ", " + fixed(result.simulated_seconds, 1) +
+                       " s simulated");
+    std::ostringstream logs;
+    for (std::size_t i = 0; i < session->robot_count(); ++i) {
+      os::Node& node = session->robot(i).node();
+      for (const os::LogEntry& e : node.log().since(0)) logs << node.name() << " " << os::format_log_entry(e) << "\n";
+    }
+    const std::pair<const char*, std::string> files[] = {
+        {"trajectory.svg", svg.str()}, {"summary.txt", summary_text(scenario, result)}, {"syslog.txt", logs.str()}};
+    for (const auto& [name, text] : files)
+      if (auto st = write_file(result.out_dir / name, text); !st) return Error{st.error()};
+    result.files = {result.out_dir / "trajectory.svg", result.out_dir / "steps.csv", result.out_dir / "summary.txt",
+                    result.out_dir / "syslog.txt"};
+  }
+  return result;
+}
+
+}  // namespace symb::apps::run

@@ -1,0 +1,74 @@
+// Running a scenario in-process (`symb run`): the scenario session on the deterministic
+// virtual-time executor (or OS threads with realtime), a progress report, an optional command
+// shell on one robot, and what a person wants to look at afterwards, in an output folder:
+//   trajectory.svg  walls and every robot's path, contacts marked
+//   steps.csv       one row per robot and recorded step: time, pose, 7 IR values, wheel speeds,
+//                   contact
+//   summary.txt     per robot: distance, contacts, time moving; sim speed as real-time factor
+//   syslog.txt      every robot's SysLog
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "symb/apps/run/run_recorder.hpp"
+#include "symb/kernel/result.hpp"
+#include "symb/kernel/time.hpp"
+#include "symb/sim/world_spec.hpp"
+
+namespace symb::apps::run {
+
+struct ShellRequest {
+  enum class Kind { kNone, kStdio, kTcp };
+  Kind kind = Kind::kNone;
+  std::string host = "127.0.0.1";
+  std::uint16_t port = 0;  // kTcp: 0 picks a free port
+  std::string robot;       // empty: the first robot
+  std::string token;       // kTcp: empty makes one up
+};
+
+struct RunProgress {
+  double simulated_seconds = 0;
+  double total_seconds = 0;
+  double wall_seconds = 0;
+  double fraction() const { return total_seconds > 0 ? simulated_seconds / total_seconds : 1.0; }
+};
+
+struct RunOptions {
+  std::string scenario_path;
+  std::optional<std::uint64_t> seed;
+  std::optional<kernel::Duration> duration;
+  std::optional<std::filesystem::path> out_dir;    // none: write no files (unless out_under)
+  std::optional<std::filesystem::path> out_under;  // without out_dir: write into out_under/<scenario name>
+  bool realtime = false;
+  // Virtual time only: 0 runs as fast as possible; s > 0 keeps simulated time at s times the wall
+  // clock (a shell needs this: otherwise the run is over before anyone could type).
+  double speed = 0;
+  ShellRequest shell;
+  std::uint32_t csv_every = 1;  // record every n-th step in steps.csv (the picture uses every step)
+  std::function<void(const RunProgress&)> on_progress;
+  std::function<void(const std::string&)> on_notice;  // "shell: ..." for the person
+};
+
+struct RunResult {
+  std::string scenario;
+  std::uint64_t seed = 0;
+  bool realtime = false;
+  double simulated_seconds = 0;
+  double wall_seconds = 0;
+  double real_time_factor = 0;
+  std::uint64_t steps = 0;
+  std::vector<RobotSummary> robots;
+  // FNV-1a over every robot's pose and wheel speeds at every step: equal hashes, equal runs.
+  std::uint64_t trajectory_hash = 0;
+  std::filesystem::path out_dir;
+  std::vector<std::filesystem::path> files;
+};
+
+kernel::Result<RunResult> run_scenario(const RunOptions& options);
+
+}  // namespace symb::apps::run

@@ -1,0 +1,80 @@
+#include "symb/sim/scenario_session.hpp"
+
+#include <exception>
+
+#include "symb/sim/enki_world.hpp"
+
+namespace symb::sim {
+
+namespace {
+
+// Each robot's node seed: the run's seed and the robot's index mixed (splitmix64), so robots of
+// one run draw different numbers and the same robot draws the same ones in every run.
+std::uint64_t robot_seed(std::uint64_t seed, std::size_t index) {
+  std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (index + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const Scenario& scenario,
+                                                                         kernel::Executor& executor,
+                                                                         SessionOptions options) {
+  std::unique_ptr<ScenarioSession> s(new ScenarioSession());
+  s->scenario_ = scenario;
+  s->seed_ = options.seed.value_or(scenario.seed);
+  ProgramReader read = options.read_program ? options.read_program : file_program_reader(scenario.base_dir);
+
+  {
+    os::TaskTypeRegistry schemas;
+    if (auto st = register_scenario_task_types(schemas, {}, read); !st) return kernel::Error{st.error()};
+    if (auto st = check_scenario(scenario, schemas); !st) return kernel::Error{st.error()};
+  }
+  if (scenario.robots.empty()) return kernel::Error{scenario.file + ": the scenario has no robots"};
+  try {
+    EnkiWorld::Options wo;
+    wo.max_robots = std::max<std::size_t>(scenario.robots.size(), 1);
+    s->world_ = std::make_unique<EnkiWorld>(scenario.world, s->seed_, wo);
+    for (const RobotSpec& r : scenario.robots) s->world_->add_robot(r.name, r.kind, r.start);
+    WorldRunner::Options ro;
+    ro.period = scenario.control_period;
+    s->runner_ = std::make_unique<WorldRunner>(executor, *s->world_, ro);
+  } catch (const std::exception& e) {
+    return kernel::Error{scenario.file + ": " + e.what()};
+  }
+  for (std::size_t i = 0; i < scenario.robots.size(); ++i) {
+    RobotSystemOptions ro;
+    ro.control_period = scenario.control_period;
+    ro.seed = robot_seed(s->seed_, i);
+    ro.log_capacity = options.log_capacity;
+    ro.read_program = read;
+    auto built = RobotSystem::build(executor, scenario.robots[i],
+                                    RobotDevices{s->runner_->ir_sensor(i), s->runner_->wheels(i)}, std::move(ro));
+    if (!built) return kernel::Error{built.error()};
+    s->robots_.push_back(std::move(built).value());
+  }
+  return s;
+}
+
+ScenarioSession::~ScenarioSession() {
+  if (runner_) runner_->stop();
+  robots_.clear();  // every node emptied (RobotSystem's destructor) before the drivers' runner goes
+}
+
+void ScenarioSession::start() {
+  if (runner_ && !runner_->running()) (void)runner_->start();
+}
+
+void ScenarioSession::stop() {
+  if (runner_) runner_->stop();
+}
+
+RobotSystem* ScenarioSession::find_robot(std::string_view name) {
+  for (auto& r : robots_)
+    if (r->name() == name) return r.get();
+  return nullptr;
+}
+
+}  // namespace symb::sim

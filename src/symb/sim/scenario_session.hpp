@@ -1,0 +1,61 @@
+// ScenarioSession: a scenario made real, in-process: the Enki world with the scenario's walls and
+// robots, the world runner stepping it at the control period, the simulated drivers, and one
+// RobotSystem (node, task graph) per robot, all on one executor. It is what `symb run` runs and
+// what tests drive step by step; recording and output files are the caller's business (observe
+// the runner).
+//
+// Lifetime: create() builds everything but starts nothing; start() attaches the runner (the
+// robots' tasks already run: they wait for sensor data); the destructor stops the runner and
+// empties every node before the world goes away, so no task touches a freed driver.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "symb/kernel/executor.hpp"
+#include "symb/kernel/result.hpp"
+#include "symb/sim/robot_system.hpp"
+#include "symb/sim/scenario.hpp"
+#include "symb/sim/world.hpp"
+#include "symb/sim/world_runner.hpp"
+
+namespace symb::sim {
+
+struct SessionOptions {
+  std::optional<std::uint64_t> seed;  // overrides the scenario's
+  ProgramReader read_program;         // default: files relative to the scenario's folder
+  std::size_t log_capacity = 1024;
+};
+
+class ScenarioSession {
+ public:
+  // Checks the scenario against the task types (check_scenario) before building anything.
+  static kernel::Result<std::unique_ptr<ScenarioSession>> create(const Scenario& scenario, kernel::Executor& executor,
+                                                                 SessionOptions options = {});
+  ~ScenarioSession();
+  ScenarioSession(const ScenarioSession&) = delete;
+  ScenarioSession& operator=(const ScenarioSession&) = delete;
+
+  void start();
+  void stop();
+
+  const Scenario& scenario() const { return scenario_; }
+  std::uint64_t seed() const { return seed_; }
+  World& world() { return *world_; }
+  WorldRunner& runner() { return *runner_; }
+  std::size_t robot_count() const { return robots_.size(); }
+  RobotSystem& robot(std::size_t i) { return *robots_.at(i); }
+  // The robot named `name`, or null.
+  RobotSystem* find_robot(std::string_view name);
+
+ private:
+  ScenarioSession() = default;
+  Scenario scenario_;
+  std::uint64_t seed_ = 1;
+  std::unique_ptr<World> world_;
+  std::unique_ptr<WorldRunner> runner_;
+  std::vector<std::unique_ptr<RobotSystem>> robots_;  // destroyed before runner_ and world_
+};
+
+}  // namespace symb::sim
