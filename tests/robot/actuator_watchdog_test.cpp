@@ -138,7 +138,7 @@ TEST(ActuatorWatchdog, OffByDefaultAndRefusedCommandsDoNotFeedIt) {
   EXPECT_EQ(motors2->applied[0].time - started, 50ms);
 }
 
-TEST(ActuatorWatchdog, TaskTypeTakesTheTimeoutAsADurationWithATickingDefaultPeriod) {
+TEST(ActuatorWatchdog, TaskTypeTakesTheTimeoutAsADurationAndTicksOnlyWithAWatchdog) {
   kernel::VirtualTimeExecutor ex;
   auto motors = std::make_shared<RecordingMotors>(ex);
   RobotDevices devices;
@@ -150,7 +150,7 @@ TEST(ActuatorWatchdog, TaskTypeTakesTheTimeoutAsADurationWithATickingDefaultPeri
   ASSERT_NE(type->param("timeout"), nullptr);
   EXPECT_EQ(type->param("timeout")->type, os::ParamType::kDuration);
   EXPECT_EQ(std::get<kernel::Duration>(type->param("timeout")->default_value), kernel::Duration{0});
-  EXPECT_GT(type->defaults.period, kernel::Duration{0});
+  EXPECT_EQ(type->defaults.period, kernel::Duration{0});  // no ticks for a sink without a watchdog
 
   os::Node node(ex, {.name = "bot", .types = &registry});
   auto params = os::parse_param_assignments("device=motors timeout=45ms");
@@ -160,6 +160,7 @@ TEST(ActuatorWatchdog, TaskTypeTakesTheTimeoutAsADurationWithATickingDefaultPeri
   auto ctl = *node.create("ctl", std::make_unique<Driver>(kDrive), {.period = 30ms});
   ASSERT_TRUE(node.hook(ctl, *sink));
   ex.run_until(kernel::Time{300ms});
+  EXPECT_EQ(node.info(*sink)->period, kernel::Duration{15ms});  // given itself a third of the timeout
   EXPECT_EQ(motors->output(), kDrive);
   ASSERT_TRUE(node.suspend(ctl));  // last command at 300 ms
   ex.run_until(kernel::Time{400ms});

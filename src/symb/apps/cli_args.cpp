@@ -1,8 +1,10 @@
 #include "symb/apps/cli_args.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 
 #include "symb/os/param.hpp"
 
@@ -124,6 +126,38 @@ std::variant<kernel::Duration, UsageError> parse_duration(std::string_view what,
 int usage_error(const CliContext& ctx, std::string_view command, const UsageError& e) {
   ctx.err << command << ": " << e.message << "\n(run '" << command << " --help' for usage)\n";
   return kExitUsage;
+}
+
+std::variant<SplitArgs, UsageError> split_args(std::span<const std::string_view> args,
+                                               std::span<const OptionSpec> specs, std::size_t max_positional) {
+  SplitArgs out;
+  std::vector<std::string_view> rest;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string_view a = args[i];
+    if (a.starts_with("-") && a.size() > 1) {
+      rest.push_back(a);
+      const bool has_value = a.find('=') == std::string_view::npos &&
+                             std::any_of(specs.begin(), specs.end(),
+                                         [&](const OptionSpec& s) { return s.name == a && !s.value_name.empty(); });
+      if (has_value && i + 1 < args.size()) rest.push_back(args[++i]);
+    } else {
+      out.positional.push_back(a);
+    }
+  }
+  auto parsed = parse_options(rest, specs);
+  if (auto* e = std::get_if<UsageError>(&parsed)) return *e;
+  out.options = std::get<std::vector<ParsedOption>>(parsed);
+  for (const ParsedOption& o : out.options)
+    if (o.name == "--help") out.help = true;
+  if (!out.help && out.positional.size() > max_positional)
+    return UsageError{"unexpected argument " + quote_arg(out.positional[max_positional])};
+  return out;
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
 }
 
 }  // namespace symb::apps

@@ -42,6 +42,16 @@ struct ParsedOption {
 std::variant<std::vector<ParsedOption>, UsageError> parse_options(std::span<const std::string_view> args,
                                                                   std::span<const OptionSpec> specs);
 
+struct SplitArgs {
+  std::vector<ParsedOption> options;
+  std::vector<std::string_view> positional;
+  bool help = false;
+};
+
+// Options of `specs` anywhere, positional arguments (up to `max_positional`) anywhere else.
+std::variant<SplitArgs, UsageError> split_args(std::span<const std::string_view> args,
+                                               std::span<const OptionSpec> specs, std::size_t max_positional);
+
 // "  --nodes N      how many robots" lines for a help text.
 std::string describe_options(std::span<const OptionSpec> specs);
 
@@ -54,6 +64,8 @@ std::variant<std::uint64_t, UsageError> parse_u64(std::string_view what, std::st
 std::variant<kernel::Duration, UsageError> parse_duration(std::string_view what, std::string_view text,
                                                           kernel::Duration max);
 
+// `v` with `decimals` digits after the point, for people ("12.35").
+std::string fixed(double v, int decimals);
 // `text` cut to a readable length with control characters replaced, for quoting in a message.
 std::string quote_arg(std::string_view text);
 // " (did you mean 'x'?)" or "".

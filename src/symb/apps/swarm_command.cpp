@@ -36,12 +36,6 @@ void print_help(std::ostream& out) {
       << "Writes trajectories.svg, summary.txt and syslog.txt (node 0's log) into the output folder.\n";
 }
 
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
 std::string progress_text(const SwarmProgress& p, bool realtime) {
   std::string s = "swarm: " + fixed(p.simulated_seconds, 1) + " / " + fixed(p.total_seconds, 1) + " s " +
                   (realtime ? "real time" : "simulated") + " (" + fixed(100 * p.fraction(), 0) + "%)";

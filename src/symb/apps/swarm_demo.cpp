@@ -7,6 +7,7 @@
 #include <memory>
 #include <thread>
 
+#include "symb/apps/cli_args.hpp"
 #include "symb/apps/swarm/kinematics_task.hpp"
 #include "symb/apps/swarm/proximity_task.hpp"
 #include "symb/apps/swarm/trail_task.hpp"
@@ -28,12 +29,6 @@ namespace {
 constexpr kernel::Duration kProgressStep = std::chrono::milliseconds(100);
 
 double seconds_since(WallClock::time_point t0) { return std::chrono::duration<double>(WallClock::now() - t0).count(); }
-
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
 
 // The type's own defaults (period, priority, queue), held back from starting: hooks are made
 // first, so that no message of the first instant goes nowhere.

@@ -156,7 +156,7 @@ void Mdl2eTask::on_tick() {
     ++stats_.skipped_ticks;
     return;
   }
-  if (const auto info = node().info(id()); info && info->queue_depth > 0) {
+  if (pending_messages() > 0) {
     deferred_tick_ = true;
     deferred_at_ = now();
     std::lock_guard lock(mu_);

@@ -15,6 +15,11 @@ const std::string& Task::name() const { return record_->name; }
 kernel::Time Task::now() const { return record_->node.now(); }
 kernel::RandomStream& Task::random() { return record_->random; }
 
+std::size_t Task::pending_messages() const {
+  std::lock_guard lock(record_->in_mu);
+  return record_->queue.size();
+}
+
 void Task::send(Port port, const Payload& payload) {
   Message m;
   m.source = record_->id;

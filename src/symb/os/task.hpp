@@ -85,6 +85,9 @@ class Task {
   TaskId id() const;
   const std::string& name() const;
   kernel::Time now() const;
+  // Messages waiting in this task's own queue (a tick may leave its work to one of them). Cheap: no
+  // copy, and a lock only under the thread executor.
+  std::size_t pending_messages() const;
   // Sends to every task hooked to this one. Timestamped with the node clock.
   void send(Port port, const Payload& payload);
   void send(Port port, std::span<const float> values) { send(port, Payload(values)); }

@@ -1,5 +1,6 @@
 #include "symb/robot/actuator.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <stdexcept>
 
@@ -128,11 +129,18 @@ std::vector<float> ActuatorSinkTask::safe_output() const {
   return out;
 }
 
+// The watchdog is checked at ticks. A sink without a watchdog needs none, so the type's default
+// period is 0; one with a watchdog and no period of its own gets ticks at a third of the timeout,
+// which stops the outputs within 4/3 of the timeout.
+void ActuatorSinkTask::arm_watchdog() {
+  if (options_.timeout.count() <= 0) return;
+  if (auto info = node().info(id()); info && info->period.count() == 0)
+    (void)node().set_period(id(), std::max<kernel::Duration>(options_.timeout / 3, std::chrono::milliseconds(1)));
+}
+
 void ActuatorSinkTask::on_start() {
   last_applied_ = now();
-  if (options_.timeout.count() > 0)
-    if (auto info = node().info(id()); info && info->period.count() == 0)
-      log(os::LogLevel::kWarn, "timeout set but no period: the watchdog is never checked");
+  arm_watchdog();
   if (!actuator_->is_open())
     if (auto st = actuator_->open(); !st)
       log(os::LogLevel::kWarn, "cannot open '" + actuator_->name() + "': " + st.error());
@@ -200,6 +208,7 @@ kernel::Status ActuatorSinkTask::on_parameter(std::string_view name, const os::P
     options_.timeout = t;
     last_applied_ = now();
     timed_out_ = false;
+    arm_watchdog();
     return {};
   }
   return os::Task::on_parameter(name, value);

@@ -97,7 +97,7 @@ class ActuatorSinkTask : public os::Task {
     std::vector<ChannelSpec> ranges;
     kernel::Duration warn_interval = std::chrono::seconds(1);
     // Watchdog: apply the safe output when no command was applied for this long; 0: off. Needs
-    // a period (checked at ticks).
+    // a period to be checked at ticks; without one the sink gives itself a third of the timeout.
     kernel::Duration timeout{0};
   };
 
@@ -119,6 +119,8 @@ class ActuatorSinkTask : public os::Task {
   kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
+  void arm_watchdog();
+
   std::shared_ptr<Actuator> actuator_;
   Options options_;
   std::array<float, os::Payload::kInlineValues> narrowed_{};

@@ -94,8 +94,7 @@ kernel::Status register_robot_task_types(os::TaskTypeRegistry& registry, RobotDe
                  {"timeout", ParamType::kDuration, kernel::Duration{0}, 0.0, 3600.0,
                   "watchdog: apply the safe output (closest to 0) when no command came for this long; 0: off"}};
   sink.defaults.queue_capacity = 8;
-  // The watchdog is checked at ticks: it stops the wheels within timeout + period.
-  sink.defaults.period = 10ms;
+  // No period by default: a sink with a watchdog gives itself one (ActuatorSinkTask::arm_watchdog).
   sink.make = [shared](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
     auto dev = find_device(shared->actuator, p.string("device"), "actuator");
     ActuatorSinkTask::Options o;

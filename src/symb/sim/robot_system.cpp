@@ -18,6 +18,13 @@ kernel::Error at(const SourceLocation& where, const std::string& what) { return 
 
 }  // namespace
 
+std::uint64_t robot_node_seed(std::uint64_t seed, std::size_t index) {
+  std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (index + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
 ProgramReader file_program_reader(std::string base_dir) {
   return [base = std::move(base_dir)](std::string_view ref) -> kernel::Result<std::string> {
     namespace fs = std::filesystem;

@@ -32,6 +32,11 @@ using ProgramReader = std::function<kernel::Result<std::string>(std::string_view
 // Reads files relative to `base_dir` (absolute paths as they are), at most 1 MiB each.
 ProgramReader file_program_reader(std::string base_dir);
 
+// The node seed of robot `index` in a run seeded with `seed`: the two mixed (splitmix64), so the
+// robots of one run draw different numbers and a robot draws the same ones in every run, in
+// process or on a board.
+std::uint64_t robot_node_seed(std::uint64_t seed, std::size_t index);
+
 // The devices behind the default device tasks.
 struct RobotDevices {
   std::shared_ptr<robot::Sensor> ir;        // 7 channels

@@ -6,19 +6,6 @@
 
 namespace symb::sim {
 
-namespace {
-
-// Each robot's node seed: the run's seed and the robot's index mixed (splitmix64), so robots of
-// one run draw different numbers and the same robot draws the same ones in every run.
-std::uint64_t robot_seed(std::uint64_t seed, std::size_t index) {
-  std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (index + 1);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
-}  // namespace
-
 kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const Scenario& scenario,
                                                                          kernel::Executor& executor,
                                                                          SessionOptions options) {
@@ -47,7 +34,7 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
   for (std::size_t i = 0; i < scenario.robots.size(); ++i) {
     RobotSystemOptions ro;
     ro.control_period = scenario.control_period;
-    ro.seed = robot_seed(s->seed_, i);
+    ro.seed = robot_node_seed(s->seed_, i);
     ro.log_capacity = options.log_capacity;
     ro.read_program = read;
     auto built = RobotSystem::build(executor, scenario.robots[i],

@@ -125,7 +125,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   auto link = sim::BoardLink::create(port, lo);
   sim::RobotSystemOptions ro;
   ro.control_period = sc.control_period;
-  ro.seed = robot_seed(seed.value_or(sc.seed), index);
+  ro.seed = sim::robot_node_seed(seed.value_or(sc.seed), index);
   ro.read_program = sim::file_program_reader(sc.base_dir);
   ro.make_device_tasks = link->device_tasks();
   auto log_sink = std::make_shared<PrefixedLogSink>(ctx.err, "board " + spec.name + ": ");

@@ -19,16 +19,6 @@
 
 namespace symb::apps::hil {
 
-struct SplitArgs {
-  std::vector<ParsedOption> options;
-  std::vector<std::string_view> positional;
-  bool help = false;
-};
-
-// Options of `specs` anywhere, positional arguments (up to `max_positional`) anywhere else.
-std::variant<SplitArgs, UsageError> split_args(std::span<const std::string_view> args,
-                                               std::span<const OptionSpec> specs, std::size_t max_positional);
-
 // While alive, SIGINT and SIGTERM set a flag instead of ending the process (a handler can reach
 // only a static, which is why this flag is one: it belongs to the process, as signals do).
 class InterruptFlag {
@@ -39,9 +29,6 @@ class InterruptFlag {
   InterruptFlag& operator=(const InterruptFlag&) = delete;
   bool raised() const;
 };
-
-// The node seed of robot `index` in a run seeded with `seed` (ScenarioSession's mixing).
-std::uint64_t robot_seed(std::uint64_t seed, std::size_t index);
 
 // Writes a node's log entries to a stream, one line each, prefixed with the node's name;
 // serialised, as tasks on several threads log at once.
@@ -55,7 +42,5 @@ class PrefixedLogSink final : public os::LogSink {
   std::ostream& out_;
   std::string prefix_;
 };
-
-std::string fixed(double v, int decimals);
 
 }  // namespace symb::apps::hil

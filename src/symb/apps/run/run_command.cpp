@@ -48,12 +48,6 @@ void print_help(std::ostream& out) {
       << "Example: symb run scenarios/maze.yaml --out out/maze\n";
 }
 
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
 std::string progress_text(const RunProgress& p, bool realtime) {
   std::string s = "run: " + fixed(p.simulated_seconds, 1) + " / " + fixed(p.total_seconds, 1) + " s " +
                   (realtime ? "real time" : "simulated") + " (" + fixed(100 * p.fraction(), 0) + "%)";
@@ -93,33 +87,16 @@ std::string hex64(std::uint64_t v) {
 
 int run_run_command(std::span<const std::string_view> args, const CliContext& ctx) {
   RunOptions options;
-  // The scenario is the one positional argument; it may come anywhere.
-  std::vector<std::string_view> rest;
-  std::vector<std::string_view> positional;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string_view a = args[i];
-    if (a.starts_with("-")) {
-      rest.push_back(a);
-      const bool has_value = a.find('=') == std::string_view::npos &&
-                             std::any_of(std::begin(kOptions), std::end(kOptions),
-                                         [&](const OptionSpec& s) { return s.name == a && !s.value_name.empty(); });
-      if (has_value && i + 1 < args.size()) rest.push_back(args[++i]);
-    } else {
-      positional.push_back(a);
-    }
+  auto split = split_args(args, kOptions, 1);
+  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
+  const SplitArgs& parsed = std::get<SplitArgs>(split);
+  if (parsed.help) {
+    print_help(ctx.out);
+    return kExitOk;
   }
-  auto parsed = parse_options(rest, kOptions);
-  if (auto* e = std::get_if<UsageError>(&parsed)) return usage_error(ctx, kCommand, *e);
-  const auto& opts = std::get<std::vector<ParsedOption>>(parsed);
-  for (const ParsedOption& o : opts)
-    if (o.name == "--help") {
-      print_help(ctx.out);
-      return kExitOk;
-    }
-  if (positional.empty()) return usage_error(ctx, kCommand, UsageError{"missing SCENARIO (a .yaml file)"});
-  if (positional.size() > 1)
-    return usage_error(ctx, kCommand, UsageError{"unexpected argument " + quote_arg(positional[1])});
-  options.scenario_path = std::string(positional.front());
+  if (parsed.positional.empty()) return usage_error(ctx, kCommand, UsageError{"missing SCENARIO (a .yaml file)"});
+  const auto& opts = parsed.options;
+  options.scenario_path = std::string(parsed.positional.front());
 
   bool print_hash = false, quiet = false, speed_given = false;
   std::optional<std::string> token, shell_robot;

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <thread>
 
+#include "symb/apps/cli_args.hpp"
 #include "symb/apps/run/maze_svg.hpp"
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/io/stdio_stream.hpp"
@@ -28,12 +29,6 @@ namespace fs = std::filesystem;
 using kernel::Error;
 
 double seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
-
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
 
 kernel::Status write_file(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
