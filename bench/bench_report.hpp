@@ -88,4 +88,16 @@ inline std::vector<char*> with_default_flags(int argc, char** argv, std::vector<
   return out;
 }
 
+// The usual main(): our default flags (repetitions interleaved at random), Google Benchmark's
+// own flags, every registered benchmark into `reporter`. False on an unknown flag.
+inline bool run_interleaved(int argc, char** argv, CollectingReporter& reporter) {
+  auto args = with_default_flags(argc, argv, {"--benchmark_enable_random_interleaving=true"});
+  int n = static_cast<int>(args.size());
+  benchmark::Initialize(&n, args.data());
+  if (benchmark::ReportUnrecognizedArguments(n, args.data())) return false;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  benchmark::Shutdown();
+  return true;
+}
+
 }  // namespace symb::bench

@@ -157,13 +157,8 @@ BENCHMARK(BM_Fanout_Baseline)->Arg(8)->Arg(kHeadlineBurst)->Arg(256)->Repetition
 }  // namespace
 
 int main(int argc, char** argv) {
-  auto args = symb::bench::with_default_flags(argc, argv, {"--benchmark_enable_random_interleaving=true"});
-  int n = static_cast<int>(args.size());
-  benchmark::Initialize(&n, args.data());
-  if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 1;
   symb::bench::CollectingReporter reporter;
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  benchmark::Shutdown();
+  if (!symb::bench::run_interleaved(argc, argv, reporter)) return 1;
 
   std::printf("\nfan-out, 1 sender -> %d receivers, 8-float payload, VirtualTimeExecutor, median of repetitions\n",
               kReceivers);

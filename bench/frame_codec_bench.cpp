@@ -111,13 +111,8 @@ BENCHMARK(BM_Memcpy)->Arg(8)->Arg(64)->Arg(kHeadline)->Repetitions(kRepetitions)
 }  // namespace
 
 int main(int argc, char** argv) {
-  auto args = symb::bench::with_default_flags(argc, argv, {"--benchmark_enable_random_interleaving=true"});
-  int n = static_cast<int>(args.size());
-  benchmark::Initialize(&n, args.data());
-  if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 1;
   symb::bench::CollectingReporter reporter(false);
-  benchmark::RunSpecifiedBenchmarks(&reporter);
-  benchmark::Shutdown();
+  if (!symb::bench::run_interleaved(argc, argv, reporter)) return 1;
 
   std::printf("\nframe codec, payload MB/s (CPU time), median of repetitions\n");
   std::printf("%8s %12s %12s %12s %10s %10s\n", "payload", "encode", "decode", "memcpy", "enc/cpy", "dec/cpy");

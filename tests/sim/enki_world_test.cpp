@@ -159,13 +159,32 @@ TEST(EnkiWorld, ContactsWithTheArenaSideAreCounted) {
   EnkiWorld world(empty_arena(100, 100), 4);
   const std::size_t r = world.add_robot("a", RobotKind::kThymio2, {50, 50, std::numbers::pi / 2});
   world.set_wheels(r, 12, 12);  // up, towards y = 100
-  for (int i = 0; i < 300; ++i) world.step(kDt);
+  std::uint64_t first_contact = 0;
+  for (int i = 1; i <= 300; ++i) {
+    world.step(kDt);
+    if (first_contact == 0 && world.state(r).in_contact) first_contact = static_cast<std::uint64_t>(i);
+  }
   const RobotState s = world.state(r);
+  // The front is about 8 cm ahead of the centre: 42 cm at 12 cm/s, some 117 steps.
+  EXPECT_GT(first_contact, 100u);
+  EXPECT_LT(first_contact, 130u);
   EXPECT_TRUE(s.in_contact);
-  EXPECT_GT(s.contact_steps, 100u);
-  EXPECT_LT(s.pose.y, 100.0) << "the side is outside the arena, the robot inside";
+  EXPECT_GE(s.contact_steps, (300 - first_contact) * 9 / 10);
+  EXPECT_LE(s.contact_steps, 300 - first_contact + 1);
+  EXPECT_LT(s.pose.y, 100.0) << "the side holds the robot inside";
   EXPECT_GT(s.pose.y, 85.0);
-  EXPECT_EQ(world.wall_objects(), 4u);
+  EXPECT_EQ(world.wall_objects(), 0u) << "the sides are Enki's square walls";
+}
+
+TEST(EnkiWorld, DrivingAlongASideCloseByIsNoContact) {
+  EnkiWorld world(empty_arena(200, 100), 4);
+  // Thymio2 is about 11 cm wide: 8 cm from the side leaves a 2 to 3 cm gap.
+  const std::size_t r = world.add_robot("a", RobotKind::kThymio2, {20, 8, 0});
+  world.set_wheels(r, 10, 10);
+  for (int i = 0; i < 400; ++i) world.step(kDt);
+  const RobotState s = world.state(r);
+  EXPECT_GT(s.pose.x, 120.0);
+  EXPECT_EQ(s.contact_steps, 0u);
 }
 
 TEST(EnkiWorld, RobotsTouchingEachOtherCountAsContact) {
@@ -379,7 +398,7 @@ TEST(EnkiWorld, MazeWallsBecomeObjects) {
   o.cells = 5;
   const Maze m = *generate_maze(o);
   EnkiWorld world(m.world, 1);
-  EXPECT_EQ(world.wall_objects(), 4 + m.world.walls.size());
+  EXPECT_EQ(world.wall_objects(), m.world.walls.size());
   // A robot at every cell centre fits: nothing touches anything after a step.
   for (std::size_t i = 0; i < m.centres.size(); ++i)
     world.add_robot("r" + std::to_string(i), RobotKind::kThymio2, m.centres[i]);

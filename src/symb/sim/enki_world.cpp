@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <mutex>
 #include <new>
 #include <numbers>
@@ -19,8 +18,8 @@ using kernel::Error;
 
 namespace {
 
-// Guards Enki's process-wide state: Enki::random (motor noise), the C library's rand() (IR
-// noise) and the object id counter every PhysicalObject constructor bumps. See the header.
+// Guards Enki's process-wide state: Enki::random (motor noise) and the object id counter every
+// PhysicalObject constructor bumps. See the header.
 std::mutex& enki_mutex() {
   static std::mutex mu;
   return mu;
@@ -34,6 +33,22 @@ double normalize_angle(double a) {
 }
 
 constexpr std::size_t round_up(std::size_t n, std::size_t to) { return (n + to - 1) / to * to; }
+
+// Whether Enki's square walls pushed `o` back during the last step. Within a physics step Enki
+// moves each body, computes its hull's shape there, resolves object contacts (which recompute the
+// shape), then tests that shape's points against the sides (x < 0, x > w, ...) and moves the body
+// back inside WITHOUT recomputing the shape or calling collisionEvent(). So after step() the shape
+// still shows a point beyond a side exactly when the sides touched the body.
+bool touched_sides(const Enki::PhysicalObject& o, double w, double h) {
+  if (o.isCylindric()) {
+    const double r = o.getRadius();
+    return o.pos.x - r < 0 || o.pos.y - r < 0 || o.pos.x + r > w || o.pos.y + r > h;
+  }
+  for (const Enki::PhysicalObject::Part& part : o.getHull())
+    for (const Enki::Point& p : part.getTransformedShape())
+      if (p.x < 0 || p.y < 0 || p.x > w || p.y > h) return true;
+  return false;
+}
 
 }  // namespace
 
@@ -91,7 +106,8 @@ class EnkiWorld::Arena {
 };
 
 struct EnkiWorld::EnkiState {
-  Enki::World world;  // no walls of its own: ours are objects
+  EnkiState(double w, double h) : world(w, h) {}
+  Enki::World world;  // its square walls are the arena's sides; inner walls are objects
 };
 
 kernel::Status EnkiWorld::check_spec(const WorldSpec& spec) {
@@ -120,21 +136,18 @@ EnkiWorld::EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options)
   if (auto st = check_spec(spec_); !st) throw std::invalid_argument(st.error());
   if (options_.physics_oversampling == 0 || options_.physics_oversampling > 100)
     throw std::invalid_argument("enki world: physics_oversampling must be 1..100");
-  if (!finite(options_.outer_wall_thickness) || options_.outer_wall_thickness <= 0)
-    throw std::invalid_argument("enki world: outer_wall_thickness must be finite and positive");
   if (options_.max_robots > (std::size_t{1} << 24)) throw std::invalid_argument("enki world: max_robots above 2^24");
 
-  const std::size_t walls = 4 + spec_.walls.size();
+  const std::size_t walls = spec_.walls.size();
   arena_ = std::make_unique<Arena>(walls * round_up(sizeof(Enki::PhysicalObject), 64) +
                                    options_.max_robots * round_up(sizeof(Thymio), 64));
   robots_.reserve(std::min<std::size_t>(options_.max_robots, 1024));
 
   std::lock_guard lock(enki_mutex());
-  enki_ = std::make_unique<EnkiState>();
+  enki_ = std::make_unique<EnkiState>(spec_.width, spec_.height);
   // The world does not own the objects: they live in (and die with) the arena.
   enki_->world.takeObjectOwnership = false;
 
-  const double w = spec_.width, h = spec_.height, t = options_.outer_wall_thickness;
   std::vector<IrModel::Rect> ir_walls;
   auto add_wall = [&](double cx, double cy, double length, double width, double angle) {
     auto* o = arena_->make<Enki::PhysicalObject>();
@@ -146,11 +159,12 @@ EnkiWorld::EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options)
     ir_walls.push_back({cx, cy, length / 2, width / 2, angle});
     ++wall_count_;
   };
-  // The sides, outside the arena, long enough to close the corners.
-  add_wall(w / 2, -t / 2, w + 2 * t, t, 0);
-  add_wall(w / 2, h + t / 2, w + 2 * t, t, 0);
-  add_wall(-t / 2, h / 2, t, h + 2 * t, 0);
-  add_wall(w + t / 2, h / 2, t, h + 2 * t, 0);
+  // The sides, for the IR model only: 10 cm thick, just outside the arena, closing the corners.
+  const double w = spec_.width, h = spec_.height, t = 10;
+  ir_walls.push_back({w / 2, -t / 2, w / 2 + t, t / 2, 0});
+  ir_walls.push_back({w / 2, h + t / 2, w / 2 + t, t / 2, 0});
+  ir_walls.push_back({-t / 2, h / 2, t / 2, h / 2 + t, 0});
+  ir_walls.push_back({w + t / 2, h / 2, t / 2, h / 2 + t, 0});
   for (const WallSpec& s : spec_.walls) {
     const double dx = s.x2 - s.x1, dy = s.y2 - s.y1;
     const double length = std::hypot(dx, dy);
@@ -204,11 +218,10 @@ void EnkiWorld::step(double dt) {
   if (!(dt > 0 && dt <= 1))
     throw std::invalid_argument("enki world: step dt must be in (0, 1] s, got " + std::to_string(dt));
   std::lock_guard lock(enki_mutex());
-  // Both of Enki's generators restart from this world's own stream, so what other worlds drew
-  // in between changes nothing here.
-  const std::uint64_t s = random_.next_u64();
-  Enki::random.setSeed(static_cast<unsigned long>(s));
-  std::srand(static_cast<unsigned>(s >> 32));
+  // Enki's generator restarts from this world's own stream, so what other worlds drew in between
+  // changes nothing here. (The C library's rand() feeds only Enki's IR and ground sensors, which
+  // are switched off.)
+  Enki::random.setSeed(static_cast<unsigned long>(random_.next_u64()));
   for (Robot& r : robots_) r.body->touched = false;
   enki_->world.step(dt, options_.physics_oversampling);
   for (Robot& r : robots_) {
@@ -216,7 +229,7 @@ void EnkiWorld::step(double dt) {
     const Pose now{r.body->pos.x, r.body->pos.y, normalize_angle(r.body->angle)};
     st.distance += std::hypot(now.x - st.pose.x, now.y - st.pose.y);
     st.pose = now;
-    st.in_contact = r.body->touched;
+    st.in_contact = r.body->touched || touched_sides(*r.body, spec_.width, spec_.height);
     if (st.in_contact) ++st.contact_steps;
   }
   // IR after the bodies have moved, from every robot's new pose.

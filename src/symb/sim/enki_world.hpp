@@ -2,23 +2,24 @@
 // robots. It builds Enki objects from a WorldSpec and keeps Enki behind this file: nothing else
 // in the framework includes an Enki header.
 //
-// Walls: every wall is a static rectangular Enki object (infinite mass), the arena's four sides
-// included, so a robot's contact with any wall goes through Enki's object collision and is
-// counted (Enki's own square arena walls report no collision events). The four sides lie just
-// OUTSIDE [0, width] x [0, height], `outer_wall_thickness` thick, so the free arena is exactly the
-// spec's. An inner wall is its segment's length plus its thickness long (the ends are capped, so
-// walls meeting at a corner leave no gap), `thickness` wide and spec.wall_height high.
+// Walls: the arena's four sides are Enki's own square walls (cheap: a bounds test per body, where
+// side walls as objects would cost a polygon test against every body and every other wall in every
+// step, and Enki does not skip static-static pairs). Enki reports no collision events for them,
+// so contacts with the sides are read off the body's hull after each step (see touched_sides in
+// the .cpp). Every inner wall is a static rectangular Enki object (infinite mass) whose contacts
+// come through collisionEvent(): its segment's length plus its thickness long (the ends are
+// capped, so walls meeting at a corner leave no gap), `thickness` wide, spec.wall_height high.
 //
 // Determinism, within one process too. Enki is deterministic for a given object order and random
 // state, but (a) it keeps its objects in a std::set ordered by pointer value and iterates it for
 // collisions, sensors and noise draws, and (b) its noise comes from process-wide generators:
 // motor noise from Enki::random (Enki's own IR sensors would draw from the C library's rand(),
-// but their readings go stale in Debian's Enki 1.6.99, so IrModel computes IR instead, with its
-// own noise stream: see ir_model.hpp). So:
+// but their readings go stale in Debian's Enki 1.6.99, so they are switched off and IrModel
+// computes IR instead, with its own noise stream: see ir_model.hpp). So:
 //  - every Enki object of a world is placed in one address range reserved when the world is made
 //    (see Options::max_robots), bump-allocated, so addresses increase in creation order and two
 //    worlds built alike iterate alike, whatever the heap looked like;
-//  - before each step the world reseeds both generators from its OWN RandomStream (seeded from
+//  - before each step the world reseeds Enki's generator from its OWN RandomStream (seeded from
 //    the constructor's seed), and every Enki call that touches them (construction of objects,
 //    step) holds one process-wide mutex. That mutex is the one justified global of the framework:
 //    it stands for the globals inside Enki. Several worlds in one process, on any threads, are
@@ -52,7 +53,6 @@ class EnkiWorld final : public World {
     std::size_t max_robots = 4096;
     // Physics substeps per step (Enki's physicsOversampling); 1 as in the reference benchmark.
     unsigned physics_oversampling = 1;
-    double outer_wall_thickness = 10.0;  // cm
   };
 
   // Throws std::invalid_argument (naming the wall's location) when check_spec() fails or the
@@ -87,7 +87,7 @@ class EnkiWorld final : public World {
   IrReadings ir(std::size_t robot) const override;
   RobotState state(std::size_t robot) const override;
 
-  // Static Enki objects built for walls: the 4 sides plus one per inner wall.
+  // Static Enki objects built for walls: one per inner wall (the sides are Enki's square walls).
   std::size_t wall_objects() const { return wall_count_; }
 
  private:

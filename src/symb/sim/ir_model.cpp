@@ -1,7 +1,10 @@
 #include "symb/sim/ir_model.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <iterator>
+#include <utility>
 
 namespace symb::sim {
 
@@ -17,6 +20,22 @@ constexpr SensorMount kMounts[kIrCount] = {
 };
 constexpr double kM = 4505, kX0 = 0.03, kC = 73, kNoiseSd = 2.87;
 constexpr double kAperture = 15.0 * M_PI / 180.0;
+constexpr double kMountReach = 8.0;  // cm: no sensor sits farther from the centre (7.95 at most)
+
+// Per sensor, the cosine and sine of its three rays' angles on the robot: left, centre, right.
+using RayDirections = std::array<std::array<std::pair<double, double>, 3>, kIrCount>;
+const RayDirections& ray_directions() {
+  static const RayDirections dirs = [] {
+    RayDirections d{};
+    for (std::size_t i = 0; i < kIrCount; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const double a = kMounts[i].orientation + (1 - k) * kAperture;
+        d[i][static_cast<std::size_t>(k)] = {std::cos(a), std::sin(a)};
+      }
+    return d;
+  }();
+  return dirs;
+}
 
 double response(double x) {
   if (x < kX0) return kM;
@@ -53,16 +72,11 @@ IrModel::IrModel(std::vector<Rect> walls) {
   }
 }
 
-double IrModel::ray(double px, double py, double angle, std::size_t self, std::span<const Pose> robots) const {
-  const double ux = std::cos(angle), uy = std::sin(angle);
+double IrModel::ray(double px, double py, double ux, double uy) const {
   double best = kRange + 1;  // beyond range: no response
-  for (const Wall& w : walls_) {
-    if (std::hypot(w.cx - px, w.cy - py) > w.reach + kRange) continue;
-    for (const Segment& e : w.edges) best = std::min(best, hit_segment(px, py, ux, uy, e.x1, e.y1, e.x2, e.y2, best));
-  }
-  for (std::size_t j = 0; j < robots.size(); ++j) {
-    if (j == self) continue;
-    const double dx = robots[j].x - px, dy = robots[j].y - py;
+  for (const Segment& e : near_edges_) best = std::min(best, hit_segment(px, py, ux, uy, e.x1, e.y1, e.x2, e.y2, best));
+  for (const Pose& robot : near_robots_) {
+    const double dx = robot.x - px, dy = robot.y - py;
     const double along = dx * ux + dy * uy;
     const double across2 = dx * dx + dy * dy - along * along;
     const double r2 = kRobotRadius * kRobotRadius;
@@ -78,15 +92,35 @@ double IrModel::ray(double px, double py, double angle, std::size_t self, std::s
 
 IrReadings IrModel::read(std::size_t self, std::span<const Pose> robots, kernel::RandomStream& noise) const {
   const Pose& p = robots[self];
+  // Anything a ray can hit lies within kRange + 1 of a sensor, and every sensor within
+  // kMountReach of the robot's centre.
+  near_edges_.clear();
+  for (const Wall& w : walls_) {
+    const double reach = w.reach + kRange + 1 + kMountReach;
+    const double dx = w.cx - p.x, dy = w.cy - p.y;
+    if (dx * dx + dy * dy <= reach * reach)
+      near_edges_.insert(near_edges_.end(), std::begin(w.edges), std::end(w.edges));
+  }
+  near_robots_.clear();
+  const double robot_reach = kRobotRadius + kRange + 1 + kMountReach;
+  for (std::size_t j = 0; j < robots.size(); ++j) {
+    const double dx = robots[j].x - p.x, dy = robots[j].y - p.y;
+    if (j != self && dx * dx + dy * dy <= robot_reach * robot_reach) near_robots_.push_back(robots[j]);
+  }
+  // One sine and cosine per reading: the 21 ray directions are the robot's heading turned by the
+  // fixed angles in ray_directions().
   const double c = std::cos(p.theta), s = std::sin(p.theta);
+  const RayDirections& dirs = ray_directions();
   IrReadings out{};
   for (std::size_t i = 0; i < kIrCount; ++i) {
     const SensorMount& m = kMounts[i];
     const double sx = p.x + c * m.x - s * m.y, sy = p.y + s * m.x + c * m.y;
-    const double a = p.theta + m.orientation;
-    const double centre = ray(sx, sy, a, self, robots);
-    const double left = ray(sx, sy, a + kAperture, self, robots);
-    const double right = ray(sx, sy, a - kAperture, self, robots);
+    double d[3];
+    for (int k = 0; k < 3; ++k) {
+      const auto [rc, rs] = dirs[i][k];
+      d[k] = ray(sx, sy, c * rc - s * rs, s * rc + c * rs);
+    }
+    const double left = d[0], centre = d[1], right = d[2];
     double v = response(left) + response(centre) + response(right) - 2 * response(centre / std::cos(kAperture));
     v = std::clamp(v + noise.normal(0, kNoiseSd), 0.0, kM);
     out[i] = static_cast<float>(v);

@@ -9,7 +9,9 @@
 //  - response F(x) = m (c - x0^2) / (x^2 - 2 x0 x + c) with m = 4505, x0 = 0.03, c = 73, 0 beyond
 //    range; combined as F(d_left) + F(d_centre) + F(d_right) - 2 F(d_centre / cos 15deg);
 //  - Gaussian noise, sd 2.87, from the world's own random stream; clamped to [0, 4505].
-// Obstacles are wall rectangles and other robots (circles of the Thymio's half width).
+// Obstacles are wall rectangles and other robots (circles of the Thymio's half width). Each read
+// first keeps the walls and robots near enough to be seen by any of its 21 rays, so a reading costs
+// about the same in a maze of 1,000 walls as in an empty box.
 #pragma once
 
 #include <span>
@@ -36,7 +38,8 @@ class IrModel {
   static constexpr double kRobotRadius = 5.5;  // cm, as seen by another robot's sensors
 
  private:
-  double ray(double px, double py, double angle, std::size_t self, std::span<const Pose> robots) const;
+  // Distance to the nearest obstacle along (ux, uy) from (px, py); above kRange when none.
+  double ray(double px, double py, double ux, double uy) const;
 
   struct Segment {
     double x1, y1, x2, y2;
@@ -46,6 +49,9 @@ class IrModel {
     Segment edges[4];
   };
   std::vector<Wall> walls_;
+  // Scratch of read(): what its rays can reach (mutable: reused to avoid allocating per reading).
+  mutable std::vector<Segment> near_edges_;
+  mutable std::vector<Pose> near_robots_;
 };
 
 }  // namespace symb::sim
