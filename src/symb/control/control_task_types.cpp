@@ -3,8 +3,11 @@
 #include <memory>
 #include <stdexcept>
 
+#include "symb/control/ahhs_task_types.hpp"
+#include "symb/control/behaviour_task_types.hpp"
 #include "symb/control/mdl2e/compiler.hpp"
 #include "symb/control/mdl2e_task.hpp"
+#include "symb/control/network_task_types.hpp"
 
 namespace symb::control {
 
@@ -60,7 +63,10 @@ kernel::Status register_control_task_types(os::TaskTypeRegistry& registry, Contr
     return std::move(task).value();
   };
 
-  return registry.add(std::move(mdl2e_type));
+  if (auto st = registry.add(std::move(mdl2e_type)); !st) return st;
+  if (auto st = register_ahhs_task_types(registry, *shared); !st) return st;
+  if (auto st = register_network_task_types(registry, *shared); !st) return st;
+  return register_behaviour_task_types(registry, *shared);
 }
 
 }  // namespace symb::control

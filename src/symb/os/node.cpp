@@ -722,6 +722,22 @@ std::uint64_t Node::queued() const {
 
 void Node::set_tracing(bool on) { tracing_.store(on); }
 
+void Node::set_probe_sink(ProbeSink sink) {
+  std::lock_guard lock(probe_mu_);
+  probe_sink_ = sink ? std::make_shared<const ProbeSink>(std::move(sink)) : nullptr;
+  probing_.store(probe_sink_ != nullptr, std::memory_order_release);
+}
+
+void Node::probe(const TaskRecord& from, std::string_view channel, std::span<const float> values) {
+  std::shared_ptr<const ProbeSink> sink;
+  {
+    std::lock_guard lock(probe_mu_);
+    sink = probe_sink_;
+  }
+  // Called outside the lock: a sink may take its own locks or replace itself.
+  if (sink) (*sink)(ProbeSample{now(), config_.name, from.name, channel, values});
+}
+
 std::uint64_t Node::trace_hash() const {
   std::lock_guard lock(trace_mu_);
   return trace_hash_;

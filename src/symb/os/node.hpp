@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -39,6 +40,19 @@ struct TaskSlot {
   std::uint32_t generation = 0;
 };
 }  // namespace detail
+
+// One sample of a task's internal state (hormone levels, activations, the active layer...), as a
+// task hands it to Task::probe(). Views: valid only during the sink call.
+struct ProbeSample {
+  kernel::Time time{0};
+  std::string_view node;
+  std::string_view task;
+  std::string_view channel;
+  std::span<const float> values;
+};
+// Receives every probe sample of a node. Under the thread executor it is called from the probing
+// tasks' threads, possibly at once: it must be thread-safe.
+using ProbeSink = std::function<void(const ProbeSample&)>;
 
 struct NodeConfig {
   std::string name = "node";
@@ -125,6 +139,12 @@ class Node {
   void set_tracing(bool on);
   std::uint64_t trace_hash() const;
 
+  // --- probes: tasks' internal state for people and plots ----------------------------------------
+  // Installs (or, with an empty function, removes) the sink of Task::probe(). Without a sink a
+  // probe costs one atomic load, so controllers probe unconditionally or check Task::probing().
+  void set_probe_sink(ProbeSink sink);
+  bool probing() const { return probing_.load(std::memory_order_acquire); }
+
  private:
   friend struct detail::TaskRecord;
   friend class Task;
@@ -135,6 +155,7 @@ class Node {
   void release(detail::TaskRecord& r);
   void send_from(detail::TaskRecord& from, const Message& m);
   void trace(const detail::TaskRecord& receiver, const Message& m);
+  void probe(const detail::TaskRecord& from, std::string_view channel, std::span<const float> values);
 
   kernel::Executor& executor_;
   NodeConfig config_;
@@ -149,6 +170,9 @@ class Node {
   std::atomic<bool> tracing_{false};
   mutable kernel::OptionalMutex trace_mu_;
   std::uint64_t trace_hash_ = 0xcbf29ce484222325ULL;
+  std::atomic<bool> probing_{false};
+  mutable std::mutex probe_mu_;
+  std::shared_ptr<const ProbeSink> probe_sink_;
 };
 
 }  // namespace symb::os

@@ -29,6 +29,12 @@ void Task::send(Port port, const Payload& payload) {
   record_->node.send_from(*record_, m);
 }
 
+void Task::probe(std::string_view channel, std::span<const float> values) const {
+  if (record_->node.probing()) record_->node.probe(*record_, channel, values);
+}
+
+bool Task::probing() const { return record_->node.probing(); }
+
 void Task::log(LogLevel level, std::string_view text) const { record_->node.log().write(level, record_->name, text); }
 
 }  // namespace symb::os

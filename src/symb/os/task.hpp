@@ -93,6 +93,15 @@ class Task {
   void send(Port port, std::span<const float> values) { send(port, Payload(values)); }
   void send(Port port, std::initializer_list<float> values) { send(port, Payload(values)); }
   void log(LogLevel level, std::string_view text) const;
+  // Hands a sample of this task's internal state to the node's probe sink (Node::set_probe_sink),
+  // e.g. probe("hormones/c0", levels). Channel names are the task's own; keep them few and fixed
+  // so a recorder can make one plot per channel. Nothing happens without a sink.
+  void probe(std::string_view channel, std::span<const float> values) const;
+  void probe(std::string_view channel, std::initializer_list<float> values) const {
+    probe(channel, std::span<const float>(values.begin(), values.size()));
+  }
+  // Whether a sink listens: skip gathering state nobody will see.
+  bool probing() const;
   // This task's own random stream, derived from the node seed and the task's name.
   kernel::RandomStream& random();
 

@@ -1,0 +1,10 @@
+#include "symb/control/ahhs_task_types.hpp"
+
+namespace symb::control {
+
+// Being written (issue 5): no types yet.
+kernel::Status register_ahhs_task_types(os::TaskTypeRegistry& /*registry*/, const ControlResources& /*resources*/) {
+  return {};
+}
+
+}  // namespace symb::control

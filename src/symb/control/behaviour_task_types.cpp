@@ -1,0 +1,11 @@
+#include "symb/control/behaviour_task_types.hpp"
+
+namespace symb::control {
+
+// Being written (issue 5): no types yet.
+kernel::Status register_behaviour_task_types(os::TaskTypeRegistry& /*registry*/,
+                                             const ControlResources& /*resources*/) {
+  return {};
+}
+
+}  // namespace symb::control
