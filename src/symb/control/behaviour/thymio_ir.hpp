@@ -1,0 +1,37 @@
+// Thymio II's 7 horizontal IR proximity sensors, as a controller sees them: where each looks (in
+// the robot frame: x forward, y left, angles counter-clockwise from x) and the distance a reading
+// stands for. The distance is the inverse of the response curve Enki's Thymio2 uses (and the
+// simulator's IrModel reproduces): F(x) = m (c - x0^2) / (x^2 - 2 x0 x + c), x in cm, m = 4505,
+// x0 = 0.03, c = 73, 0 beyond 14 cm. The control layer cannot see the simulator, so the numbers
+// are repeated here; they are the robot's, not the simulator's.
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+namespace symb::control::behaviour {
+
+inline constexpr std::size_t kIrCount = 7;  // 0 far left .. 4 far right, 5 back left, 6 back right
+inline constexpr double kIrMax = 4505;      // the reading at contact
+inline constexpr double kIrRange = 14;      // cm: nothing farther is seen
+
+struct IrMount {
+  double x, y, angle;  // cm, cm, rad (robot frame)
+};
+inline constexpr std::array<IrMount, kIrCount> kIrMounts = {{
+    {6.2, 4.85, 0.69813},
+    {7.5, 2.55, 0.34906},
+    {7.95, 0.0, 0.0},
+    {7.5, -2.55, -0.34906},
+    {6.2, -4.85, -0.69813},
+    {-2.95, 2.95, -3.14159265358979},
+    {-2.95, -2.95, -3.14159265358979},
+}};
+
+// The distance (cm, from the sensor) a reading stands for: kIrRange for a reading <= the response
+// at kIrRange (nothing seen, or at the edge), 0 at kIrMax and above. Monotone decreasing.
+double ir_distance(double reading);
+// The reading an obstacle at `distance` cm gives (the forward curve; for tests and thresholds).
+double ir_reading(double distance);
+
+}  // namespace symb::control::behaviour
