@@ -1,0 +1,106 @@
+// The hormone controller (AHHS) in the maze: scenarios/ahhs_obstacle_avoidance.yaml over 10
+// minutes of virtual time with its fixed seed, and the same network run as one task per
+// compartment (ahhs_compartment + ahhs_mixer), which must drive the robot along the same
+// trajectory, step for step.
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/sim/scenario_session.hpp"
+
+namespace symb::sim {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Measured with seed 1: 37.7 m in 10 minutes (it patrols the second corridor, turning at both
+// ends), no contact. The threshold is about 60% of that.
+constexpr double kMinDistanceCm = 2200;
+
+std::string read(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+struct Outcome {
+  double distance = 0;
+  std::uint64_t contact_steps = 0;
+  std::uint64_t steps = 0;
+  std::vector<Pose> poses;
+};
+
+Outcome run(const Scenario& scenario, kernel::Duration duration) {
+  kernel::VirtualTimeExecutor executor;
+  auto session = ScenarioSession::create(scenario, executor);
+  EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
+  if (!session) return {};
+  Outcome out;
+  (*session)->runner().add_observer([&](const StepRecord& r) { out.poses.push_back(r.robots[0].state.pose); });
+  (*session)->start();
+  executor.run_for(duration);
+  (*session)->stop();
+  const RobotState s = (*session)->world().state(0);
+  out.distance = s.distance;
+  out.contact_steps = s.contact_steps;
+  out.steps = (*session)->world().steps();
+  return out;
+}
+
+const std::string kFile = std::string(SYMB_SCENARIO_DIR) + "/ahhs_obstacle_avoidance.yaml";
+
+TEST(AhhsScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
+  auto sc = load_scenario(kFile);
+  ASSERT_TRUE(sc.ok()) << sc.error();
+  const Outcome o = run(*sc, 10min);
+  EXPECT_EQ(o.steps, 20000u);
+  EXPECT_EQ(o.contact_steps, 0u);
+  EXPECT_GT(o.distance, kMinDistanceCm);
+  std::cout << "ahhs maze: " << o.distance / 100 << " m in 10 min, " << o.contact_steps << " contact steps\n";
+}
+
+// The shipped file with its controller replaced by one task per compartment and a mixer.
+std::string compartment_version() {
+  std::string text = read(kFile);
+  const std::string tasks_at = "    tasks:\n";
+  const auto from = text.find(tasks_at);
+  EXPECT_NE(from, std::string::npos);
+  text = text.substr(0, from) + R"(    tasks:
+      - {name: left, type: ahhs_compartment, params: {network: ahhs/two_hormone.ahhs, compartment: 0}}
+      - {name: right, type: ahhs_compartment, params: {network: ahhs/two_hormone.ahhs, compartment: 1}}
+      - {name: mixer, type: ahhs_mixer, params: {actuators: 2, actuator_scale: 300}}
+    hooks:
+      - {from: ir, to: left, port: 0}
+      - {from: ir, to: right, port: 0}
+      - {from: left, to: right, port: 1}
+      - {from: right, to: left, port: 1}
+      - {from: left, to: mixer, port: 2}
+      - {from: right, to: mixer, port: 2}
+      - mixer -> wheels
+)";
+  return text;
+}
+
+TEST(AhhsScenario, OneTaskPerCompartmentDrivesTheSameTrajectory) {
+  auto whole = load_scenario(kFile);
+  ASSERT_TRUE(whole.ok()) << whole.error();
+  auto split = parse_scenario(compartment_version(), kFile);
+  ASSERT_TRUE(split.ok()) << split.error();
+  const Outcome a = run(*whole, 2min), b = run(*split, 2min);
+  ASSERT_EQ(a.poses.size(), 4000u);
+  ASSERT_EQ(b.poses.size(), a.poses.size());
+  for (std::size_t i = 0; i < a.poses.size(); ++i) {
+    ASSERT_EQ(a.poses[i].x, b.poses[i].x) << "step " << i;
+    ASSERT_EQ(a.poses[i].y, b.poses[i].y) << "step " << i;
+    ASSERT_EQ(a.poses[i].theta, b.poses[i].theta) << "step " << i;
+  }
+  EXPECT_GT(a.distance, 300.0);
+}
+
+}  // namespace
+}  // namespace symb::sim
