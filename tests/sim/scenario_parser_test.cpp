@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 
 namespace symb::sim {
@@ -78,6 +79,7 @@ double segments_distance(const WallSpec& a, const WallSpec& b) {
 TEST(ShippedScenarios, AllParseAndNameTheirFile) {
   const auto files = shipped();
   ASSERT_GE(files.size(), 4u);
+  std::size_t mdl2e_scenarios = 0;
   for (const auto& f : files) {
     SCOPED_TRACE(f);
     auto sc = load_scenario(f);
@@ -91,6 +93,9 @@ TEST(ShippedScenarios, AllParseAndNameTheirFile) {
     EXPECT_GE(sc->world.height, 150);
     EXPECT_LE(sc->world.height, 300);
     ASSERT_FALSE(sc->robots.empty());
+    // The MDL2e demos (the other controllers' scenarios are checked by their own tests).
+    if (sc->robots[0].tasks.empty() || sc->robots[0].tasks[0].type != "mdl2e") continue;
+    ++mdl2e_scenarios;
     for (const auto& r : sc->robots) {
       // Every robot runs an MDL2e program that exists next to the scenario, wired sensors to
       // controller to motors.
@@ -106,6 +111,7 @@ TEST(ShippedScenarios, AllParseAndNameTheirFile) {
       EXPECT_TRUE(hooks.contains({"controller", "wheels"}));
     }
   }
+  EXPECT_GE(mdl2e_scenarios, 4u);
 }
 
 TEST(ShippedScenarios, EveryGapIsWideEnoughToTurnIn) {
@@ -610,16 +616,10 @@ TEST(CheckScenario, TypesAndParameters) {
   EXPECT_EQ(flag.rfind("t.yaml:12:18: task 'c': ", 0), 0u) << flag;
 }
 
-TEST(CheckScenario, ShippedScenariosAgainstAStandInMdl2eType) {
-  // The real mdl2e type lives in the control layer; a stand-in with its parameters shows the
-  // shipped files name only those.
+TEST(CheckScenario, ShippedScenariosAgainstTheRealTaskTypes) {
+  // Every type a scenario may name (robot and control layers), as a run registers them.
   os::TaskTypeRegistry reg;
-  os::TaskType t;
-  t.name = "mdl2e";
-  t.params = {{"program", os::ParamType::kString, std::string(), std::nullopt, std::nullopt, "file"},
-              {"speed_limit", os::ParamType::kReal, 500.0, 0.0, 500.0, "motor units"}};
-  t.make = [](const os::ParamSet&) { return std::unique_ptr<os::Task>(); };
-  ASSERT_TRUE(reg.add(t).ok());
+  ASSERT_TRUE(register_scenario_task_types(reg, RobotDevices{}, file_program_reader(kDir)).ok());
   for (const auto& f : shipped()) {
     auto sc = load_scenario(f);
     ASSERT_TRUE(sc.ok()) << sc.error();

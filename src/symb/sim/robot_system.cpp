@@ -1,5 +1,6 @@
 #include "symb/sim/robot_system.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -47,8 +48,11 @@ ProgramReader file_program_reader(std::string base_dir) {
 kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, RobotDevices devices,
                                             ProgramReader read_program) {
   robot::RobotDevices lookups;
-  lookups.sensor = [ir = devices.ir](std::string_view name) -> std::shared_ptr<robot::Sensor> {
-    return name == kIrTaskName ? ir : nullptr;
+  lookups.sensor = [devices](std::string_view name) -> std::shared_ptr<robot::Sensor> {
+    if (name == kIrTaskName) return devices.ir;
+    if (name == kPoseTaskName) return devices.pose;
+    if (name == kGroundTaskName) return devices.ground;
+    return nullptr;
   };
   lookups.actuator = [wheels = devices.wheels](std::string_view name) -> std::shared_ptr<robot::Actuator> {
     return name == kWheelsTaskName ? wheels : nullptr;
@@ -87,6 +91,16 @@ kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor
     wheel_options.period = options.control_period;
     if (auto r = node.create("actuator_sink", std::string(kWheelsTaskName), wheel_params, wheel_options); !r)
       return kernel::Error{"robot '" + spec.name + "': wheels: " + r.error()};
+    // Pose and ground only when used: each is a task woken every period. (A shell can still make
+    // one later: `create sensor pose device=pose`.)
+    for (const std::string_view device : {kPoseTaskName, kGroundTaskName}) {
+      const bool used = std::any_of(spec.hooks.begin(), spec.hooks.end(),
+                                    [&](const HookSpec& h) { return h.from == device || h.to == device; });
+      if (!used) continue;
+      const std::vector<os::ParamAssignment> params{{"device", std::string(device), 1}};
+      if (auto r = node.create("sensor", std::string(device), params); !r)
+        return kernel::Error{"robot '" + spec.name + "': " + std::string(device) + ": " + r.error()};
+    }
   }
   for (const char* device_task : {kIrTaskName.data(), kWheelsTaskName.data()})
     if (!node.find(device_task))

@@ -41,6 +41,8 @@ std::uint64_t robot_node_seed(std::uint64_t seed, std::size_t index);
 struct RobotDevices {
   std::shared_ptr<robot::Sensor> ir;        // 7 channels
   std::shared_ptr<robot::Actuator> wheels;  // 2 channels, Thymio motor units
+  std::shared_ptr<robot::Sensor> pose;      // 3 channels (simulation only; may be null)
+  std::shared_ptr<robot::Sensor> ground;    // 2 channels (simulation only; may be null)
 };
 
 struct RobotSystemOptions {
@@ -50,7 +52,8 @@ struct RobotSystemOptions {
   ProgramReader read_program;
   // When set, makes the device tasks instead of the defaults (a `sensor` task over devices.ir and
   // an `actuator_sink` over devices.wheels whose watchdog stops the wheels 1.5 control periods
-  // after the last command). It must create tasks named kIrTaskName and kWheelsTaskName.
+  // after the last command; `sensor` tasks over devices.pose and devices.ground when the robot's
+  // hooks name them). It must create tasks named kIrTaskName and kWheelsTaskName.
   std::function<kernel::Status(os::Node&)> make_device_tasks;
 };
 

@@ -6,6 +6,9 @@
 // Every robot gets two device tasks from whoever runs it, so a scenario's hooks can name them:
 //   ir      the 7 IR proximity sensors: one message of 7 values per control period (port 0)
 //   wheels  the wheel actuator: takes [left, right] in Thymio motor units, -500..500
+// and, in simulation, two more that are made only when the robot's hooks name them:
+//   pose    [x cm, y cm, heading rad] per control period (an overhead tracker)
+//   ground  [left, right] floor reflectance 0..1 per control period (see WorldSpec::zones)
 // In-process they sit on simulated drivers; on a board, on the serial link (see docs/scenarios.md).
 //
 // File format: docs/scenarios.md. Parsing: scenario_parser.cpp (yaml-cpp).
@@ -30,6 +33,13 @@ namespace symb::sim {
 // Names of the device tasks every robot has.
 inline constexpr std::string_view kIrTaskName = "ir";
 inline constexpr std::string_view kWheelsTaskName = "wheels";
+inline constexpr std::string_view kPoseTaskName = "pose";
+inline constexpr std::string_view kGroundTaskName = "ground";
+
+// Whether `name` is one of the device tasks above.
+inline bool is_device_task_name(std::string_view name) {
+  return name == kIrTaskName || name == kWheelsTaskName || name == kPoseTaskName || name == kGroundTaskName;
+}
 
 // Every robot keeps a disc of this radius (cm) around its start point free: no wall surface and
 // no other robot's disc may reach into it. Thymio2 is about 11 cm across, so 8 cm leaves it
@@ -41,6 +51,7 @@ inline constexpr std::size_t kMaxScenarioBytes = 1 << 20;
 inline constexpr int kMaxNesting = 64;           // mappings and sequences inside each other
 inline constexpr std::size_t kMaxRobots = 1000;  // after `count` expansion
 inline constexpr std::size_t kMaxWalls = 2000;
+inline constexpr std::size_t kMaxZones = 100;
 
 struct TaskSpec {
   std::string name;

@@ -359,12 +359,46 @@ struct Parser {
   }
 
   void world(const YAML::Node& n) {
-    Map m(src, n, "world", {"arena", "wall_height", "walls"});
+    Map m(src, n, "world", {"arena", "wall_height", "walls", "zones"});
     Map arena(src, m.require("arena"), "arena", {"width", "height"});
     sc.world.width = rd.number(arena.require("width"), "arena width (cm)", kMinArena, kMaxArena);
     sc.world.height = rd.number(arena.require("height"), "arena height (cm)", kMinArena, kMaxArena);
     if (auto h = m.get("wall_height"); h.IsDefined()) sc.world.wall_height = rd.number(h, "wall_height (cm)", 1, 1000);
     for (const auto& w : rd.list(m.get("walls"), "walls", kMaxWalls)) sc.world.walls.push_back(wall(w));
+    for (const auto& z : rd.list(m.get("zones"), "zones", kMaxZones)) sc.world.zones.push_back(zone(z));
+  }
+
+  // {rect: [x1, y1, x2, y2], ground: G, name: N} or {circle: [x, y, r], ground: G, name: N}.
+  ZoneSpec zone(const YAML::Node& n) {
+    ZoneSpec z;
+    z.where = src.at(n);
+    const WorldSpec& ws = sc.world;
+    if (!n.IsMap())
+      src.fail(n, "a zone is {rect: [x1, y1, x2, y2], ground: G} or {circle: [x, y, r], ground: G}" + Map::got(n));
+    Map m(src, n, "a zone", {"rect", "circle", "ground", "name"});
+    const YAML::Node rect = m.get("rect"), circle = m.get("circle");
+    if (rect.IsDefined() == circle.IsDefined())
+      src.fail(n, "a zone is either a rect: [x1, y1, x2, y2] or a circle: [x, y, r] (exactly one of them)");
+    if (rect.IsDefined()) {
+      const auto v = rd.list(rect, "rect", 4);
+      if (!rect.IsSequence() || v.size() != 4) src.fail(rect, "rect is [x1, y1, x2, y2]" + Map::got(rect));
+      z.shape = ZoneSpec::Shape::kRect;
+      z.x1 = rd.number(v[0], "rect x1", 0, ws.width);
+      z.y1 = rd.number(v[1], "rect y1", 0, ws.height);
+      z.x2 = rd.number(v[2], "rect x2", 0, ws.width);
+      z.y2 = rd.number(v[3], "rect y2", 0, ws.height);
+      if (z.x2 <= z.x1 || z.y2 <= z.y1) src.fail(rect, "rect [x1, y1, x2, y2] needs x1 < x2 and y1 < y2");
+    } else {
+      const auto v = rd.list(circle, "circle", 3);
+      if (!circle.IsSequence() || v.size() != 3) src.fail(circle, "circle is [x, y, r]" + Map::got(circle));
+      z.shape = ZoneSpec::Shape::kCircle;
+      z.cx = rd.number(v[0], "circle x", 0, ws.width);
+      z.cy = rd.number(v[1], "circle y", 0, ws.height);
+      z.radius = rd.number(v[2], "circle radius (cm)", 0.5, std::max(ws.width, ws.height));
+    }
+    z.ground = rd.number(m.require("ground"), "zone ground (reflectance)", 0, 1);
+    if (auto nm = m.get("name"); nm.IsDefined()) z.name = rd.name(nm, "zone name");
+    return z;
   }
 
   WallSpec wall(const YAML::Node& n) {
@@ -502,9 +536,10 @@ struct Parser {
     starts(e);
     for (const auto& t : rd.list(m.get("tasks"), "tasks", kMaxTasksPerRobot)) {
       TaskSpec ts = task(t);
-      if (ts.name == kIrTaskName || ts.name == kWheelsTaskName)
-        src.fail(ts.where, "task name '" + ts.name + "' is taken: every robot has the device tasks '" +
-                               std::string(kIrTaskName) + "' and '" + std::string(kWheelsTaskName) + "'");
+      if (is_device_task_name(ts.name))
+        src.fail(ts.where, "task name '" + ts.name + "' is taken: it names a device task (" + std::string(kIrTaskName) +
+                               ", " + std::string(kWheelsTaskName) + ", " + std::string(kPoseTaskName) + ", " +
+                               std::string(kGroundTaskName) + ")");
       for (const auto& other : r.tasks)
         if (other.name == ts.name)
           src.fail(ts.where, "robot '" + r.name + "' already has a task '" + ts.name + "' (line " +
@@ -656,14 +691,14 @@ struct Parser {
 
   // Every name a hook of robot `r` may use.
   bool has_task(const RobotSpec& r, std::string_view name) const {
-    if (name == kIrTaskName || name == kWheelsTaskName) return true;
+    if (is_device_task_name(name)) return true;
     return std::any_of(r.tasks.begin(), r.tasks.end(), [&](const TaskSpec& t) { return t.name == name; });
   }
 
   void add_hook(RobotSpec& r, HookSpec h, const SourceLocation& to_where) {
     for (const std::string* end : {&h.from, &h.to})
       if (!has_task(r, *end)) {
-        std::vector<std::string_view> names{kIrTaskName, kWheelsTaskName};
+        std::vector<std::string_view> names{kIrTaskName, kWheelsTaskName, kPoseTaskName, kGroundTaskName};
         for (const auto& t : r.tasks) names.push_back(t.name);
         std::string msg = "robot '" + r.name + "' has no task '" + *end + "'";
         if (auto hint = os::closest_name(*end, names); !hint.empty()) msg += " (did you mean '" + hint + "'?)";

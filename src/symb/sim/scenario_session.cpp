@@ -38,7 +38,9 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
     ro.log_capacity = options.log_capacity;
     ro.read_program = read;
     auto built = RobotSystem::build(executor, scenario.robots[i],
-                                    RobotDevices{s->runner_->ir_sensor(i), s->runner_->wheels(i)}, std::move(ro));
+                                    RobotDevices{s->runner_->ir_sensor(i), s->runner_->wheels(i),
+                                                 s->runner_->pose_sensor(i), s->runner_->ground_sensor(i)},
+                                    std::move(ro));
     if (!built) return kernel::Error{built.error()};
     s->robots_.push_back(std::move(built).value());
   }

@@ -11,6 +11,23 @@ std::vector<robot::ChannelSpec> SimIrSensor::channel_specs() {
 
 SimIrSensor::SimIrSensor(std::string name) : robot::Sensor(std::move(name), channel_specs()) {}
 
+std::vector<robot::ChannelSpec> SimPoseSensor::channel_specs(double arena_width, double arena_height) {
+  const float margin = 100.0f;
+  return {robot::ChannelSpec{"x", "cm", -margin, static_cast<float>(arena_width) + margin},
+          robot::ChannelSpec{"y", "cm", -margin, static_cast<float>(arena_height) + margin},
+          robot::ChannelSpec{"heading", "rad", -4.0f, 4.0f}};
+}
+
+SimPoseSensor::SimPoseSensor(std::string name, double arena_width, double arena_height)
+    : robot::Sensor(std::move(name), channel_specs(arena_width, arena_height)) {}
+
+std::vector<robot::ChannelSpec> SimGroundSensor::channel_specs() {
+  return {robot::ChannelSpec{"left", "reflectance", 0.0f, 1.0f},
+          robot::ChannelSpec{"right", "reflectance", 0.0f, 1.0f}};
+}
+
+SimGroundSensor::SimGroundSensor(std::string name) : robot::Sensor(std::move(name), channel_specs()) {}
+
 std::vector<robot::ChannelSpec> SimWheels::channel_specs() {
   return {robot::ChannelSpec{"left", "thymio", -kWheelUnitsMax, kWheelUnitsMax},
           robot::ChannelSpec{"right", "thymio", -kWheelUnitsMax, kWheelUnitsMax}};

@@ -5,6 +5,9 @@
 //
 //   SimIrSensor  7 channels ir0..ir6, raw units, [0, kIrMax]: Thymio2's horizontal proximity
 //                sensors (see world.hpp for their placement)
+//   SimPoseSensor   3 channels x, y (cm), heading (rad, -pi..pi): where the robot is, as an
+//                overhead tracker or a motion-capture system would report it
+//   SimGroundSensor 2 channels left, right: floor reflectance 0..1 (ground_model.hpp)
 //   SimWheels    2 channels left, right, Thymio motor units, [-500, 500]. The real Thymio's
 //                firmware takes wheel targets in these units; here 500 is mapped to the simulated
 //                top speed kMaxWheelSpeed (16.6 cm/s), linearly, so a controller written for the
@@ -23,6 +26,7 @@
 #include "symb/robot/actuator.hpp"
 #include "symb/robot/channel_spec.hpp"
 #include "symb/robot/sensor.hpp"
+#include "symb/sim/ground_model.hpp"
 #include "symb/sim/world.hpp"
 
 namespace symb::sim {
@@ -41,6 +45,28 @@ class SimIrSensor final : public robot::Sensor {
   static std::vector<robot::ChannelSpec> channel_specs();
   // For the runner: one reading of all 7 sensors at node time `time`.
   robot::PublishResult publish_readings(const IrReadings& readings, kernel::Time time) {
+    return publish(std::span<const float>(readings.data(), readings.size()), time);
+  }
+};
+
+class SimPoseSensor final : public robot::Sensor {
+ public:
+  // The channels' ranges are the arena's (plus a margin: a pose is never clamped).
+  SimPoseSensor(std::string name, double arena_width, double arena_height);
+
+  static std::vector<robot::ChannelSpec> channel_specs(double arena_width, double arena_height);
+  robot::PublishResult publish_pose(const Pose& pose, kernel::Time time) {
+    const float v[3] = {static_cast<float>(pose.x), static_cast<float>(pose.y), static_cast<float>(pose.theta)};
+    return publish(std::span<const float>(v, 3), time);
+  }
+};
+
+class SimGroundSensor final : public robot::Sensor {
+ public:
+  explicit SimGroundSensor(std::string name = "ground");
+
+  static std::vector<robot::ChannelSpec> channel_specs();
+  robot::PublishResult publish_readings(const GroundReadings& readings, kernel::Time time) {
     return publish(std::span<const float>(readings.data(), readings.size()), time);
   }
 };

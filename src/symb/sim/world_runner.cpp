@@ -15,6 +15,8 @@ WorldRunner::WorldRunner(kernel::Executor& executor, World& world, Options optio
   for (std::size_t i = 0; i < n; ++i) {
     ir_.push_back(std::make_shared<SimIrSensor>("ir"));
     wheels_.push_back(std::make_shared<SimWheels>("wheels"));
+    pose_.push_back(std::make_shared<SimPoseSensor>("pose", world_.spec().width, world_.spec().height));
+    ground_.push_back(std::make_shared<SimGroundSensor>("ground"));
   }
   record_.robots.resize(n);
 }
@@ -35,6 +37,16 @@ std::shared_ptr<SimIrSensor> WorldRunner::ir_sensor(std::size_t robot) const {
 std::shared_ptr<SimWheels> WorldRunner::wheels(std::size_t robot) const {
   if (robot >= wheels_.size()) throw std::out_of_range("world runner: no robot " + std::to_string(robot));
   return wheels_[robot];
+}
+
+std::shared_ptr<SimPoseSensor> WorldRunner::pose_sensor(std::size_t robot) const {
+  if (robot >= pose_.size()) throw std::out_of_range("world runner: no robot " + std::to_string(robot));
+  return pose_[robot];
+}
+
+std::shared_ptr<SimGroundSensor> WorldRunner::ground_sensor(std::size_t robot) const {
+  if (robot >= ground_.size()) throw std::out_of_range("world runner: no robot " + std::to_string(robot));
+  return ground_[robot];
 }
 
 void WorldRunner::add_observer(StepObserver observer) {
@@ -125,11 +137,17 @@ void WorldRunner::tick() {
     for (std::size_t i = 0; i < record_.robots.size(); ++i) {
       record_.robots[i].state = world_.state(i);
       record_.robots[i].ir = world_.ir(i);
+      record_.robots[i].ground = ground_readings(world_.spec(), record_.robots[i].state.pose);
     }
   }
   // Outside the world lock: under the thread executor this runs the sensor tasks' injected work
   // right here, and a handler further down the chain may well look at the world.
-  for (std::size_t i = 0; i < ir_.size(); ++i) ir_[i]->publish_readings(record_.robots[i].ir, now);
+  for (std::size_t i = 0; i < ir_.size(); ++i) {
+    const RobotStep& r = record_.robots[i];
+    ir_[i]->publish_readings(r.ir, now);
+    if (pose_[i]->has_listener()) pose_[i]->publish_pose(r.state.pose, now);
+    if (ground_[i]->has_listener()) ground_[i]->publish_readings(r.ground, now);
+  }
   steps_.fetch_add(1, std::memory_order_acq_rel);
   std::lock_guard lock(observers_mu_);
   for (const StepObserver& observer : observers_) observer(record_);

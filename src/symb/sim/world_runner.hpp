@@ -2,7 +2,9 @@
 // robots' nodes run on (virtual-time or threads), ticking at the control period, and each tick:
 //   1. gives every robot the newest command of its SimWheels,
 //   2. steps the world by one period,
-//   3. publishes every robot's IR readings to its SimIrSensor, stamped with the node time,
+//   3. publishes every robot's IR readings to its SimIrSensor, stamped with the node time, and
+//      its pose and ground readings to its SimPoseSensor and SimGroundSensor when a task listens
+//      to them (most control systems do not: then they cost nothing),
 //   4. hands a StepRecord (poses, IR, wheel speeds, contacts) to the observers (CSV writers,
 //      trajectory pictures, fitness functions).
 //
@@ -39,8 +41,9 @@
 namespace symb::sim {
 
 struct RobotStep {
-  RobotState state;  // pose after the step; wheel speeds used during it; contacts
-  IrReadings ir{};   // what was published to the robot's SimIrSensor
+  RobotState state;         // pose after the step; wheel speeds used during it; contacts
+  IrReadings ir{};          // what was published to the robot's SimIrSensor
+  GroundReadings ground{};  // the floor under its ground sensors (ground_model.hpp)
 };
 
 struct StepRecord {
@@ -75,6 +78,8 @@ class WorldRunner final : private kernel::Activity {
   // The robot's devices, to hand to its node's tasks. Throw std::out_of_range for a bad index.
   std::shared_ptr<SimIrSensor> ir_sensor(std::size_t robot) const;
   std::shared_ptr<SimWheels> wheels(std::size_t robot) const;
+  std::shared_ptr<SimPoseSensor> pose_sensor(std::size_t robot) const;
+  std::shared_ptr<SimGroundSensor> ground_sensor(std::size_t robot) const;
 
   // Any time, any thread.
   void add_observer(StepObserver observer);
@@ -116,6 +121,8 @@ class WorldRunner final : private kernel::Activity {
   const double dt_;  // options_.period in seconds
   std::vector<std::shared_ptr<SimIrSensor>> ir_;
   std::vector<std::shared_ptr<SimWheels>> wheels_;
+  std::vector<std::shared_ptr<SimPoseSensor>> pose_;
+  std::vector<std::shared_ptr<SimGroundSensor>> ground_;
 
   std::mutex world_mu_;
   StepRecord record_;  // reused every tick; only the runner's context touches it

@@ -33,11 +33,30 @@ struct WallSpec {
   SourceLocation where;
 };
 
+// A marked floor area (tape, paint, a printed target) that the robots' ground sensors see: a
+// rectangle [x1, x2] x [y1, y2] or a disc. The plain floor reflects 1; a zone reflects `ground`
+// (0 black .. 1 white). Where zones overlap, the one listed last is on top.
+struct ZoneSpec {
+  enum class Shape : std::uint8_t { kRect, kCircle };
+  Shape shape = Shape::kRect;
+  double x1 = 0, y1 = 0, x2 = 0, y2 = 0;  // kRect, x1 <= x2 and y1 <= y2
+  double cx = 0, cy = 0, radius = 0;      // kCircle
+  double ground = 0.1;
+  std::string name;  // for pictures and messages; may be empty
+  SourceLocation where;
+
+  bool contains(double x, double y) const {
+    if (shape == Shape::kRect) return x >= x1 && x <= x2 && y >= y1 && y <= y2;
+    return (x - cx) * (x - cx) + (y - cy) * (y - cy) <= radius * radius;
+  }
+};
+
 struct WorldSpec {
   double width = 0;             // cm
   double height = 0;            // cm
   double wall_height = 10.0;    // cm; Thymio2's IR sensors see objects at least as high as they are
   std::vector<WallSpec> walls;  // inner walls; the arena's four sides are always walled
+  std::vector<ZoneSpec> zones;  // marked floor areas
 };
 
 // The robot models a world can hold.
