@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/shell/shell.hpp"
 #include "symb/sim/scenario_session.hpp"
 
 namespace symb::sim {
@@ -100,6 +101,37 @@ TEST(AhhsScenario, OneTaskPerCompartmentDrivesTheSameTrajectory) {
     ASSERT_EQ(a.poses[i].theta, b.poses[i].theta) << "step " << i;
   }
   EXPECT_GT(a.distance, 300.0);
+}
+
+// Runtime rewiring through the command shell, as a person would do it: the one-task controller is
+// replaced by compartment tasks and a mixer while the world runs, and the robot drives on.
+TEST(AhhsScenario, TheShellSplitsTheControllerIntoCompartmentsAtRuntime) {
+  auto sc = load_scenario(kFile);
+  ASSERT_TRUE(sc.ok()) << sc.error();
+  kernel::VirtualTimeExecutor executor;
+  auto session = ScenarioSession::create(*sc, executor);
+  ASSERT_TRUE(session.ok()) << session.error();
+  (*session)->start();
+  shell::Shell shell((*session)->robot(0).node());
+  executor.run_for(5s);
+  for (const char* line :
+       {"delete controller", "create ahhs_compartment left network=ahhs/two_hormone.ahhs compartment=0",
+        "create ahhs_compartment right network=ahhs/two_hormone.ahhs compartment=1",
+        "create ahhs_mixer mixer actuators=2 actuator_scale=300", "hook ir left --port 0", "hook ir right --port 0",
+        "hook left right --port 1", "hook right left --port 1", "hook left mixer --port 2", "hook right mixer --port 2",
+        "hook mixer wheels"}) {
+    const auto reply = shell.execute(line);
+    ASSERT_TRUE(reply.ok) << line << ": " << reply.text;
+  }
+  const auto bad = shell.execute("create ahhs_compartment third network=ahhs/two_hormone.ahhs compartment=2");
+  EXPECT_FALSE(bad.ok);
+  EXPECT_NE(bad.text.find("compartment 2 is not in the network"), std::string::npos) << bad.text;
+  const double before = (*session)->world().state(0).distance;
+  executor.run_for(60s);
+  const RobotState now = (*session)->world().state(0);
+  EXPECT_GT(now.distance - before, 300.0) << "it drives on under the compartment tasks";
+  EXPECT_EQ(now.contact_steps, 0u);
+  (*session)->stop();
 }
 
 }  // namespace
