@@ -209,6 +209,26 @@ TEST(Subsumption, StopInZoneLatchesWhenAskedAndIgnoresMalformedReadings) {
   EXPECT_TRUE(rig.from(rig.wander, ms(120), ms(600)).empty());
 }
 
+TEST(Subsumption, StopInZoneWaitsUntilTheRobotHasBeenInTheZoneForAfter) {
+  Rig rig([](Time) { return std::nullopt; });
+  // In the zone at 300 .. 360, out at 390, in again from 420 on.
+  const os::TaskId ground =
+      *rig.node.create("ground", std::make_unique<ScriptedSensor>([](Time t) -> std::optional<Values> {
+                         const bool in = (t >= ms(300) && t <= ms(360)) || t >= ms(420);
+                         return in ? Values{0.1f, 0.1f} : Values{1.0f, 1.0f};
+                       }),
+                       {.priority = 5, .period = 30ms});
+  const os::TaskId stop = rig.make_layer("stop_in_zone", "stop", {{"after", "100ms"}});
+  ASSERT_TRUE(rig.node.hook(ground, stop));
+  ASSERT_TRUE(rig.node.hook(stop, rig.wheels_id, {.priority = 2, .suppress_window = 50ms}));
+  rig.ex.run_until(ms(700));
+  // 300 .. 360 is too short; from 420 the 100 ms have passed at 540.
+  EXPECT_EQ(rig.first_from(stop, ms(0)), ms(540));
+  EXPECT_EQ(rig.from(stop, ms(0), ms(700)).size(), 6u);     // 540 .. 690
+  EXPECT_EQ(rig.first_from(rig.wander, ms(400)), ms(420));  // wander drives on meanwhile
+  EXPECT_TRUE(rig.from(rig.wander, ms(540), ms(700)).empty());
+}
+
 TEST(Subsumption, LayersAddedRemovedAndReplacedAtRuntime) {
   Rig rig([](Time t) -> std::optional<Values> { return t >= ms(300) ? wall_left() : kClear; });  // wall from 300 on
   rig.ex.run_until(ms(150));

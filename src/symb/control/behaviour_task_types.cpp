@@ -111,10 +111,12 @@ kernel::Status register_behaviour_task_types(os::TaskTypeRegistry& registry, con
         {"zone_min", ParamType::kReal, d.zone_min, 0.0, 1.0, "lowest floor reflectance counted as the zone"},
         {"zone_max", ParamType::kReal, d.zone_max, 0.0, 1.0, "highest floor reflectance counted as the zone"},
         {"latch", ParamType::kBool, d.latch, std::nullopt, std::nullopt, "once in the zone, stop for good"},
+        {"after", ParamType::kDuration, d.after, 0.0, 3600.0,
+         "stop only once both readings have been in the zone this long (drives further in)"},
     });
     t.defaults = defaults(3, kernel::Duration{0}, 4);
     t.make = [](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-      StopInZoneOptions o{p.real("zone_min"), p.real("zone_max"), p.boolean("latch")};
+      StopInZoneOptions o{p.real("zone_min"), p.real("zone_max"), p.boolean("latch"), p.duration("after")};
       if (o.zone_min > o.zone_max) throw std::invalid_argument("zone_min must not exceed zone_max");
       return std::make_unique<StopInZoneLayer>(o, layer_options(p));
     };

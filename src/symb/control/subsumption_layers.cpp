@@ -146,7 +146,13 @@ void StopInZoneLayer::on_message(const os::Message& m) {
   const auto v = m.numbers();
   if (v.size() != 2 || !all_finite(v)) return;
   const auto inside = [&](float x) { return x >= o_.zone_min && x <= o_.zone_max; };
-  const bool in_zone = inside(v[0]) && inside(v[1]);
+  const kernel::Time t = now();
+  if (!(inside(v[0]) && inside(v[1]))) {
+    entered_.reset();
+  } else if (!entered_) {
+    entered_ = t;
+  }
+  const bool in_zone = entered_ && t - *entered_ >= o_.after;
   if (in_zone && o_.latch) latched_ = true;
   if (in_zone || latched_) {
     act(0, 0);
@@ -160,6 +166,8 @@ kernel::Status StopInZoneLayer::on_layer_parameter(std::string_view name, const 
     o_.zone_min = std::get<double>(value);
   } else if (name == "zone_max") {
     o_.zone_max = std::get<double>(value);
+  } else if (name == "after") {
+    o_.after = std::get<kernel::Duration>(value);
   } else if (name == "latch") {
     o_.latch = std::get<bool>(value);
     if (!o_.latch) latched_ = false;

@@ -106,12 +106,15 @@ class AvoidLayer : public SubsumptionLayer {
 };
 
 // Stops in a target zone: ground readings [left, right] (floor reflectance 0..1) in on port 0.
-// Active while both readings lie in [zone_min, zone_max]; then sends [0, 0] at each reading. With
-// `latch`, once active it stays active for good. Malformed readings are ignored.
+// Active while both readings lie in [zone_min, zone_max] and have done so for at least `after`
+// (so the lower layers carry the robot that much further in: the ground sensors sit at its front
+// edge); then sends [0, 0] at each reading. With `latch`, once active it stays active for good.
+// Malformed readings are ignored.
 struct StopInZoneOptions {
   double zone_min = 0;
   double zone_max = 0.5;
   bool latch = false;
+  kernel::Duration after{0};
 };
 class StopInZoneLayer : public SubsumptionLayer {
  public:
@@ -124,6 +127,7 @@ class StopInZoneLayer : public SubsumptionLayer {
  private:
   StopInZoneOptions o_;
   bool latched_ = false;
+  std::optional<kernel::Time> entered_;  // since when both readings are in the zone
 };
 
 }  // namespace symb::control

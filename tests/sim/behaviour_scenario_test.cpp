@@ -1,0 +1,93 @@
+// The behaviour family's shipped scenarios end to end, in process, over 10 minutes of virtual time
+// with fixed seeds: the subsumption robot (wander, avoid, stop_in_zone) ends up stopped inside the
+// target zone and stays there; the motor-schema robot (avoid_obstacle, move_to_goal, stay_on_path,
+// noise, schema_sum) reaches the goal at the far end of the serpentine maze. Neither touches a wall.
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/sim/scenario_session.hpp"
+
+namespace symb::sim {
+namespace {
+
+using namespace std::chrono_literals;
+
+Scenario load(const std::string& name) {
+  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
+  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
+  return s ? *s : Scenario{};
+}
+
+struct Outcome {
+  std::vector<Pose> poses;  // every step (30 ms)
+  std::uint64_t contact_steps = 0;
+  std::vector<float> last_probe;  // the last ("active") sample of the probed task
+};
+
+Outcome run(const Scenario& scenario, std::uint64_t seed, const std::string& probed_task = "") {
+  kernel::VirtualTimeExecutor executor;
+  SessionOptions options;
+  options.seed = seed;
+  auto session = ScenarioSession::create(scenario, executor, options);
+  EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
+  if (!session) return {};
+  Outcome out;
+  (*session)->runner().add_observer([&](const StepRecord& r) { out.poses.push_back(r.robots[0].state.pose); });
+  if (!probed_task.empty())
+    (*session)->robot(0).node().set_probe_sink([&](const os::ProbeSample& s) {
+      if (s.task == probed_task && s.channel == "active") out.last_probe.assign(s.values.begin(), s.values.end());
+    });
+  (*session)->start();
+  executor.run_for(10min);
+  (*session)->stop();
+  out.contact_steps = (*session)->world().state(0).contact_steps;
+  return out;
+}
+
+TEST(SubsumptionScenario, TheRobotStopsInTheTargetZoneAndStaysThere) {
+  const Scenario sc = load("subsumption.yaml");
+  ASSERT_EQ(sc.world.zones.size(), 1u);
+  const ZoneSpec& target = sc.world.zones[0];
+  for (std::uint64_t seed : {1, 2, 3}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Outcome o = run(sc, seed, "stop");
+    ASSERT_EQ(o.poses.size(), 20000u);
+    // The first step from which the robot's centre never leaves the zone again.
+    std::size_t settled = o.poses.size();
+    while (settled > 0 && target.contains(o.poses[settled - 1].x, o.poses[settled - 1].y)) --settled;
+    ASSERT_LT(settled, o.poses.size()) << "not in the zone at the end";
+    EXPECT_LT(settled, 15000u) << "arrived only after 7.5 minutes";
+    // Once stopped it stays: from 2 s after arriving to the end, it moves less than 1 mm.
+    const Pose& at = o.poses[std::min(settled + 67, o.poses.size() - 1)];
+    for (std::size_t k = settled + 67; k < o.poses.size(); ++k)
+      ASSERT_LT(std::hypot(o.poses[k].x - at.x, o.poses[k].y - at.y), 0.1) << "moved at step " << k;
+    EXPECT_EQ(o.last_probe, std::vector<float>{1.0f});  // the stop layer is the active one
+    EXPECT_EQ(o.contact_steps, 0u);
+  }
+}
+
+TEST(MotorSchemaScenario, TheRobotReachesTheGoalAtTheFarEndOfTheMaze) {
+  const Scenario sc = load("motor_schemas.yaml");
+  constexpr double kGoalX = 175, kGoalY = 25, kWithin = 15;
+  for (std::uint64_t seed : {1, 2, 3}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Outcome o = run(sc, seed);
+    ASSERT_EQ(o.poses.size(), 20000u);
+    std::optional<std::size_t> reached;
+    for (std::size_t k = 0; k < o.poses.size() && !reached; ++k)
+      if (std::hypot(o.poses[k].x - kGoalX, o.poses[k].y - kGoalY) <= kWithin) reached = k;
+    ASSERT_TRUE(reached.has_value());
+    EXPECT_LT(*reached, 4000u) << "took more than 2 minutes";  // measured: about 55 s for seeds 1 to 6
+    const Pose& end = o.poses.back();
+    EXPECT_LT(std::hypot(end.x - kGoalX, end.y - kGoalY), 6.0);  // and it stays there
+    EXPECT_EQ(o.contact_steps, 0u);
+  }
+}
+
+}  // namespace
+}  // namespace symb::sim
