@@ -201,5 +201,48 @@ TEST(NetworkHotSwap, ControllerReplacedByAnotherNetworkWhileTheRobotDrives) {
   EXPECT_EQ(session.world().state(0).contact_steps, 0u);
 }
 
+// An ANN circuit on the robot: stage 1 (the Braitenberg perceptron from its description file,
+// output=raw) feeds stage 2 (a 2-2 linear network that scales its inputs to wheel units), coupled
+// by a hook; then stage 1 is replaced by an mlp task with the same weights while the robot drives.
+TEST(NetworkCircuit, TwoStagesDriveTheMazeAndAStageIsSwappedAtRuntime) {
+  kernel::VirtualTimeExecutor executor;
+  Scenario sc = load("braitenberg.yaml");
+  sc.robots[0].tasks.clear();
+  sc.robots[0].hooks.clear();
+  auto s = ScenarioSession::create(sc, executor);
+  ASSERT_TRUE(s.ok()) << (s ? "" : s.error());
+  ScenarioSession& session = **s;
+  os::Node& node = session.robot(0).node();
+  const auto ir = node.find("ir"), wheels = node.find("wheels");
+  ASSERT_TRUE(ir && wheels);
+  auto stage1 = create(node, "network", "stage1", "description=network/braitenberg.net output=raw");
+  ASSERT_TRUE(stage1.ok()) << (stage1 ? "" : stage1.error());
+  auto stage2 = create(node, "mlp", "stage2",
+                       "inputs=2 layers=2 activation=linear input_scale=1 output_scale=500 weights=\"1 0 0  0 1 0\"");
+  ASSERT_TRUE(stage2.ok()) << (stage2 ? "" : stage2.error());
+  ASSERT_TRUE(node.hook(*ir, *stage1).ok());
+  ASSERT_TRUE(node.hook(*stage1, *stage2).ok());
+  ASSERT_TRUE(node.hook(*stage2, *wheels).ok());
+  session.start();
+  executor.run_for(60s);
+  const RobotState first = session.world().state(0);
+  EXPECT_GT(first.distance, 300.0);  // measured: 5.1 m in the first minute, 5.0 m in the second
+  EXPECT_EQ(first.contact_steps, 0u);
+
+  auto replacement = create(node, "mlp", "stage1b", "output=raw weights=network/braitenberg.w");
+  ASSERT_TRUE(replacement.ok()) << (replacement ? "" : replacement.error());
+  ASSERT_TRUE(node.hook(*ir, *replacement).ok());
+  ASSERT_TRUE(node.hook(*replacement, *stage2).ok());
+  ASSERT_TRUE(node.remove(*stage1).ok());
+  executor.run_for(60s);
+  session.stop();
+  const RobotState second = session.world().state(0);
+  EXPECT_GT(second.distance - first.distance, 300.0);
+  EXPECT_EQ(second.contact_steps, 0u);
+  const os::TaskInfo info = *node.info(*stage2);
+  EXPECT_EQ(info.traffic.attempted, info.traffic.delivered + info.traffic.dropped() + info.queue_depth);
+  EXPECT_EQ(info.traffic.dropped(), 0u);
+}
+
 }  // namespace
 }  // namespace symb::sim
