@@ -1,6 +1,7 @@
 #include "symb/apps/run/maze_svg.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "symb/apps/svg.hpp"
@@ -37,6 +38,26 @@ void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<co
                 "stroke-width=\"%.1f\"/>\n",
                 kMargin, kMargin, w, h, std::max(2.0, 2.0 * scale));
   out << buf;
+  // Floor zones under everything, in their own grey (0 black .. 1 the floor's white), labelled.
+  for (const sim::ZoneSpec& z : world.zones) {
+    const int g = static_cast<int>(std::lround(80 + 160 * std::clamp(z.ground, 0.0, 1.0)));
+    char fill[8];
+    std::snprintf(fill, sizeof fill, "#%02x%02x%02x", g, g, g);
+    if (z.shape == sim::ZoneSpec::Shape::kRect)
+      std::snprintf(buf, sizeof buf, "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"%s\"/>\n",
+                    px(z.x1), py(z.y2), (z.x2 - z.x1) * scale, (z.y2 - z.y1) * scale, fill);
+    else
+      std::snprintf(buf, sizeof buf, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%.1f\" fill=\"%s\"/>\n", px(z.cx), py(z.cy),
+                    z.radius * scale, fill);
+    out << buf;
+    if (!z.name.empty()) {
+      const double lx = z.shape == sim::ZoneSpec::Shape::kRect ? px(z.x1) + 3 : px(z.cx - z.radius) + 3;
+      const double ly = z.shape == sim::ZoneSpec::Shape::kRect ? py(z.y2) + 13 : py(z.cy) + 4;
+      std::snprintf(buf, sizeof buf, R"(<text x="%.1f" y="%.1f" font-family="sans-serif" font-size="11" fill="#000">)",
+                    lx, ly);
+      out << buf << svg_escape(z.name) << "</text>\n";
+    }
+  }
   out << "<g stroke=\"#333\" stroke-linecap=\"square\">\n";
   for (const sim::WallSpec& wall : world.walls) {
     std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke-width=\"%.1f\"/>\n",

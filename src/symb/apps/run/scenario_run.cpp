@@ -12,6 +12,8 @@
 
 #include "symb/apps/cli_args.hpp"
 #include "symb/apps/run/maze_svg.hpp"
+#include "symb/apps/run/probe_plot.hpp"
+#include "symb/apps/run/probe_recorder.hpp"
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/io/stdio_stream.hpp"
 #include "symb/kernel/thread_executor.hpp"
@@ -27,6 +29,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using kernel::Error;
+
+constexpr std::size_t kMaxProbePlots = 48;
 
 double seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
 
@@ -75,12 +79,15 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     result.out_dir = *options.out_under / scenario.name;
   const bool write_files = !result.out_dir.empty();
   std::ofstream csv;
+  std::ofstream probes_csv;
   if (write_files) {
     std::error_code ec;
     fs::create_directories(result.out_dir, ec);
     if (ec) return Error{"cannot create " + result.out_dir.string() + ": " + ec.message()};
     csv.open(result.out_dir / "steps.csv", std::ios::binary);
     if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
+    probes_csv.open(result.out_dir / "probes.csv", std::ios::binary);
+    if (!probes_csv) return Error{"cannot write " + (result.out_dir / "probes.csv").string()};
   }
 
   std::unique_ptr<kernel::Executor> executor;
@@ -103,6 +110,16 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   RunRecorder recorder(session->world(), write_files ? &csv : nullptr, options.csv_every,
                        seconds(scenario.control_period));
   session->runner().add_observer([&recorder](const sim::StepRecord& r) { recorder.on_step(r); });
+  // Controllers' internal state, only when there is a folder to put it in.
+  ProbeRecorder probes(write_files ? &probes_csv : nullptr);
+  if (write_files)
+    for (std::size_t i = 0; i < session->robot_count(); ++i) session->robot(i).node().set_probe_sink(probes.sink());
+  struct ProbeSinkGuard {  // the sinks point at `probes`, which goes before the session
+    sim::ScenarioSession& s;
+    ~ProbeSinkGuard() {
+      for (std::size_t i = 0; i < s.robot_count(); ++i) s.robot(i).node().set_probe_sink({});
+    }
+  } probe_sink_guard{*session};
 
   // The shell's tasks live on the robot's node: closed before the session (and its nodes) go.
   std::unique_ptr<shell::TcpShellServer> tcp_shell;
@@ -177,6 +194,8 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (write_files) {
     csv.close();
     if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
+    probes_csv.close();
+    if (!probes_csv) return Error{"cannot write " + (result.out_dir / "probes.csv").string()};
     std::ostringstream svg;
     write_maze_svg(svg, scenario.world, recorder.paths(),
                    scenario.name + ", seed " + std::to_string(result.seed) + ", " + fixed(result.simulated_seconds, 1) +
@@ -191,7 +210,22 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     for (const auto& [name, text] : files)
       if (auto st = write_file(result.out_dir / name, text); !st) return Error{st.error()};
     result.files = {result.out_dir / "trajectory.svg", result.out_dir / "steps.csv", result.out_dir / "summary.txt",
-                    result.out_dir / "syslog.txt"};
+                    result.out_dir / "syslog.txt", result.out_dir / "probes.csv"};
+    // A picture per probe series, for the first robots (a swarm would make hundreds).
+    std::size_t plots = 0;
+    for (const ProbeSeries* s : probes.series()) {
+      if (plots == kMaxProbePlots) break;
+      const fs::path dir = result.out_dir / "probes";
+      std::error_code ec;
+      fs::create_directories(dir, ec);
+      if (ec) return Error{"cannot create " + dir.string() + ": " + ec.message()};
+      std::ostringstream plot;
+      write_probe_svg(plot, *s);
+      const fs::path file = dir / probe_file_name(*s);
+      if (auto st = write_file(file, plot.str()); !st) return Error{st.error()};
+      result.files.push_back(file);
+      ++plots;
+    }
   }
   return result;
 }

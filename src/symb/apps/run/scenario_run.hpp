@@ -6,6 +6,8 @@
 //                   contact
 //   summary.txt     per robot: distance, contacts, time moving; sim speed as real-time factor
 //   syslog.txt      every robot's SysLog
+//   probes.csv      every sample the controllers publish about themselves (Task::probe)
+//   probes/*.svg    a line chart per probed series (robot, task, channel), for the first 48
 #pragma once
 
 #include <cstdint>

@@ -1,0 +1,90 @@
+// `symb run`'s output folder: besides the trajectory, steps and summary, every sample a controller
+// probes lands in probes.csv and each probed series gets a picture; the probe recorder thins long
+// series evenly and keeps every sample in the CSV.
+#include "symb/apps/run/scenario_run.hpp"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "symb/apps/run/probe_plot.hpp"
+#include "symb/apps/run/probe_recorder.hpp"
+
+namespace symb::apps::run {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST(ScenarioRun, ProbesOfTheControllersReachTheOutputFolder) {
+  const fs::path out = fs::temp_directory_path() / ("symb_run_probes_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  RunOptions o;
+  o.scenario_path = std::string(SYMB_SCENARIO_DIR) + "/ahhs_obstacle_avoidance.yaml";
+  o.duration = 3s;
+  o.out_dir = out;
+  auto r = run_scenario(o);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_EQ(r->steps, 100u);
+  const std::string csv = read(out / "probes.csv");
+  ASSERT_FALSE(csv.empty());
+  EXPECT_EQ(csv.rfind("time_s,robot,task,channel,values...\n", 0), 0u);
+  EXPECT_NE(csv.find(",thymio,controller,hormones/c0,"), std::string::npos) << csv.substr(0, 400);
+  // One picture per probed series, each an SVG with a polyline.
+  std::size_t pictures = 0;
+  for (const auto& e : fs::directory_iterator(out / "probes")) {
+    ++pictures;
+    const std::string svg = read(e.path());
+    EXPECT_NE(svg.find("<svg"), std::string::npos);
+    EXPECT_NE(svg.find("<polyline"), std::string::npos) << e.path();
+  }
+  EXPECT_GE(pictures, 2u);
+  fs::remove_all(out);
+}
+
+TEST(ProbeRecorder, KeepsEverySampleInTheCsvAndThinsTheSeriesEvenly) {
+  std::ostringstream csv;
+  ProbeRecorder rec(&csv);
+  const auto sink = rec.sink();
+  const std::size_t n = 3 * ProbeRecorder::kMaxPoints;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float v[2] = {static_cast<float>(i), -1.0f};
+    sink(os::ProbeSample{kernel::Time{std::chrono::milliseconds(30 * i)}, "r", "t", "ch", v});
+  }
+  sink(os::ProbeSample{kernel::Time{0}, "r", "u", "other", {}});
+  EXPECT_EQ(rec.samples(), n + 1);
+  const auto series = rec.series();
+  ASSERT_EQ(series.size(), 2u);
+  const ProbeSeries& s = *series[0];
+  EXPECT_EQ(s.samples, n);
+  EXPECT_EQ(s.width, 2u);
+  EXPECT_LT(s.times.size(), ProbeRecorder::kMaxPoints);
+  EXPECT_GT(s.times.size(), ProbeRecorder::kMaxPoints / 2);
+  // Evenly spaced: every kept sample is a multiple of the final stride apart.
+  const double step = s.values[1][0] - s.values[0][0];
+  EXPECT_GE(step, 2);
+  for (std::size_t i = 1; i < s.values.size(); ++i) EXPECT_EQ(s.values[i][0] - s.values[i - 1][0], step) << i;
+  // The CSV has every sample.
+  std::size_t lines = 0;
+  for (char c : csv.str()) lines += c == '\n';
+  EXPECT_EQ(lines, n + 2);  // header, n samples, the empty one
+  EXPECT_EQ(probe_file_name(*series[1]), "r.u.other.svg");
+  std::ostringstream svg;
+  write_probe_svg(svg, s);
+  EXPECT_NE(svg.str().find("ch[1]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace symb::apps::run
