@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/shell/shell.hpp"
 #include "symb/sim/scenario_session.hpp"
 
 namespace symb::sim {
@@ -69,6 +70,49 @@ TEST(SubsumptionScenario, TheRobotStopsInTheTargetZoneAndStaysThere) {
     EXPECT_EQ(o.last_probe, std::vector<float>{1.0f});  // the stop layer is the active one
     EXPECT_EQ(o.contact_steps, 0u);
   }
+}
+
+// Dynamic subsumption through the command shell, as a person would do it: the stop layer is
+// deleted at the start, so the robot crosses the target zone and wanders on; once it has left the
+// zone a new stop layer is created and hooked in above the others, and the robot then stops in it.
+TEST(SubsumptionScenario, AStopLayerAddedThroughTheShellAtRuntimeTakesOver) {
+  const Scenario sc = load("subsumption.yaml");
+  const ZoneSpec& target = sc.world.zones.at(0);
+  kernel::VirtualTimeExecutor executor;
+  auto session = ScenarioSession::create(sc, executor);
+  ASSERT_TRUE(session.ok()) << session.error();
+  std::vector<Pose> poses;
+  (*session)->runner().add_observer([&](const StepRecord& r) { poses.push_back(r.robots[0].state.pose); });
+  shell::Shell sh((*session)->robot(0).node());
+  const auto exec = [&](std::string_view line) {
+    const shell::Reply r = sh.execute(line);
+    EXPECT_TRUE(r.ok) << line << ": " << r.text;
+  };
+  exec("delete stop");
+  (*session)->start();
+  // Without the stop layer: on until the robot has crossed the zone and left it again.
+  bool crossed = false;
+  for (int second = 0; second < 600 && !(crossed && !target.contains(poses.back().x, poses.back().y)); ++second) {
+    executor.run_for(1s);
+    for (std::size_t k = poses.size() >= 34 ? poses.size() - 34 : 0; k < poses.size(); ++k)
+      crossed = crossed || target.contains(poses[k].x, poses[k].y);
+  }
+  ASSERT_TRUE(crossed) << "never reached the zone in 10 minutes";
+  ASSERT_FALSE(target.contains(poses.back().x, poses.back().y));
+  const Pose before = poses.back();
+  executor.run_for(1s);
+  EXPECT_GT(std::hypot(poses.back().x - before.x, poses.back().y - before.y), 3.0) << "still wandering";
+
+  exec("create stop_in_zone stop2 after=1500ms");
+  exec("hook ground stop2");
+  exec("hook stop2 wheels --priority 2 --suppress 100ms");
+  executor.run_for(10min);
+  (*session)->stop();
+  const Pose end = poses.back();
+  EXPECT_TRUE(target.contains(end.x, end.y)) << end.x << ", " << end.y;
+  const Pose& earlier = poses[poses.size() - 1 - 200];  // 6 s before the end
+  EXPECT_LT(std::hypot(end.x - earlier.x, end.y - earlier.y), 0.1);
+  EXPECT_EQ((*session)->world().state(0).contact_steps, 0u);
 }
 
 TEST(MotorSchemaScenario, TheRobotReachesTheGoalAtTheFarEndOfTheMaze) {
