@@ -10,11 +10,13 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "symb/control/control_task_types.hpp"
+#include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 
@@ -348,6 +350,53 @@ TEST(NetworkTask, ReplacedWhileInputsKeepComingNoStaleNoNaN) {
   ASSERT_TRUE(info);
   EXPECT_EQ(info->traffic.attempted, info->traffic.delivered + info->traffic.dropped() + info->queue_depth);
   EXPECT_EQ(info->traffic.dropped(), 0u);
+}
+
+// A sensor that sends the same vector at every tick (for the thread executor).
+class Pulse : public os::Task {
+ protected:
+  void on_tick() override { send(0, {0.5f, -0.5f}); }
+};
+
+TEST(NetworkTask, GenomesWrittenWhileItRunsUnderTheThreadExecutor) {
+  kernel::ThreadExecutor ex;
+  os::TaskTypeRegistry registry;
+  ASSERT_TRUE(register_control_task_types(registry, files()).ok());
+  os::Node node(ex, {.name = "bot", .types = &registry});
+  std::mutex mu;
+  std::size_t probes = 0;
+  node.set_probe_sink([&](const os::ProbeSample&) {
+    std::lock_guard lock(mu);
+    ++probes;
+  });
+  auto rec_task = std::make_unique<Recorder>();
+  Recorder* rec = rec_task.get();
+  const auto rec_id = *node.create("rec", std::move(rec_task), {.queue_capacity = 64});
+  const auto pulse = *node.create("pulse", std::make_unique<Pulse>(), {.period = 1ms});
+  auto a = os::parse_param_assignments("inputs=2 layers=\"3 2\" input_scale=1");
+  ASSERT_TRUE(a.ok());
+  const auto net = node.create("elman", "net", *a);
+  ASSERT_TRUE(net.ok()) << (net ? "" : net.error());
+  ASSERT_TRUE(node.hook(pulse, *net).ok());
+  ASSERT_TRUE(node.hook(*net, rec_id).ok());
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  int k = 0;
+  while (rec->entries().size() < 60 && std::chrono::steady_clock::now() < deadline) {
+    // New genomes from this thread while the network steps on its own.
+    std::string w;
+    for (int g = 0; g < 26; ++g)  // (2 + 3 + 1) * 3 + (3 + 1) * 2 w += std::to_string(0.01 * ((g + k) % 7)) + " ";
+      ASSERT_TRUE(node.set_parameter(*net, "weights", w).ok());
+    ++k;
+    std::this_thread::sleep_for(1ms);
+  }
+  const auto cmds = rec->entries();
+  node.clear();
+  EXPECT_GE(cmds.size(), 60u);
+  for (const auto& e : node.log().since(0)) EXPECT_EQ(e.text.find("weights:"), std::string::npos) << e.text;
+  for (const auto& c : cmds)
+    for (float v : c.values) EXPECT_TRUE(std::isfinite(v) && std::fabs(v) <= 500);
+  std::lock_guard lock(mu);
+  EXPECT_GT(probes, 0u);
 }
 
 }  // namespace

@@ -74,7 +74,7 @@ std::vector<ParamSpec> common_params() {
       {"output", ParamType::kString, std::string("wheels"), 1.0, 16.0,
        "wheels: [left, right] on port 0; raw: the output vector on port 0; both: wheels on 0, raw on 1"},
       {"input_port", ParamType::kInt, std::int64_t{0}, 0.0, 65535.0,
-       "the port input vectors arrive on (1 to read another network's raw outputs)"},
+       "the port input vectors arrive on (1 to read a network's raw outputs sent with output=both)"},
       {"warn_interval", ParamType::kDuration, d.warn_interval, 0.0, 3600.0, "at most one warning per interval"},
   };
 }
@@ -94,21 +94,14 @@ NetworkTaskOptions common_options(const os::ParamSet& p) {
 os::TaskType network_type(Kind kind, const std::shared_ptr<const ControlResources>& resources) {
   os::TaskType t;
   t.name = network::to_string(kind);
+  const char* io = "; input vector in on input_port, [left, right] wheel units or the raw outputs out (see output)";
   switch (kind) {
-    case Kind::kMlp:
-      t.doc =
-          "feed-forward network (perceptron / MLP): input vector in on port 0, [left, right] out on port 0, raw "
-          "outputs on port 1";
-      break;
+    case Kind::kMlp: t.doc = std::string("feed-forward network (perceptron / MLP)") + io; break;
     case Kind::kElman:
-      t.doc =
-          "Elman recurrent network (context units on the first hidden layer): input in on port 0, [left, right] out on "
-          "port 0, raw outputs on port 1";
+      t.doc = std::string("Elman recurrent network (context units on the first hidden layer)") + io;
       break;
     case Kind::kCtrnn:
-      t.doc =
-          "continuous-time recurrent network (Beer 1995, Euler step dt): input in on port 0, [left, right] (rates "
-          "centred) out on port 0, rates on port 1";
+      t.doc = std::string("continuous-time recurrent network (Beer 1995), one Euler step of dt per input") + io;
       break;
   }
   t.params = {

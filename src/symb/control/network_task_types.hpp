@@ -1,5 +1,12 @@
-// Task types for neural networks (MLP, Elman, CTRNN) and ANN circuits: the control layer's entries in a
-// TaskTypeRegistry, added by register_control_task_types(). See the family's docs for the types and their parameters.
+// Task types for neural networks and ANN circuits (docs/networks.md): the control layer's entries
+// in a TaskTypeRegistry, added by register_control_task_types():
+//
+//   mlp      feed-forward perceptron / MLP     inputs, layers, activation, weights, input_scale, ...
+//   elman    Elman recurrent network           the same
+//   ctrnn    continuous-time RNN (Beer 1995)   inputs, layers "N O", tau, dt, weights, ...
+//   network  any of them from a description    description, weights (override), ...
+//
+// Weight files and descriptions are references that ControlResources::read_program resolves.
 #pragma once
 
 #include "symb/control/control_task_types.hpp"
@@ -8,6 +15,7 @@
 
 namespace symb::control {
 
+// Adds the four types; fails when a name is already taken.
 kernel::Status register_network_task_types(os::TaskTypeRegistry& registry, const ControlResources& resources);
 
 }  // namespace symb::control
