@@ -75,10 +75,8 @@ void MotorSchema::evaluate() {
 }
 
 kernel::Status MotorSchema::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "gain") {
-    gain_ = std::get<double>(value);
-    return on_schema_parameter(name, value);
-  }
+  // The gain is shared: the base keeps it for gain(), a schema with its own copy updates that too.
+  if (name == "gain") gain_ = std::get<double>(value);
   return on_schema_parameter(name, value);
 }
 

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstddef>
+#include <numbers>
 
 namespace symb::control::behaviour {
 
@@ -24,8 +25,8 @@ inline constexpr std::array<IrMount, kIrCount> kIrMounts = {{
     {7.95, 0.0, 0.0},
     {7.5, -2.55, -0.34906},
     {6.2, -4.85, -0.69813},
-    {-2.95, 2.95, -3.14159265358979},
-    {-2.95, -2.95, -3.14159265358979},
+    {-2.95, 2.95, -std::numbers::pi},
+    {-2.95, -2.95, -std::numbers::pi},
 }};
 
 // The distance (cm, from the sensor) a reading stands for: kIrRange for a reading <= the response
