@@ -153,9 +153,8 @@ void expect_sound(const Scenario& sc) {
     for (const auto& h : r.hooks) {
       EXPECT_NE(h.from, h.to);
       for (const std::string* end : {&h.from, &h.to}) {
-        const bool known =
-            *end == kIrTaskName || *end == kWheelsTaskName ||
-            std::any_of(r.tasks.begin(), r.tasks.end(), [&](const TaskSpec& t) { return t.name == *end; });
+        const bool known = is_device_task_name(*end) || std::any_of(r.tasks.begin(), r.tasks.end(),
+                                                                    [&](const TaskSpec& t) { return t.name == *end; });
         EXPECT_TRUE(known) << *end;
       }
     }
