@@ -130,9 +130,15 @@ TEST(NetworkModel, GenomeSizesAndRoundTrip) {
   EXPECT_EQ(genome_size({Kind::kCtrnn, 7, {4, 2}, Activation::kTanh}), 4u * (7 + 4 + 1));
   Network n = make(Kind::kElman, 3, {2, 2});
   std::vector<float> g(n.genome_size());
+  EXPECT_FALSE(Network::from_genome({Kind::kElman, 3, {2, 2}, Activation::kTanh}, std::vector<float>(3)).ok());
   for (std::size_t k = 0; k < g.size(); ++k) g[k] = 0.1f * static_cast<float>(k) - 1.0f;
   ASSERT_TRUE(n.set_genome(g).ok());
   EXPECT_EQ(std::vector<float>(n.genome().begin(), n.genome().end()), g);
+  auto built = Network::from_genome({Kind::kElman, 3, {2, 2}, Activation::kTanh}, g);
+  ASSERT_TRUE(built.ok()) << built.error();
+  EXPECT_EQ(std::vector<float>(built->genome().begin(), built->genome().end()), g);
+  const std::vector<float> x{0.3f, -0.7f, 1.0f};
+  EXPECT_EQ(built.value().step(x)[1], n.step(x)[1]);
 }
 
 TEST(NetworkModel, BadGenomesAndTopologiesRefused) {

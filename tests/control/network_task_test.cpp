@@ -5,6 +5,7 @@
 // network while inputs keep coming.
 #include "symb/control/network_task.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -397,6 +398,28 @@ TEST(NetworkTask, GenomesWrittenWhileItRunsUnderTheThreadExecutor) {
     for (float v : c.values) EXPECT_TRUE(std::isfinite(v) && std::fabs(v) <= 500);
   std::lock_guard lock(mu);
   EXPECT_GT(probes, 0u);
+}
+
+TEST(NetworkTask, OutputsInZeroOneAreCentredForTheWheels) {
+  Rig rig;
+  // A ctrnn at rest: rates sigma(theta) = sigma(1), sigma(-1); wheels 500 (2 sigma - 1) = 500 tanh(theta / 2).
+  rig.network("ctrnn", "ct", "inputs=1 layers=\"2 2\" weights=\"0 0 0 1  0 0 0 -1\"");
+  // A sigmoid perceptron: 500 (2 sigma(x) - 1).
+  rig.network("mlp", "sg", "inputs=1 layers=2 activation=sigmoid input_scale=1 weights=\"1 0  -1 0\"");
+  rig.sensor->script(at(10), {0.0f});
+  rig.sensor->script(at(20), {2.0f});
+  rig.ex.run_until(at(20));
+  const auto cmds = rig.rec->entries();
+  ASSERT_EQ(cmds.size(), 4u);
+  std::vector<Vec> seen;
+  for (const auto& c : cmds) seen.push_back(c.values);
+  std::sort(seen.begin(), seen.end());
+  const float t1 = 500 * std::tanh(0.5f), t2 = 500 * std::tanh(1.0f);
+  // ctrnn twice (its input weights are 0: the state stays at rest), the sigmoid at 0 and at 2.
+  const std::vector<Vec> expect{{0, 0}, {t1, -t1}, {t1, -t1}, {t2, -t2}};
+  ASSERT_EQ(seen.size(), expect.size());
+  for (std::size_t k = 0; k < seen.size(); ++k)
+    for (int j = 0; j < 2; ++j) EXPECT_NEAR(seen[k][j], expect[k][j], 1e-3) << k;
 }
 
 }  // namespace

@@ -95,6 +95,13 @@ kernel::Result<Network> Network::create(Topology topology) {
   return Network(std::move(topology));
 }
 
+kernel::Result<Network> Network::from_genome(Topology topology, std::span<const float> genome) {
+  auto n = create(std::move(topology));
+  if (!n) return n;
+  if (auto st = n.value().set_genome(genome); !st) return Error{st.error()};
+  return n;
+}
+
 Network::Network(Topology t) : topology_(std::move(t)) {
   genome_.assign(control::network::genome_size(topology_), 0.0f);
   activations_.emplace_back(topology_.inputs, 0.0f);

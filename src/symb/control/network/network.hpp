@@ -65,6 +65,8 @@ class Network {
  public:
   // Checks the topology; weights start at zero, state at rest.
   static kernel::Result<Network> create(Topology topology);
+  // Builds a network straight from a genome (create() then set_genome()): how evolution makes one.
+  static kernel::Result<Network> from_genome(Topology topology, std::span<const float> genome);
 
   const Topology& topology() const { return topology_; }
   std::size_t genome_size() const { return genome_.size(); }
