@@ -40,7 +40,7 @@ kernel::Status check(const AhhsTaskOptions& o);
 // A warning written at most once per interval, saying how many occurrences it stands for.
 class WarningLimiter {
  public:
-  // True when a warning should be written now; held() then says how many it stands for.
+  // True when a warning should be written now; take_held() then says how many it stands for.
   bool note(kernel::Time now, kernel::Duration interval);
   std::uint64_t take_held() { return std::exchange(held_, 0); }
 
