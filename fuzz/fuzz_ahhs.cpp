@@ -34,8 +34,7 @@ void run(const Network& n) {
   if (n.compartments > 2000 || n.rules.size() > 2000) return;  // keep each input fast
   float sensors[kMaxSensorIndex];
   for (int t = 0; t < 100; ++t) {
-    for (std::size_t k = 0; k < kMaxSensorIndex; ++k)
-      sensors[k] = static_cast<float>((t * (k + 3)) % 101) / 100.0f;
+    for (std::size_t k = 0; k < kMaxSensorIndex; ++k) sensors[k] = static_cast<float>((t * (k + 3)) % 101) / 100.0f;
     m.value().step(sensors);
     for (std::uint32_t c = 0; c < m->compartments(); ++c)
       for (std::size_t h = 0; h < m->hormones(); ++h) {
