@@ -162,7 +162,9 @@ TEST(AvoidObstacleSchema, AsATaskEvaluatesAtEveryReadingAndProbesItsVector) {
     return t >= ms(90) ? ir_with(2, 5) : Values(7, 0.0f);
   });
   const auto schema = rig.make("avoid_obstacle", "avoid", {{"gain", "2"}});
-  auto [rec_id, rec] = rig.recorder("sum");
+  const auto recorded = rig.recorder("sum");  // no structured binding: lambdas capture rec (clang)
+  const auto rec_id = recorded.first;
+  const auto rec = recorded.second;
   ASSERT_TRUE(rig.node.hook(ir, schema));
   ASSERT_TRUE(rig.node.hook(schema, rec_id));
   std::vector<std::pair<std::string, Values>> probes;
@@ -189,7 +191,9 @@ TEST(MoveToGoalSchema, PointsTowardTheNextWaypointThenTheGoalInTheRobotFrame) {
       "move_to_goal", "goal",
       {{"gain", "0.8"}, {"goal_x", "100"}, {"goal_y", "0"}, {"via", "0,50; 50,50"}, {"reach", "10"}, {"arrive", "3"}},
       os::TaskOptions{.priority = 2, .period = 100ms});
-  auto [rec_id, rec] = rig.recorder("sum");
+  const auto recorded = rig.recorder("sum");  // no structured binding: lambdas capture rec (clang)
+  const auto rec_id = recorded.first;
+  const auto rec = recorded.second;
   ASSERT_TRUE(rig.node.hook(pose_task, schema));
   ASSERT_TRUE(rig.node.hook(schema, rec_id));
   const auto last = [&] { return rec->got.back().v; };
@@ -227,7 +231,9 @@ TEST(StayOnPathSchema, PullsTowardTheCentreLineProportionallyInsideAndFullyOutsi
   const auto schema =
       rig.make("stay_on_path", "path", {{"gain", "0.6"}, {"path", "0,0;100,0;100,100"}, {"width", "20"}},
                os::TaskOptions{.period = 0ns});
-  auto [rec_id, rec] = rig.recorder("sum");
+  const auto recorded = rig.recorder("sum");  // no structured binding: lambdas capture rec (clang)
+  const auto rec_id = recorded.first;
+  const auto rec = recorded.second;
   ASSERT_TRUE(rig.node.hook(pose_task, schema));
   ASSERT_TRUE(rig.node.hook(schema, rec_id));
   rig.ex.run_until(ms(30));
@@ -254,7 +260,9 @@ TEST(NoiseSchema, HoldsARandomDirectionOfMagnitudeGForItsPersistence) {
   Rig rig;
   const auto schema =
       rig.make("noise", "noise", {{"gain", "0.5"}, {"persistence", "300ms"}}, os::TaskOptions{.period = 100ms});
-  auto [rec_id, rec] = rig.recorder("sum");
+  const auto recorded = rig.recorder("sum");  // no structured binding: lambdas capture rec (clang)
+  const auto rec_id = recorded.first;
+  const auto rec = recorded.second;
   ASSERT_TRUE(rig.node.hook(schema, rec_id));
   rig.ex.run_until(ms(1200));
   ASSERT_EQ(rec->got.size(), 12u);
@@ -302,7 +310,9 @@ TEST(SchemaSum, SumsTheFreshVectorsAtItsOwnRate) {
   const auto b = rig.sensor("b", vector_until({0.3, -0.25}, ms(200)), 70ms);  // goes silent after 140
   const auto sum = rig.make("schema_sum", "sum", {{"speed", "400"}, {"turn_speed", "100"}, {"max_age", "200ms"}},
                             os::TaskOptions{.priority = 1, .period = 30ms, .queue_capacity = 16});
-  auto [rec_id, rec] = rig.recorder("wheels");
+  const auto recorded = rig.recorder("wheels");  // no structured binding: lambdas capture rec (clang)
+  const auto rec_id = recorded.first;
+  const auto rec = recorded.second;
   ASSERT_TRUE(rig.node.hook(a, sum));
   ASSERT_TRUE(rig.node.hook(b, sum));
   ASSERT_TRUE(rig.node.hook(sum, rec_id));
@@ -345,7 +355,9 @@ TEST(SchemaSum, SchemasAtTheirOwnRatesDriveOneRobot) {
   const auto goal = rig.make("move_to_goal", "goal", {{"goal_x", "100"}});
   const auto noise = rig.make("noise", "noise", {{"gain", "0.1"}}, os::TaskOptions{.period = 250ms});
   const auto sum = rig.make("schema_sum", "sum", {});
-  auto [rec_id, rec] = rig.recorder("wheels");
+  const auto recorded = rig.recorder("wheels");  // no structured binding: lambdas capture rec (clang)
+  const auto rec_id = recorded.first;
+  const auto rec = recorded.second;
   ASSERT_TRUE(rig.node.hook(ir, avoid));
   ASSERT_TRUE(rig.node.hook(pose, goal));
   for (auto s : {avoid, goal, noise}) ASSERT_TRUE(rig.node.hook(s, sum));
