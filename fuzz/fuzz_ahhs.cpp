@@ -12,21 +12,12 @@
 #include "symb/control/ahhs/mutation.hpp"
 #include "symb/control/ahhs/parser.hpp"
 
+#include "located_error.hpp"
+
+using symb::fuzz::located;
 using namespace symb::control::ahhs;
 
 namespace {
-
-bool located(const std::string& e) {
-  std::size_t i = 0;
-  auto digits = [&] {
-    const std::size_t s = i;
-    while (i < e.size() && std::isdigit(static_cast<unsigned char>(e[i]))) ++i;
-    return i > s;
-  };
-  if (!digits() || i >= e.size() || e[i++] != ':') return false;
-  if (!digits() || i + 1 >= e.size()) return false;
-  return e[i] == ':' && e[i + 1] == ' ';
-}
 
 void run(const Network& n) {
   auto m = Model::create(n);

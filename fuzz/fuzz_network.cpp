@@ -12,23 +12,10 @@
 
 #include "symb/control/network/description.hpp"
 
+#include "located_error.hpp"
+
+using symb::fuzz::located;
 using namespace symb::control::network;
-
-namespace {
-
-bool located(const std::string& e) {
-  std::size_t i = 0;
-  auto digits = [&] {
-    const std::size_t s = i;
-    while (i < e.size() && std::isdigit(static_cast<unsigned char>(e[i]))) ++i;
-    return i > s;
-  };
-  if (!digits() || i >= e.size() || e[i++] != ':') return false;
-  if (!digits() || i + 1 >= e.size()) return false;
-  return e[i] == ':' && e[i + 1] == ' ';
-}
-
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
