@@ -12,19 +12,19 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/control/behaviour/thymio_ir.hpp"
 #include "symb/control/control_task_types.hpp"
 #include "symb/control/schema_tasks.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
+#include "symb/robot/thymio_ir.hpp"
 
 namespace symb::control {
 namespace {
 
 using namespace std::chrono_literals;
-using behaviour::ir_distance;
-using behaviour::ir_reading;
 using kernel::Time;
+using robot::thymio::ir_distance;
+using robot::thymio::ir_reading;
 using Values = std::vector<float>;
 
 Time ms(long long n) { return std::chrono::milliseconds(n); }
@@ -99,9 +99,9 @@ Values ir_with(std::size_t sensor, double distance_cm) {
 
 TEST(ThymioIr, DistanceInvertsTheResponseCurve) {
   for (double d : {0.5, 1.0, 3.0, 7.0, 10.0, 13.5}) EXPECT_NEAR(ir_distance(ir_reading(d)), d, 1e-6) << d;
-  EXPECT_EQ(ir_distance(0), behaviour::kIrRange);
+  EXPECT_EQ(ir_distance(0), robot::thymio::kIrRange);
   EXPECT_EQ(ir_distance(4505), 0.0);
-  EXPECT_EQ(ir_distance(std::nan("")), behaviour::kIrRange);
+  EXPECT_EQ(ir_distance(std::nan("")), robot::thymio::kIrRange);
   EXPECT_NEAR(ir_reading(10), 4505.0 * (73 - 0.0009) / (100 - 0.6 + 73), 1e-9);
 }
 

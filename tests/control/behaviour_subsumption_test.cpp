@@ -10,7 +10,6 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/control/behaviour/thymio_ir.hpp"
 #include "symb/control/control_task_types.hpp"
 #include "symb/control/subsumption_layers.hpp"
 #include "symb/control/subsumption_rewiring.hpp"

@@ -6,9 +6,9 @@
 #include <numbers>
 #include <variant>
 
-#include "symb/control/behaviour/thymio_ir.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/node.hpp"
+#include "symb/robot/thymio_ir.hpp"
 
 namespace symb::control {
 
@@ -91,18 +91,18 @@ Vec2 AvoidObstacleSchema::vector_for(std::span<const float> ir, const AvoidObsta
   Vec2 sum;
   double largest = 0;
   Vec2 largest_dir;
-  const std::size_t n = std::min(ir.size(), behaviour::kIrCount);
+  const std::size_t n = std::min(ir.size(), robot::thymio::kIrCount);
   for (std::size_t i = 0; i < n; ++i) {
-    const double d = behaviour::ir_distance(ir[i]);
+    const double d = robot::thymio::ir_distance(ir[i]);
     double m = 0;
     if (d <= o.safety) {
       m = o.gain * o.near_gain;
-    } else if (d <= o.sphere && d < behaviour::kIrRange) {
+    } else if (d <= o.sphere && d < robot::thymio::kIrRange) {
       m = o.gain * (o.sphere - d) / (o.sphere - o.safety);
     }
     if (m <= 0) continue;
     // The obstacle sits d in front of its sensor; push away from it, seen from the robot's centre.
-    const auto& mount = behaviour::kIrMounts[i];
+    const auto& mount = robot::thymio::kIrMounts[i];
     const double px = mount.x + d * std::cos(mount.angle), py = mount.y + d * std::sin(mount.angle);
     const double len = std::hypot(px, py);
     const Vec2 away{-px / len, -py / len};
@@ -124,7 +124,7 @@ Vec2 AvoidObstacleSchema::vector_for(std::span<const float> ir, const AvoidObsta
 bool AvoidObstacleSchema::take(const os::Message& m) {
   if (m.payload.blob || m.port != kSchemaInputPort) return false;
   const auto v = m.numbers();
-  if (v.size() != behaviour::kIrCount || !all_finite(v)) return false;
+  if (v.size() != robot::thymio::kIrCount || !all_finite(v)) return false;
   ir_.assign(v.begin(), v.end());
   return true;
 }

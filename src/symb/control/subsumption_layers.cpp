@@ -4,7 +4,6 @@
 #include <cmath>
 #include <variant>
 
-#include "symb/control/behaviour/thymio_ir.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/node.hpp"
 

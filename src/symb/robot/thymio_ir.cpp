@@ -1,8 +1,8 @@
-#include "symb/control/behaviour/thymio_ir.hpp"
+#include "symb/robot/thymio_ir.hpp"
 
 #include <cmath>
 
-namespace symb::control::behaviour {
+namespace symb::robot::thymio {
 
 namespace {
 constexpr double kM = kIrMax, kX0 = 0.03, kC = 73;
@@ -24,4 +24,4 @@ double ir_distance(double reading) {
   return x < 0 ? 0 : (x > kIrRange ? kIrRange : x);
 }
 
-}  // namespace symb::control::behaviour
+}  // namespace symb::robot::thymio

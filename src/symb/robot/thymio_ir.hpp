@@ -1,16 +1,16 @@
-// Thymio II's 7 horizontal IR proximity sensors, as a controller sees them: where each looks (in
-// the robot frame: x forward, y left, angles counter-clockwise from x) and the distance a reading
-// stands for. The distance is the inverse of the response curve Enki's Thymio2 uses (and the
-// simulator's IrModel reproduces): F(x) = m (c - x0^2) / (x^2 - 2 x0 x + c), x in cm, m = 4505,
-// x0 = 0.03, c = 73, 0 beyond 14 cm. The control layer cannot see the simulator, so the numbers
-// are repeated here; they are the robot's, not the simulator's.
+// Thymio II's 7 horizontal IR proximity sensors: where each looks (in the robot frame: x forward,
+// y left, angles counter-clockwise from x), the response curve of one ray (Enki's Thymio2 model:
+// F(x) = m (c - x0^2) / (x^2 - 2 x0 x + c), x in cm, m = 4505, x0 = 0.03, c = 73, 0 beyond 14 cm)
+// and its inverse, the distance a reading stands for. The numbers are the robot's: the
+// simulator's IrModel computes readings with them and controllers (motor schemas) read distances
+// back, so both live here, in the robot layer, once.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <numbers>
 
-namespace symb::control::behaviour {
+namespace symb::robot::thymio {
 
 inline constexpr std::size_t kIrCount = 7;  // 0 far left .. 4 far right, 5 back left, 6 back right
 inline constexpr double kIrMax = 4505;      // the reading at contact
@@ -35,4 +35,4 @@ double ir_distance(double reading);
 // The reading an obstacle at `distance` cm gives (the forward curve; for tests and thresholds).
 double ir_reading(double distance);
 
-}  // namespace symb::control::behaviour
+}  // namespace symb::robot::thymio

@@ -6,19 +6,15 @@
 #include <iterator>
 #include <utility>
 
+#include "symb/robot/thymio_ir.hpp"
+
 namespace symb::sim {
 
 namespace {
 
-struct SensorMount {
-  double x, y, orientation;  // on the robot, cm and radians
-};
-// Enki's Thymio2 layout: 0 far left ... 4 far right, 5 back left, 6 back right.
-constexpr SensorMount kMounts[kIrCount] = {
-    {6.2, 4.85, 0.69813},   {7.5, 2.55, 0.34906}, {7.95, 0.0, 0.0},      {7.5, -2.55, -0.34906},
-    {6.2, -4.85, -0.69813}, {-2.95, 2.95, -M_PI}, {-2.95, -2.95, -M_PI},
-};
-constexpr double kM = 4505, kX0 = 0.03, kC = 73, kNoiseSd = 2.87;
+namespace thymio = robot::thymio;
+using thymio::kIrMounts;
+constexpr double kM = thymio::kIrMax, kNoiseSd = 2.87;
 constexpr double kAperture = 15.0 * M_PI / 180.0;
 constexpr double kMountReach = 8.0;  // cm: no sensor sits farther from the centre (7.95 at most)
 
@@ -29,7 +25,7 @@ const RayDirections& ray_directions() {
     RayDirections d{};
     for (std::size_t i = 0; i < kIrCount; ++i)
       for (int k = 0; k < 3; ++k) {
-        const double a = kMounts[i].orientation + (1 - k) * kAperture;
+        const double a = kIrMounts[i].angle + (1 - k) * kAperture;
         d[i][static_cast<std::size_t>(k)] = {std::cos(a), std::sin(a)};
       }
     return d;
@@ -37,11 +33,8 @@ const RayDirections& ray_directions() {
   return dirs;
 }
 
-double response(double x) {
-  if (x < kX0) return kM;
-  if (x > IrModel::kRange) return 0;
-  return kM * (kC - kX0 * kX0) / (x * x - 2 * kX0 * x + kC);
-}
+// Enki's response of one ray (and 0 beyond IrModel::kRange, which is the sensor's range).
+double response(double x) { return thymio::ir_reading(x); }
 
 // Distance along the ray (px, py) + t (ux, uy), t in [0, limit], to segment s; `limit` if none.
 double hit_segment(double px, double py, double ux, double uy, double ax, double ay, double bx, double by,
@@ -113,7 +106,7 @@ IrReadings IrModel::read(std::size_t self, std::span<const Pose> robots, kernel:
   const RayDirections& dirs = ray_directions();
   IrReadings out{};
   for (std::size_t i = 0; i < kIrCount; ++i) {
-    const SensorMount& m = kMounts[i];
+    const thymio::IrMount& m = kIrMounts[i];
     const double sx = p.x + c * m.x - s * m.y, sy = p.y + s * m.x + c * m.y;
     double d[3];
     for (int k = 0; k < 3; ++k) {

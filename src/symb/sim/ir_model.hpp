@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "symb/kernel/random_stream.hpp"
+#include "symb/robot/thymio_ir.hpp"
 #include "symb/sim/world.hpp"
 #include "symb/sim/world_spec.hpp"
 
@@ -34,8 +35,8 @@ class IrModel {
   // Readings of the robot at `self` among robots at `others` (self excluded by index).
   IrReadings read(std::size_t self, std::span<const Pose> robots, kernel::RandomStream& noise) const;
 
-  static constexpr double kRange = 14.0;       // cm
-  static constexpr double kRobotRadius = 5.5;  // cm, as seen by another robot's sensors
+  static constexpr double kRange = robot::thymio::kIrRange;  // cm
+  static constexpr double kRobotRadius = 5.5;                // cm, as seen by another robot's sensors
 
  private:
   // Distance to the nearest obstacle along (ux, uy) from (px, py); above kRange when none.

@@ -12,14 +12,15 @@
 #include <cstdint>
 #include <string>
 
+#include "symb/robot/thymio_ir.hpp"
 #include "symb/sim/world_spec.hpp"
 
 namespace symb::sim {
 
 // Thymio2's 7 horizontal IR proximity sensors: 0 far left, 1 left, 2 centre, 3 right, 4 far
 // right (front), 5 back left, 6 back right. Raw response, 0 (nothing in range) to about 4505.
-inline constexpr std::size_t kIrCount = 7;
-inline constexpr double kIrMax = 4505.0;
+inline constexpr std::size_t kIrCount = robot::thymio::kIrCount;
+inline constexpr double kIrMax = robot::thymio::kIrMax;
 // Thymio2's wheel speed limit in Enki, cm/s.
 inline constexpr double kMaxWheelSpeed = 16.6;
 
