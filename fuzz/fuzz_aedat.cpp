@@ -2,6 +2,7 @@
 // located as "LINE:COLUMN: " (header) or "byte OFFSET: " (records), never a crash, a hang or a
 // read past the input; whatever is accepted must write back and read again to the same events and
 // comments.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
