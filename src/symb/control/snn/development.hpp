@@ -99,6 +99,24 @@ class Embryo {
   std::vector<Cell> cells_;
   std::vector<std::int32_t> occupant_;      // per site: cell id or -1
   std::vector<std::vector<float>> fields_;  // per morphogen: width*height, row-major
+
+  std::size_t site(int x, int y) const { return static_cast<std::size_t>(y) * genome_.width + x; }
+  bool inside(int x, int y) const { return x >= 0 && x < genome_.width && y >= 0 && y < genome_.height; }
+  void add_cell(int x, int y, NeuronClass cls, float bias);
+  // Step 3: diffusion, decay, then the secretion collected in secretion_.
+  void update_fields();
+  void add_sources();
+  void warm_up();
+  // The site a move or divide gene points to from the cell's site (may be outside the grid).
+  void target_site(const Cell& cell, const Gene& gene, int& x, int& y) const;
+  // The living cell nearest to (x, y) within reach (ties: lowest id) other than `self` and the
+  // targets of `existing`; -1 if none.
+  std::int64_t nearest(int x, int y, std::int64_t self, const std::vector<Synapse>* existing) const;
+  void act(std::size_t cell, std::size_t gene, float x);
+
+  std::vector<float> secretion_, scratch_;  // morphogens * sites
+  std::vector<float> activation_;           // cells at the tick's start * genes
+  std::vector<std::uint8_t> expressed_;     // cells at the tick's start * genes: class matched
 };
 
 // Embryo::create + run + freeze.
