@@ -72,6 +72,11 @@ TEST(AedatReader, RecordsStartingWithHashAfterTheHeaderAreData) {
   ASSERT_TRUE(r.ok()) << r.error();
   ASSERT_EQ(r->events.size(), 2u);
   EXPECT_EQ(aer_module(r->events[1].address), static_cast<std::uint32_t>('#'));
+  // The first record must not start with '#' (module 35): jAER would take it for a header line,
+  // and so does this reader, which then finds no "\r\n" and says where.
+  std::string g = aedat_header({});
+  append_aedat_records(g, std::vector<AerEvent>{{aer_address('#', 1), 2}});
+  expect_error_starts(read_aedat(g), "2:9: ");
 }
 
 TEST(AedatReader, JaerStyleHeaderIsRead) {
