@@ -3,7 +3,9 @@
 //
 // Layout: ASCII header lines each starting with '#' and ending with "\r\n", the first exactly
 // "#!AER-DAT2.0"; then 8-byte records, big-endian: 32-bit address, 32-bit timestamp in us.
-// The header ends at the first byte that is not '#' at the start of a line.
+// The header ends at the first byte that is not '#' at the start of a line; so (in jAER too) a
+// first record whose address starts with byte 0x23 (module 35) would be taken for a header line:
+// writers that use module bits should not start a file with module 35.
 //
 // The control layer opens no files: the writer appends to a byte string the caller writes out
 // (symb run writes spikes.aedat to the run's output folder), the reader parses bytes the caller
@@ -21,7 +23,9 @@
 namespace symb::control::snn {
 
 struct AedatFile {
-  std::vector<std::string> header;  // the header lines without '#' and line ends, first excluded
+  // The header lines without '#', the one space after it and the line end; the version line
+  // excluded.
+  std::vector<std::string> header;
   std::vector<AerEvent> events;
 };
 
