@@ -122,6 +122,18 @@ TEST(DevelopmentFields, SecretionAfterOneTickEqualsTheFormula) {
   EXPECT_FLOAT_EQ(em.morphogen(0, 2, 1), 0.8f * (0.1f * s));
 }
 
+TEST(DevelopmentFields, OnceSecretesInItsFirstTickOnlyAndAtTheCellsCurrentSite) {
+  auto e = embryo(kStill +
+                  "seed at 2 2 class RS\ngene once when -3 do secrete m 4\ngene once when 1 do move east\n"
+                  "gene once when 1 do secrete m 1\n");
+  ASSERT_TRUE(e.ok()) << e.error();
+  Embryo& em = e.value();
+  em.tick();
+  em.tick();
+  EXPECT_FLOAT_EQ(em.morphogen(0, 2, 2), 4 * sigmoid(-3.0f));  // before the move, inactive all the same
+  EXPECT_FLOAT_EQ(em.morphogen(0, 3, 2), sigmoid(1.0f));       // after it
+}
+
 TEST(DevelopmentFields, DiffusionConservesMassWithoutDecayAndZeroFluxBorders) {
   auto e = embryo("grid 7 5\nmorphogen m diffusion 0.25 decay 0\nseed at 3 2 class RS\n");
   ASSERT_TRUE(e.ok()) << e.error();

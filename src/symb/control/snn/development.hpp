@@ -18,6 +18,22 @@
 //  3. the fields are updated with the collected secretion (plus noise).
 // `warmup` ticks before the first run only step 3 with the sources.
 //
+// Details of steps 1 and 2 (decided here, tested in snn_development_test.cpp):
+//  - `class C` reads the cell's class at the tick's start (a `class` action acts on restricted
+//    genes from the next tick);
+//  - `secrete` acts every tick, active or not (graded: amount * sigmoid(x)), at the cell's site at
+//    that moment (after a move earlier in the tick); with noise > 0 each secretion gets its own
+//    U[-noise, noise] draw, in cell and gene order (no draws when noise is 0: the seed is unused);
+//  - every other action acts only when active (x > 0); a `once` gene is spent the first tick it
+//    acts: for actions the first tick it is active even if the action could not take effect (a
+//    blocked move), for `secrete` its first tick;
+//  - move/divide DIR: the target site is chosen first (up/down: the best of the existing
+//    neighbours, ties north, east, south, west, and only if strictly better than here), then the
+//    action happens only if that site is inside the grid and free;
+//  - a daughter gets a fresh cell (id = cells().size(), no spent genes) and acts from the next tick;
+//    at most 65536 cells are ever made (living and dead): further divisions do nothing.
+//  - "within reach" is inclusive: distance <= reach.
+//
 // grow up|down NAME weight W delay D: from the cell's site, walk to the neighbour with the
 // highest (lowest) NAME while it is strictly higher (lower) than the current site (ties: north,
 // east, south, west); the synapse goes to the living cell nearest the walk's end (Euclidean,
@@ -29,7 +45,7 @@
 //
 // freeze(): the living cells in id order become the neurons; their synapses to living cells the
 // network's; inputs and outputs map each channel site to the living cell nearest to it within
-// `reach` (ties: lowest id), or to nothing.
+// `reach` (ties: lowest id), or to nothing; a channel lists each neuron once, in site order.
 #pragma once
 
 #include <cstdint>

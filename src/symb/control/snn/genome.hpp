@@ -24,7 +24,8 @@
 // A gene's activation is x = B + sum W * m_NAME at the cell's site; it is active when x > 0.
 // `class C` restricts it to cells of that class; `once` lets it act at most once per cell.
 // ACTION is one of:
-//   secrete NAME AMOUNT             adds AMOUNT * sigmoid(x) of NAME at the site (every tick)
+//   secrete NAME AMOUNT             adds AMOUNT * sigmoid(x) of NAME at the site (every tick,
+//                                   active or not: graded expression)
 //   move DIR                        to the neighbouring site, when free and inside the grid
 //   divide DIR CLASS                a daughter of CLASS (same bias, no synapses) in that site
 //   die                             the cell and its synapses (in and out) go
@@ -37,8 +38,20 @@
 // here) or `down NAME` (the least). Names of morphogens are declared before use: [A-Za-z_][A-Za-z0-9_]*
 // up to 32 characters; neuron classes are RS IB CH FS LTS TC RZ (izhikevich.hpp).
 //
-// Every error starts with LINE:COLUMN of the offending token. to_text() writes a genome back in
-// this form such that parse_genome(to_text(g)) == g, exactly (numbers with enough digits).
+// A term W*NAME is one token (no spaces around '*'). Statements come in any order, except that a
+// morphogen is declared before a statement names it and `grid` comes before any site (X Y); each
+// statement other than morphogen, source, seed, input, output and gene appears at most once. A line
+// is at most 1024 characters, a name at most 32. Numbers: every real within +-kMaxGenomeNumber,
+// except seed bias and `bias VALUE` (+-kMaxAbsBias, so the grown network is valid), the grown
+// weight W (+-kMaxGrownWeight), delay D (0..kMaxDelay), noise and reach (0..kMaxGenomeNumber).
+// An input/output channel may be placed at several sites. A genome may have no genes.
+//
+// Every error starts with LINE:COLUMN of the offending token (for a missing argument: just after
+// the statement's last token; for a missing `grid` or seed: the end of the text). to_text() writes
+// every field (defaults too, numbers in std::to_chars' shortest exact form) such that
+// parse_genome(to_text(g)) == g bit for bit for every g that passes check_genome(). For that,
+// check_genome() also requires a gene's fields its action does not use to hold their defaults
+// (direction kNorth, morphogen -1, cls kRS, amount 0, delay 0): the text could not express them.
 #pragma once
 
 #include <cstdint>
