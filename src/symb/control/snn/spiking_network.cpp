@@ -40,16 +40,16 @@ kernel::Status check_spec(const NetworkSpec& spec) {
     return kernel::Error{"too many synapses (" + std::to_string(spec.synapses.size()) + ")"};
   for (std::size_t k = 0; k < spec.synapses.size(); ++k) {
     const Synapse& s = spec.synapses[k];
-    const std::string where = "synapse " + std::to_string(k) + ": ";
+    auto where = [k] { return "synapse " + std::to_string(k) + ": "; };  // built only on an error
     if (s.source >= n)
-      return kernel::Error{where + "source " + std::to_string(s.source) + " out of range " + neuron_count(n)};
+      return kernel::Error{where() + "source " + std::to_string(s.source) + " out of range " + neuron_count(n)};
     if (s.target >= n)
-      return kernel::Error{where + "target " + std::to_string(s.target) + " out of range " + neuron_count(n)};
+      return kernel::Error{where() + "target " + std::to_string(s.target) + " out of range " + neuron_count(n)};
     if (!std::isfinite(s.weight) || std::abs(s.weight) > kMaxAbsWeight)
-      return kernel::Error{where + "weight " + std::to_string(s.weight) + " is not a finite number within +-" +
+      return kernel::Error{where() + "weight " + std::to_string(s.weight) + " is not a finite number within +-" +
                            std::to_string(static_cast<int>(kMaxAbsWeight))};
     if (s.delay > kMaxDelay)
-      return kernel::Error{where + "delay " + std::to_string(s.delay) + " ms out of range (0.." +
+      return kernel::Error{where() + "delay " + std::to_string(s.delay) + " ms out of range (0.." +
                            std::to_string(kMaxDelay) + ")"};
   }
   return kernel::Status::success();
@@ -173,11 +173,12 @@ std::span<const std::uint32_t> SpikingNetwork::step() {
   // (2) Their pulses into the ring slot of step t + delay (delay 0: this step's slot).
   float* const ring = ring_.data();
   const std::uint64_t t = time_ms_;
-  for (const std::uint32_t j : fired_) {
-    const std::uint32_t end = row_start_[j + 1];
-    for (std::uint32_t k = row_start_[j]; k < end; ++k) {
-      const std::size_t slot = static_cast<std::size_t>((t + delays_[k]) & (kRingSlots - 1));
-      ring[slot * n + targets_[k]] += weights_[k];
+  if (!fired_.empty()) {
+    float* slot_of_delay[kRingSlots];
+    for (std::size_t k = 0; k < kRingSlots; ++k) slot_of_delay[k] = ring + ((t + k) & (kRingSlots - 1)) * n;
+    for (const std::uint32_t j : fired_) {
+      const std::uint32_t end = row_start_[j + 1];
+      for (std::uint32_t k = row_start_[j]; k < end; ++k) slot_of_delay[delays_[k]][targets_[k]] += weights_[k];
     }
   }
   // (3)-(5) Reset the fired, sum the currents, integrate, clear the input and this step's slot.
