@@ -8,6 +8,7 @@
 #include "symb/control/mdl2e/compiler.hpp"
 #include "symb/control/mdl2e_task.hpp"
 #include "symb/control/network_task_types.hpp"
+#include "symb/control/snn_task_types.hpp"
 
 namespace symb::control {
 
@@ -66,7 +67,8 @@ kernel::Status register_control_task_types(os::TaskTypeRegistry& registry, Contr
   if (auto st = registry.add(std::move(mdl2e_type)); !st) return st;
   if (auto st = register_ahhs_task_types(registry, *shared); !st) return st;
   if (auto st = register_network_task_types(registry, *shared); !st) return st;
-  return register_behaviour_task_types(registry, *shared);
+  if (auto st = register_behaviour_task_types(registry, *shared); !st) return st;
+  return register_snn_task_types(registry, *shared);
 }
 
 }  // namespace symb::control

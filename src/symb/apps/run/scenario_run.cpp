@@ -15,6 +15,7 @@
 #include "symb/apps/run/probe_plot.hpp"
 #include "symb/apps/run/probe_recorder.hpp"
 #include "symb/apps/run/run_recorder.hpp"
+#include "symb/apps/run/spike_recorder.hpp"
 #include "symb/io/stdio_stream.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
@@ -111,9 +112,18 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
                        seconds(scenario.control_period));
   session->runner().add_observer([&recorder](const sim::StepRecord& r) { recorder.on_step(r); });
   // Controllers' internal state, only when there is a folder to put it in.
+  // Spiking networks' spikes and layouts go to their own recorder (AEDAT, raster, network picture).
   ProbeRecorder probes(write_files ? &probes_csv : nullptr);
-  if (write_files)
-    for (std::size_t i = 0; i < session->robot_count(); ++i) session->robot(i).node().set_probe_sink(probes.sink());
+  SpikeRecorder spikes;
+  if (write_files) {
+    const os::ProbeSink sink = [&probes, &spikes](const os::ProbeSample& s) {
+      if (SpikeRecorder::takes(s.channel))
+        spikes.record(s);
+      else
+        probes.record(s);
+    };
+    for (std::size_t i = 0; i < session->robot_count(); ++i) session->robot(i).node().set_probe_sink(sink);
+  }
   struct ProbeSinkGuard {  // the sinks point at `probes`, which goes before the session
     sim::ScenarioSession& s;
     ~ProbeSinkGuard() {
@@ -211,6 +221,9 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
       if (auto st = write_file(result.out_dir / name, text); !st) return Error{st.error()};
     result.files = {result.out_dir / "trajectory.svg", result.out_dir / "steps.csv", result.out_dir / "summary.txt",
                     result.out_dir / "syslog.txt", result.out_dir / "probes.csv"};
+    auto spike_files = spikes.write(result.out_dir);
+    if (!spike_files) return Error{spike_files.error()};
+    result.files.insert(result.files.end(), spike_files->begin(), spike_files->end());
     // A picture per probe series, for the first robots (a swarm would make hundreds).
     std::size_t plots = 0;
     for (const ProbeSeries* s : probes.series()) {

@@ -8,6 +8,8 @@
 //   syslog.txt      every robot's SysLog
 //   probes.csv      every sample the controllers publish about themselves (Task::probe)
 //   probes/*.svg    a line chart per probed series (robot, task, channel), for the first 48
+//   spikes/         spiking networks: an AEDAT 2.0 file, a raster and the grown network's picture
+//                   per network task (spike_recorder.hpp)
 #pragma once
 
 #include <cstdint>

@@ -1,0 +1,241 @@
+#include "symb/control/spike_coding_tasks.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <string>
+
+#include "symb/os/message.hpp"
+
+namespace symb::control {
+
+using kernel::Error;
+using namespace std::chrono_literals;
+
+namespace {
+
+// The node time (us) of a wrapping AER timestamp: the instant nearest `now_us`.
+std::int64_t unwrap_us(std::uint32_t timestamp, std::int64_t now_us) {
+  return now_us + static_cast<std::int32_t>(timestamp - static_cast<std::uint32_t>(now_us));
+}
+
+// One rate-limited warning per interval, counting the ones it stands for.
+void warn(os::LogLevel level, kernel::Time now, kernel::Duration interval, bool& warned, kernel::Time& last,
+          std::uint64_t& held, const std::string& why, const std::function<void(os::LogLevel, std::string_view)>& log) {
+  ++held;
+  if (warned && now - last < interval) return;
+  warned = true;
+  last = now;
+  log(level, std::to_string(held) + " message" + (held == 1 ? "" : "s") + " ignored, latest: " + why);
+  held = 0;
+}
+
+}  // namespace
+
+kernel::Result<SpikeCoding> parse_spike_coding(std::string_view text) {
+  if (text == "current") return SpikeCoding::kCurrent;
+  if (text == "rate") return SpikeCoding::kRate;
+  return Error{"coding must be current or rate, got '" + std::string(text.substr(0, 40)) + "'"};
+}
+
+// ---- encoder ----
+
+kernel::Result<std::unique_ptr<SpikeEncoderTask>> SpikeEncoderTask::create(SpikeEncoderOptions options) {
+  if (!std::isfinite(options.input_scale)) return Error{"input_scale must be a finite number"};
+  if (!std::isfinite(options.gain) || std::fabs(options.gain) > 1000) return Error{"gain must be within +-1000"};
+  if (!std::isfinite(options.max_rate) || options.max_rate < 0 || options.max_rate > 1000)
+    return Error{"max_rate must be 0..1000 Hz (one event per ms at most)"};
+  if (options.window < 1ms || options.window > 10s) return Error{"window must be 1ms..10s"};
+  if (options.module > snn::kMaxModule) return Error{"module must be 0.." + std::to_string(snn::kMaxModule)};
+  return std::unique_ptr<SpikeEncoderTask>(new SpikeEncoderTask(options));
+}
+
+SpikeCodingStats SpikeEncoderTask::stats() const {
+  std::lock_guard lock(mu_);
+  return stats_;
+}
+
+void SpikeEncoderTask::ignore(const std::string& why) {
+  {
+    std::lock_guard lock(mu_);
+    ++stats_.ignored;
+  }
+  warn(os::LogLevel::kWarn, now(), options_.warn_interval, warned_, last_warning_, held_warnings_, why,
+       [this](os::LogLevel l, std::string_view t) { log(l, t); });
+}
+
+void SpikeEncoderTask::on_message(const os::Message& m) {
+  if (m.payload.blob) {
+    ignore("a blob (a sensor vector of numbers expected)");
+    return;
+  }
+  const std::span<const float> x = m.numbers();
+  if (x.empty()) {
+    ignore("an empty sensor vector");
+    return;
+  }
+  float s[os::Payload::kInlineValues];
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    if (!std::isfinite(x[k])) {
+      ignore("a sensor vector with a non-finite value at index " + std::to_string(k));
+      return;
+    }
+    s[k] = std::clamp(x[k] * options_.input_scale, 0.0f, 1.0f);
+  }
+  std::uint64_t events = 0;
+  if (options_.coding == SpikeCoding::kCurrent) {
+    float currents[os::Payload::kInlineValues];
+    for (std::size_t k = 0; k < x.size(); ++k) currents[k] = options_.gain * s[k];
+    if (probing()) probe("currents", std::span<const float>(currents, x.size()));
+    send(0, std::span<const float>(currents, x.size()));
+  } else {
+    std::vector<snn::AerEvent> out;
+    const std::int64_t ms = options_.window.count() / 1'000'000;
+    const std::int64_t now_us = now().count() / 1000;
+    for (std::int64_t t = 0; t < ms; ++t)
+      for (std::size_t k = 0; k < x.size(); ++k)
+        if (random().uniform() < static_cast<double>(options_.max_rate * s[k]) / 1000.0)
+          out.push_back({snn::aer_address(options_.module, static_cast<std::uint32_t>(k)),
+                         static_cast<std::uint32_t>(static_cast<std::uint64_t>(now_us + t * 1000))});
+    events = out.size();
+    if (probing()) {
+      float rates[os::Payload::kInlineValues];
+      for (std::size_t k = 0; k < x.size(); ++k) rates[k] = options_.max_rate * s[k];
+      probe("rates", std::span<const float>(rates, x.size()));
+    }
+    send(0, snn::aer_payload(std::move(out)));
+  }
+  std::lock_guard lock(mu_);
+  ++stats_.inputs;
+  ++stats_.sent;
+  stats_.events += events;
+}
+
+kernel::Status SpikeEncoderTask::on_parameter(std::string_view name, const os::ParamValue& value) {
+  SpikeEncoderOptions o = options_;
+  if (name == "coding") {
+    auto c = parse_spike_coding(std::get<std::string>(value));
+    if (!c) return Error{c.error()};
+    o.coding = *c;
+  } else if (name == "input_scale" || name == "gain" || name == "max_rate") {
+    const auto v = static_cast<float>(std::get<double>(value));
+    (name == "input_scale" ? o.input_scale : name == "gain" ? o.gain : o.max_rate) = v;
+  } else if (name == "window") {
+    o.window = std::get<kernel::Duration>(value);
+  } else if (name == "warn_interval") {
+    o.warn_interval = std::get<kernel::Duration>(value);
+  } else if (name == "module") {
+    o.module = static_cast<std::uint32_t>(std::get<std::int64_t>(value));
+  } else {
+    return os::Task::on_parameter(name, value);
+  }
+  auto checked = create(o);
+  if (!checked) return Error{checked.error()};
+  options_ = o;
+  return {};
+}
+
+// ---- decoder ----
+
+kernel::Result<std::unique_ptr<SpikeDecoderTask>> SpikeDecoderTask::create(SpikeDecoderOptions options) {
+  if (options.channels < 1 || options.channels > kMaxChannels)
+    return Error{"channels must be 1.." + std::to_string(kMaxChannels)};
+  if (!std::isfinite(options.gain) || !std::isfinite(options.offset)) return Error{"gain and offset must be finite"};
+  if (!std::isfinite(options.speed_limit) || options.speed_limit <= 0)
+    return Error{"speed_limit must be a positive number"};
+  if (options.window < 1ms || options.window > 60s) return Error{"window must be 1ms..60s"};
+  auto task = std::unique_ptr<SpikeDecoderTask>(new SpikeDecoderTask(options));
+  task->rates_.assign(options.channels, 0.0f);
+  return task;
+}
+
+SpikeCodingStats SpikeDecoderTask::stats() const {
+  std::lock_guard lock(mu_);
+  return stats_;
+}
+
+std::vector<float> SpikeDecoderTask::rates() const {
+  std::lock_guard lock(mu_);
+  return rates_;
+}
+
+void SpikeDecoderTask::ignore(const std::string& why) {
+  {
+    std::lock_guard lock(mu_);
+    ++stats_.ignored;
+  }
+  warn(os::LogLevel::kWarn, now(), options_.warn_interval, warned_, last_warning_, held_warnings_, why,
+       [this](os::LogLevel l, std::string_view t) { log(l, t); });
+}
+
+void SpikeDecoderTask::on_message(const os::Message& m) {
+  const snn::AerPacket* packet = snn::aer_of(m);
+  if (packet == nullptr) {
+    ignore("not an AER packet (output-channel spikes expected)");
+    return;
+  }
+  const std::int64_t now_us = now().count() / 1000;
+  std::uint64_t counted = 0;
+  for (const snn::AerEvent& e : packet->events) {
+    const std::uint32_t channel = snn::aer_neuron(e.address);
+    if (channel >= options_.channels) continue;
+    recent_.push_back({unwrap_us(e.timestamp_us, now_us), channel});
+    ++counted;
+  }
+  while (recent_.size() > kMaxWindowEvents) recent_.pop_front();
+  std::lock_guard lock(mu_);
+  ++stats_.inputs;
+  stats_.events += counted;
+}
+
+void SpikeDecoderTask::on_tick() {
+  const std::int64_t now_us = now().count() / 1000;
+  const std::int64_t window_us = options_.window.count() / 1000;
+  // Events arrive in time order per sender; drop the ones that left the window.
+  while (!recent_.empty() && recent_.front().at_us <= now_us - window_us) recent_.pop_front();
+  std::vector<std::uint32_t> counts(options_.channels, 0);
+  for (const Counted& c : recent_)
+    if (c.at_us > now_us - window_us && c.at_us <= now_us) ++counts[c.channel];
+  float out[kMaxChannels];
+  std::vector<float> rates(options_.channels);
+  std::uint64_t clamped = 0;
+  for (std::size_t c = 0; c < options_.channels; ++c) {
+    rates[c] = static_cast<float>(static_cast<double>(counts[c]) * 1e6 / static_cast<double>(window_us));
+    double v = options_.offset + options_.gain * rates[c];
+    if (!std::isfinite(v)) {
+      v = 0;
+      ++clamped;
+    } else if (std::fabs(v) > options_.speed_limit) {
+      v = std::clamp(v, -options_.speed_limit, options_.speed_limit);
+      ++clamped;
+    }
+    out[c] = static_cast<float>(v);
+  }
+  if (probing()) probe("rates", rates);
+  send(0, std::span<const float>(out, options_.channels));
+  std::lock_guard lock(mu_);
+  ++stats_.sent;
+  stats_.clamped += clamped;
+  rates_ = std::move(rates);
+}
+
+kernel::Status SpikeDecoderTask::on_parameter(std::string_view name, const os::ParamValue& value) {
+  SpikeDecoderOptions o = options_;
+  if (name == "gain" || name == "offset" || name == "speed_limit") {
+    (name == "gain" ? o.gain : name == "offset" ? o.offset : o.speed_limit) = std::get<double>(value);
+  } else if (name == "window") {
+    o.window = std::get<kernel::Duration>(value);
+  } else if (name == "warn_interval") {
+    o.warn_interval = std::get<kernel::Duration>(value);
+  } else if (name == "channels") {
+    return Error{"a running decoder keeps its channels: create a new task to change them"};
+  } else {
+    return os::Task::on_parameter(name, value);
+  }
+  auto checked = create(o);
+  if (!checked) return Error{checked.error()};
+  options_ = o;
+  return {};
+}
+
+}  // namespace symb::control
