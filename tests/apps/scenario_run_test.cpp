@@ -14,6 +14,7 @@
 
 #include "symb/apps/run/probe_plot.hpp"
 #include "symb/apps/run/probe_recorder.hpp"
+#include "symb/control/snn/aedat.hpp"
 
 namespace symb::apps::run {
 namespace {
@@ -51,6 +52,43 @@ TEST(ScenarioRun, ProbesOfTheControllersReachTheOutputFolder) {
     EXPECT_NE(svg.find("<polyline"), std::string::npos) << e.path();
   }
   EXPECT_GE(pictures, 2u);
+  fs::remove_all(out);
+}
+
+// A spiking controller (linda_maze.yaml): its spikes land in an AEDAT 2.0 file that reads back
+// with exactly the spikes the run counted, in time order, from neurons the grown network has;
+// beside it a raster and the grown network's picture.
+TEST(ScenarioRun, SpikingControllersWriteAedatRasterAndNetworkPicture) {
+  const fs::path out = fs::temp_directory_path() / ("symb_run_spikes_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  RunOptions o;
+  o.scenario_path = std::string(SYMB_SCENARIO_DIR) + "/linda_maze.yaml";
+  o.duration = 5s;
+  o.out_dir = out;
+  auto r = run_scenario(o);
+  ASSERT_TRUE(r.ok()) << r.error();
+  const fs::path dir = out / "spikes";
+  const std::string bytes = read(dir / "thymio_controller.aedat");
+  auto file = control::snn::read_aedat(bytes);
+  ASSERT_TRUE(file.ok()) << file.error();
+  ASSERT_GT(file->events.size(), 100u) << "the motor neurons fire tonically";
+  std::uint32_t last = 0;
+  for (const control::snn::AerEvent& e : file->events) {
+    EXPECT_LT(control::snn::aer_neuron(e.address), 7u);  // the avoider genome grows 7 neurons
+    EXPECT_GE(e.timestamp_us, last);
+    EXPECT_LT(e.timestamp_us, 5'000'000u);
+    last = e.timestamp_us;
+  }
+  // The run's own count of spikes: the rate probe (Hz per neuron per 10 ms batch) summed back.
+  double counted = 0;
+  std::istringstream csv(read(out / "probes.csv"));
+  for (std::string line; std::getline(csv, line);)
+    if (line.find(",thymio,controller,rate,") != std::string::npos)
+      counted += std::stod(line.substr(line.rfind(',') + 1)) * 7 * 0.010;
+  EXPECT_NEAR(counted, static_cast<double>(file->events.size()), 1.0);
+  const std::string network = read(dir / "thymio_controller_network.svg");
+  EXPECT_NE(network.find("7 neurons, 10 synapses"), std::string::npos) << network.substr(0, 300);
+  EXPECT_NE(read(dir / "thymio_controller_raster.svg").find("<circle"), std::string::npos);
   fs::remove_all(out);
 }
 

@@ -17,6 +17,7 @@
 #include "symb/control/snn_task_types.hpp"
 #include "symb/control/spike_coding_tasks.hpp"
 #include "symb/control/spiking_network_task.hpp"
+#include "symb/io/bytes.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 
@@ -356,6 +357,104 @@ TEST(SpikeDecoder, RatesOverTheWindowBecomeClampedWheelCommands) {
   ASSERT_EQ(cmds.size(), 3u);  // at 30, 60, 90 ms (a period after creation, then every period)
   EXPECT_EQ(cmds[0].values, (std::vector<float>{-100.0f, -100.0f}));  // silent: the offset
   EXPECT_EQ(cmds[2].values, (std::vector<float>{-100.0f + 10 * 50.0f, 450.0f}));
+}
+
+// Spikes between nodes: node A's network sends its output spikes through an aer_codec as bytes; a
+// link (here: whatever node A's link task receives is posted into node B) carries them to node
+// B's aer_codec, which hands packets to node B's network as input events. Every output spike of A
+// arrives in B bit-identical (module bits included), and B's input neuron answers each one.
+TEST(AerAcrossNodes, SpikesCrossAByteLinkAndDriveTheOtherNodesNetwork) {
+  kernel::VirtualTimeExecutor ex;
+  os::TaskTypeRegistry registry;
+  ASSERT_TRUE(register_control_task_types(registry, files()).ok());
+  os::Node a(ex, os::NodeConfig{.name = "a", .seed = 1, .types = &registry});
+  os::Node b(ex, os::NodeConfig{.name = "b", .seed = 2, .types = &registry});
+  auto make = [](os::Node& node, std::string_view type, std::string name, std::string_view params) {
+    auto p = os::parse_param_assignments(params);
+    EXPECT_TRUE(p.ok());
+    auto id = node.create(type, std::move(name), *p);
+    EXPECT_TRUE(id.ok()) << (id ? "" : id.error());
+    return *id;
+  };
+  // A: a relay network (input channel 0 held at 20 -> neuron 0 -> neuron 1 = output channel 0).
+  SpikingNetworkTaskOptions o;
+  o.module = 3;
+  auto net_a_task = SpikingNetworkTask::create(relay_network(), o);
+  ASSERT_TRUE(net_a_task.ok());
+  const auto net_a = *a.create("net", std::move(net_a_task).value(), {.period = 10ms});
+  const auto codec_a = make(a, "aer_codec", "codec", "");
+  os::HookOptions port1;
+  port1.port = kOutputSpikesPort;
+  ASSERT_TRUE(a.hook(net_a, codec_a, port1).ok());
+  // The link: node A's bytes, posted into node B's codec.
+  const auto codec_b = make(b, "aer_codec", "codec", "");
+  class Link : public os::Task {
+   public:
+    Link(os::Node& to, os::TaskId id) : to_(to), id_(id) {}
+    std::vector<std::vector<std::byte>> carried;
+
+   protected:
+    void on_message(const os::Message& m) override {
+      if (const io::Bytes* bytes = io::bytes_of(m)) carried.push_back(bytes->data);
+      os::Message copy = m;
+      copy.source = {};
+      ASSERT_TRUE(to_.post(id_, copy).ok());
+    }
+
+   private:
+    os::Node& to_;
+    os::TaskId id_;
+  };
+  auto link_task = std::make_unique<Link>(b, codec_b);
+  Link* link = link_task.get();
+  const auto link_id = *a.create("link", std::move(link_task), {.queue_capacity = 64});
+  os::HookOptions port0;
+  port0.port = kAerBytesPort;
+  ASSERT_TRUE(a.hook(codec_a, link_id, port0).ok());
+  // B: the relay network again; its input channel 0 takes the events (pulse 200: one spike each).
+  SpikingNetworkTaskOptions ob;
+  ob.pulse = 200;
+  auto net_b_task = SpikingNetworkTask::create(relay_network(), ob);
+  ASSERT_TRUE(net_b_task.ok());
+  auto* net_b_raw = net_b_task.value().get();
+  const auto net_b = *b.create("net", std::move(net_b_task).value(), {.period = 10ms});
+  auto rec_a = std::make_unique<Recorder>();
+  auto rec_b = std::make_unique<Recorder>();
+  Recorder* sent = rec_a.get();
+  Recorder* got = rec_b.get();
+  const auto rec_a_id = *a.create("rec", std::move(rec_a), {.queue_capacity = 256});
+  const auto rec_b_id = *b.create("rec", std::move(rec_b), {.queue_capacity = 256});
+  ASSERT_TRUE(a.hook(net_a, rec_a_id, port1).ok());
+  os::HookOptions packets;
+  packets.port = kAerPacketsPort;
+  ASSERT_TRUE(b.hook(codec_b, net_b, packets).ok());
+  ASSERT_TRUE(b.hook(codec_b, rec_b_id, packets).ok());
+  os::HookOptions all_spikes;
+  all_spikes.port = kAllSpikesPort;
+  ASSERT_TRUE(b.hook(net_b, rec_b_id, all_spikes).ok());
+  os::Message current;
+  current.payload = os::Payload{20.0f};
+  ASSERT_TRUE(a.post(net_a, current).ok());
+  ex.run_until(at(1000));
+
+  const std::vector<AerEvent> out_a = sent->events(kOutputSpikesPort);
+  ASSERT_GT(out_a.size(), 10u);
+  EXPECT_FALSE(link->carried.empty());
+  EXPECT_EQ(got->events(kAerPacketsPort), out_a) << "bit-identical across the link";
+  for (const AerEvent& e : out_a) EXPECT_EQ(snn::aer_module(e.address), 3u);
+  const SpikingNetworkStats s = net_b_raw->stats();
+  EXPECT_EQ(s.input_events, out_a.size());
+  EXPECT_EQ(s.dropped_events, 0u);
+  // B's input neuron (0) answers the events: a spike no earlier than 1 ms after an event's own
+  // millisecond (events that arrive after B stepped past it act in B's next step: counted late),
+  // and one per event unless two land in one step.
+  std::vector<std::uint32_t> fired_b;
+  for (const AerEvent& e : got->events(kAllSpikesPort))
+    if (snn::aer_neuron(e.address) == 0) fired_b.push_back(e.timestamp_us / 1000);
+  EXPECT_GE(fired_b.size(), out_a.size() / 2);
+  EXPECT_LE(fired_b.size(), out_a.size());
+  ASSERT_FALSE(fired_b.empty());
+  EXPECT_GE(fired_b.front(), out_a.front().timestamp_us / 1000 + 1);
 }
 
 TEST(NetworkLayout, RoundTripsAndRejectsCutOrForeignValues) {

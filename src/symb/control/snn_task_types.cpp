@@ -196,6 +196,18 @@ os::TaskType decoder_type() {
   return t;
 }
 
+os::TaskType codec_type() {
+  os::TaskType t;
+  t.name = "aer_codec";
+  t.doc =
+      "AER packets in -> their wire form as bytes out on port 0 (for a stream task in frames mode); bytes in -> "
+      "AER packets out on port 1: spikes across byte links between nodes";
+  t.defaults.priority = 2;
+  t.defaults.queue_capacity = 16;
+  t.make = [](const os::ParamSet&) -> std::unique_ptr<os::Task> { return std::make_unique<AerCodecTask>(); };
+  return t;
+}
+
 }  // namespace
 
 kernel::Result<snn::GrownNetwork> grow_genome(std::string_view genome, std::uint64_t seed,
@@ -221,7 +233,7 @@ kernel::Result<snn::GrownNetwork> grow_genome(std::string_view genome, std::uint
 
 kernel::Status register_snn_task_types(os::TaskTypeRegistry& registry, const ControlResources& resources) {
   auto shared = std::make_shared<const ControlResources>(resources);
-  for (os::TaskType t : {linda_type(shared), izhikevich_type(), encoder_type(), decoder_type()})
+  for (os::TaskType t : {linda_type(shared), izhikevich_type(), encoder_type(), decoder_type(), codec_type()})
     if (auto st = registry.add(std::move(t)); !st) return st;
   return {};
 }

@@ -7,6 +7,7 @@
 //                                                                 network_seed, integration, module
 //   spike_encoder  sensor values to input currents or rate-coded AER events   coding, gain, ...
 //   spike_decoder  output-channel spike rates to wheel commands                gain, offset, ...
+//   aer_codec      AER packets to bytes and back, for spikes crossing byte links between nodes
 //
 // Network tasks step in 1 ms steps, in batches of their period (default 10 ms). Genomes are a
 // reference that ControlResources::read_program resolves, or the genome text itself (a value

@@ -5,6 +5,7 @@
 #include <functional>
 #include <string>
 
+#include "symb/io/bytes.hpp"
 #include "symb/os/message.hpp"
 
 namespace symb::control {
@@ -236,6 +237,51 @@ kernel::Status SpikeDecoderTask::on_parameter(std::string_view name, const os::P
   if (!checked) return Error{checked.error()};
   options_ = o;
   return {};
+}
+
+}  // namespace symb::control
+
+namespace symb::control {
+
+SpikeCodingStats AerCodecTask::stats() const {
+  std::lock_guard lock(mu_);
+  return stats_;
+}
+
+void AerCodecTask::ignore(const std::string& why) {
+  {
+    std::lock_guard lock(mu_);
+    ++stats_.ignored;
+  }
+  warn(os::LogLevel::kWarn, now(), warn_interval_, warned_, last_warning_, held_warnings_, why,
+       [this](os::LogLevel l, std::string_view t) { log(l, t); });
+}
+
+void AerCodecTask::on_message(const os::Message& m) {
+  if (const snn::AerPacket* packet = snn::aer_of(m)) {
+    const std::vector<std::byte> wire = snn::encode_aer(packet->events);
+    send(kAerBytesPort, io::bytes_payload(wire));
+    std::lock_guard lock(mu_);
+    ++stats_.inputs;
+    ++stats_.sent;
+    stats_.events += packet->events.size();
+    return;
+  }
+  if (const io::Bytes* bytes = io::bytes_of(m)) {
+    auto events = snn::decode_aer(bytes->data);
+    if (!events) {
+      ignore("bytes that are no AER packet: " + events.error());
+      return;
+    }
+    const std::size_t n = events->size();
+    send(kAerPacketsPort, snn::aer_payload(std::move(events).value()));
+    std::lock_guard lock(mu_);
+    ++stats_.inputs;
+    ++stats_.sent;
+    stats_.events += n;
+    return;
+  }
+  ignore("neither an AER packet nor bytes");
 }
 
 }  // namespace symb::control

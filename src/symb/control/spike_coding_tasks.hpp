@@ -15,12 +15,15 @@
 //   the last `window` per second, clamped to +-speed_limit (so a silent network drives at
 //   `offset`). Foreign messages are counted and ignored with a rate-limited warning; nothing NaN
 //   ever leaves either task.
+// AerCodecTask (type aer_codec, at the end of this file) turns packets into bytes and back, for
+// spikes that cross a byte link to another node.
 #pragma once
 
 #include <cstdint>
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "symb/control/snn/aer.hpp"
@@ -111,6 +114,36 @@ class SpikeDecoderTask : public os::Task {
   mutable std::mutex mu_;
   SpikeCodingStats stats_;
   std::vector<float> rates_;
+};
+
+}  // namespace symb::control
+
+namespace symb::control {
+
+// AerCodecTask (type aer_codec): the bridge between spike packets and bytes, so spikes can leave a
+// node over any byte link (a StreamTask in frames mode on a serial line, TCP, CAN) and enter
+// another node: an AER packet in -> its wire form (snn::encode_aer) as io::Bytes on port 0
+// (kAerBytesPort); io::Bytes in -> decoded -> an AER packet on port 1 (kAerPacketsPort). Bytes
+// that do not decode are counted and ignored with a rate-limited warning naming the byte offset.
+inline constexpr os::Port kAerBytesPort = 0;
+inline constexpr os::Port kAerPacketsPort = 1;
+
+class AerCodecTask : public os::Task {
+ public:
+  SpikeCodingStats stats() const;
+
+ protected:
+  void on_message(const os::Message& m) override;
+
+ private:
+  void ignore(const std::string& why);
+
+  kernel::Duration warn_interval_ = std::chrono::seconds(1);
+  kernel::Time last_warning_{0};
+  bool warned_ = false;
+  std::uint64_t held_warnings_ = 0;
+  mutable std::mutex mu_;
+  SpikeCodingStats stats_;
 };
 
 }  // namespace symb::control

@@ -42,7 +42,9 @@ void print_help(std::ostream& out) {
       << "seed, same run, far faster than real time.\n\n"
       << "Options:\n"
       << describe_options(kOptions) << "\n"
-      << "Writes trajectory.svg, steps.csv, summary.txt and syslog.txt into the output folder.\n"
+      << "Writes trajectory.svg, steps.csv, summary.txt and syslog.txt into the output folder, with\n"
+      << "probes.csv and probes/*.svg (controllers' internal state) and, for spiking controllers,\n"
+      << "spikes/ (an AEDAT 2.0 file, a raster and the grown network per network task).\n"
       << "A shell needs --realtime or --speed (a virtual-time run is over before anyone could type);\n"
       << "with --shell and neither, --speed 1 is implied.\n\n"
       << "Example: symb run scenarios/maze.yaml --out out/maze\n";
