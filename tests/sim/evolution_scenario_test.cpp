@@ -118,7 +118,7 @@ Evolved evolve(std::uint64_t seed, kernel::Duration budget, const evo::OnePlusOn
 // p = 0.2, genes in [-4, 4], 1 s recovery) except two, sigma_min and the evaluation time, which
 // the reference's robot world had tuned for its own setting. With sigma_min = 1e-4 and 10 s the
 // rule crawls by steps of 1e-4 and the maze's noise decides (measured, 4 h budget, seeds 1..8:
-// 0-103% of Braitenberg, 3 of 8 with contacts; docs/evolution.md). With sigma_min = 0.05 and 20 s
+// 0-103% of Braitenberg, 2 of 8 with contacts; docs/evolution.md). With sigma_min = 0.05 and 20 s
 // evaluations (tau is "the most influential parameter", 6.2):
 //   120 min budget, seeds 1..12: 95-163% of Braitenberg; 11 of 12 without a contact in the replay
 //   (seed 6: 95%, 4499 contact steps); seeds 1..5: 136, 155, 151, 154, 158%, no contact.
