@@ -25,10 +25,12 @@
 // Probes after every evaluation: "champion_fitness", "sigma", "evaluations", and "fitness" (the
 // candidate's measured fitness, its kind: 0 first, 1 challenger, 2 re-evaluation).
 // If a task it needs is missing it logs a warning and retries every tick (period 1 s); if a
-// controller cannot be created it logs the error and stops evolving (state kFailed).
+// controller cannot be created it logs the error and stops evolving (state kFailed). Removing
+// the evolution task leaves the candidate of the moment driving.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
