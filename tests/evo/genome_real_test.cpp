@@ -229,6 +229,11 @@ TEST(RealGenomeText, WeightsTextReadsBackToTheSameFloats) {
   ASSERT_EQ(parsed->size(), g.values.size());
   for (std::size_t i = 0; i < g.values.size(); ++i) EXPECT_EQ((*parsed)[i], static_cast<float>(g.values[i])) << i;
   EXPECT_EQ(weights_text(RealGenome{}), "");
+  RealGenome wide;
+  wide.lo = -1e300;
+  wide.hi = 1e300;
+  wide.values = {1e300, -1e40, 0.5};
+  EXPECT_EQ(weights_text(wide), "3.4028235e+38 -3.4028235e+38 0.5") << "beyond float range: the largest float";
 }
 
 TEST(RealGenomeCheck, AcceptsValidRefusesEachBreach) {

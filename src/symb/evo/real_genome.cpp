@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace symb::evo {
@@ -112,13 +113,17 @@ RealGenome crossover_arithmetic(const RealGenome& a, const RealGenome& b, kernel
 }
 
 std::string weights_text(const RealGenome& g) {
+  constexpr double kFloatMax = std::numeric_limits<float>::max();
   // The network holds floats: each value is written as the float it becomes, in the shortest form
   // that reads back to that float.
   std::string out;
   char buf[32];
   for (std::size_t i = 0; i < g.values.size(); ++i) {
     if (i) out += ' ';
-    auto [end, ec] = std::to_chars(buf, buf + sizeof buf, static_cast<float>(g.values[i]));
+    // A double beyond the float range has no float to become (the cast would be undefined): it
+    // is written as the largest float of its sign.
+    const double v = g.values[i] > kFloatMax ? kFloatMax : g.values[i] < -kFloatMax ? -kFloatMax : g.values[i];
+    auto [end, ec] = std::to_chars(buf, buf + sizeof buf, static_cast<float>(v));
     (void)ec;
     out.append(buf, end);
   }

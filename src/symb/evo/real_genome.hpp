@@ -58,7 +58,8 @@ RealGenome crossover_uniform(const RealGenome& a, const RealGenome& b, kernel::R
 RealGenome crossover_arithmetic(const RealGenome& a, const RealGenome& b, kernel::RandomStream& random);
 
 // The genes as a weight list a network task takes (`weights=` parameter, docs/networks.md):
-// numbers separated by spaces, written so that they read back to the same floats.
+// numbers separated by spaces, written so that they read back to the same floats (each gene as
+// the float it becomes; one beyond the float range as the largest float of its sign).
 std::string weights_text(const RealGenome& g);
 
 }  // namespace symb::evo
