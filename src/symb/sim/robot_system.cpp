@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "symb/control/control_task_types.hpp"
+#include "symb/evo/evo_task_types.hpp"
 #include "symb/robot/robot_task_types.hpp"
 
 namespace symb::sim {
@@ -60,7 +61,8 @@ kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, Robo
   if (auto s = robot::register_robot_task_types(registry, std::move(lookups)); !s) return s;
   control::ControlResources resources;
   resources.read_program = std::move(read_program);
-  return control::register_control_task_types(registry, std::move(resources));
+  if (auto st = control::register_control_task_types(registry, resources); !st) return st;
+  return evo::register_evo_task_types(registry, resources);
 }
 
 kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor& executor, const RobotSpec& spec,

@@ -58,7 +58,8 @@ struct RobotSystemOptions {
 };
 
 // Registers every task type a scenario may name: the robot layer's (bound to `devices`, which
-// may be empty for checking only) and the control layer's (mdl2e, ...).
+// may be empty for checking only), the control layer's (mdl2e, ...) and the evo layer's (fitness,
+// one_plus_one).
 kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, RobotDevices devices,
                                             ProgramReader read_program);
 
