@@ -2,6 +2,7 @@
 
 #include <array>
 
+#include "symb/apps/evolve/evolve_command.hpp"
 #include "symb/apps/hil/hil_commands.hpp"
 #include "symb/apps/run/run_command.hpp"
 #include "symb/apps/shell_client.hpp"
@@ -15,7 +16,7 @@ namespace symb::apps {
 
 namespace {
 
-constexpr std::string_view kCommands[] = {"run", "sim", "board", "link", "demo", "shell", "version", "help"};
+constexpr std::string_view kCommands[] = {"run", "evolve", "sim", "board", "link", "demo", "shell", "version", "help"};
 constexpr std::string_view kDemos[] = {"swarm"};
 
 void print_help(std::ostream& out) {
@@ -24,6 +25,7 @@ void print_help(std::ostream& out) {
       << "Usage: symb <command> [options]\n\n"
       << "Commands:\n"
       << "  run SCENARIO [options]  run a scenario file in-process (the main job: scenarios/maze.yaml)\n"
+      << "  evolve SCENARIO [options]  run an evolution experiment headless (scenarios/evolve_maze.yaml)\n"
       << "  sim SCENARIO --serial PATH   hardware in the loop: the simulator side (docs/hil.md)\n"
       << "  board SCENARIO --serial PATH [--shell PATH]   ... the board side: one robot's tasks\n"
       << "  link [--dir DIR]        ... the serial lines between them, from pseudo-terminals\n"
@@ -85,6 +87,7 @@ int run_symb(std::span<const std::string_view> args, const CliContext& ctx) {
     return kExitOk;
   }
   if (command == "run") return run::run_run_command(rest, ctx);
+  if (command == "evolve") return evolve::run_evolve_command(rest, ctx);
   if (command == "sim") return hil::run_sim_command(rest, ctx);
   if (command == "board") return hil::run_board_command(rest, ctx);
   if (command == "link") return hil::run_link_command(rest, ctx);

@@ -177,6 +177,12 @@ void OnePlusOneTask::finish_evaluation() {
   probe("champion_fitness", {static_cast<float>(a.champion_fitness())});
   probe("sigma", {static_cast<float>(a.sigma())});
   probe("evaluations", {static_cast<float>(a.counts().evaluations)});
+  // The champion's genes whenever it changes (as floats: what the mlp drove with), so whoever
+  // watches the run (symb evolve) can save it.
+  if (probing() && (kind == Candidate::kFirst || a.counts().successes > successes_before)) {
+    std::vector<float> genes(a.champion().values.begin(), a.champion().values.end());
+    probe("champion", genes);
+  }
   start_candidate();
 }
 

@@ -3,11 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "symb/apps/progress_line.hpp"
 #include "symb/apps/run/scenario_run.hpp"
+#include "symb/evo/genome.hpp"
+#include "symb/os/param.hpp"
 
 namespace symb::apps::run {
 
@@ -27,6 +31,8 @@ constexpr OptionSpec kOptions[] = {
     {"--shell", "WHERE", "open a robot's command shell while it runs: stdio, or tcp:PORT / tcp:HOST:PORT"},
     {"--shell-robot", "NAME", "the robot whose shell it is (default: the first)"},
     {"--token", "T", "the TCP shell's token (default: a random one, printed)"},
+    {"--genome", "FILE", "replay a champion: the controller task gets this genome's weights (symb evolve)"},
+    {"--controller", "NAME", "the task --genome replaces the weights of (default controller)"},
     {"--csv-every", "N", "record every N-th step in steps.csv (default 1)"},
     {"--print-hash", "", "print 'trajectory-hash: <16 hex digits>' on stdout"},
     {"--quiet", "", "no progress line and no summary"},
@@ -79,6 +85,22 @@ std::variant<ShellRequest, UsageError> parse_shell(std::string_view text) {
   return r;
 }
 
+// A champion file (symb evolve's champion.genome): a real genome's weights as a network task
+// takes them.
+std::variant<std::string, UsageError> read_genome_weights(std::string_view path) {
+  std::ifstream in{std::string(path), std::ios::binary};
+  if (!in) return UsageError{"--genome: cannot read " + quote_arg(path)};
+  std::ostringstream text;
+  text << in.rdbuf();
+  auto genome = evo::parse_genome_text(text.str());
+  if (!genome) return UsageError{"--genome: " + std::string(path) + ":" + genome.error()};
+  const auto* real = std::get_if<evo::RealGenome>(&*genome);
+  if (!real)
+    return UsageError{"--genome: " + std::string(path) + " holds a " + evo::kind_name(evo::kind_of(*genome)) +
+                      " genome; replay takes a real genome (network weights)"};
+  return evo::weights_text(*real);
+}
+
 std::string hex64(std::uint64_t v) {
   char buf[24];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
@@ -101,7 +123,7 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
   options.scenario_path = std::string(parsed.positional.front());
 
   bool print_hash = false, quiet = false, speed_given = false;
-  std::optional<std::string> token, shell_robot;
+  std::optional<std::string> token, shell_robot, genome_controller;
   for (const ParsedOption& o : opts) {
     if (o.name == "--out") {
       if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--out: empty folder name"});
@@ -133,6 +155,14 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
       shell_robot = o.value;
     } else if (o.name == "--token") {
       token = o.value;
+    } else if (o.name == "--genome") {
+      auto weights = read_genome_weights(o.value);
+      if (auto* e = std::get_if<UsageError>(&weights)) return usage_error(ctx, kCommand, *e);
+      options.controller_weights = std::get<std::string>(weights);
+    } else if (o.name == "--controller") {
+      if (!os::is_valid_name(o.value))
+        return usage_error(ctx, kCommand, UsageError{"--controller: " + quote_arg(o.value) + " cannot name a task"});
+      genome_controller = o.value;
     } else if (o.name == "--csv-every") {
       auto v = parse_count("--csv-every", o.value, 1, 1'000'000);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
@@ -150,6 +180,9 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
     return usage_error(ctx, kCommand, UsageError{"--shell-robot and --token need --shell"});
   if (token && options.shell.kind != ShellRequest::Kind::kTcp)
     return usage_error(ctx, kCommand, UsageError{"--token is for --shell tcp:..."});
+  if (genome_controller && !options.controller_weights)
+    return usage_error(ctx, kCommand, UsageError{"--controller names the task --genome replays into: give --genome"});
+  if (genome_controller) options.genome_controller = *genome_controller;
   if (shell_robot) options.shell.robot = *shell_robot;
   if (token) options.shell.token = *token;
   if (has_shell && !options.realtime && !speed_given) options.speed = 1.0;

@@ -70,6 +70,25 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (!loaded) return Error{loaded.error()};
   sim::Scenario scenario = std::move(loaded).value();
   if (options.duration) scenario.duration = *options.duration;
+  if (options.controller_weights) {
+    bool found = false;
+    for (sim::RobotSpec& r : scenario.robots)
+      for (sim::TaskSpec& t : r.tasks) {
+        if (t.name != options.genome_controller) continue;
+        found = true;
+        const auto p =
+            std::find_if(t.params.begin(), t.params.end(), [](const auto& a) { return a.name == "weights"; });
+        if (p != t.params.end()) {
+          p->value = *options.controller_weights;
+        } else {
+          t.params.push_back({"weights", *options.controller_weights, 1});
+          t.param_where.push_back(t.where);
+        }
+      }
+    if (!found)
+      return Error{"--genome: no robot of " + options.scenario_path + " has a task named '" +
+                   options.genome_controller + "' (name it with --controller)"};
+  }
 
   RunResult result;
   result.scenario = scenario.name;

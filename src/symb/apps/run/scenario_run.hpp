@@ -53,6 +53,10 @@ struct RunOptions {
   // clock (a shell needs this: otherwise the run is over before anyone could type).
   double speed = 0;
   ShellRequest shell;
+  // Replaying a champion (--genome): every robot's task named `genome_controller` gets these
+  // weights (its `weights` parameter, a network task's flat genome); no such task is an error.
+  std::optional<std::string> controller_weights;
+  std::string genome_controller = "controller";
   std::uint32_t csv_every = 1;  // record every n-th step in steps.csv (the picture uses every step)
   std::function<void(const RunProgress&)> on_progress;
   std::function<void(const std::string&)> on_notice;  // "shell: ..." for the person

@@ -1,0 +1,132 @@
+#include "symb/apps/evolve/evolve_command.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "symb/apps/evolve/evolve_run.hpp"
+#include "symb/apps/progress_line.hpp"
+
+namespace symb::apps::evolve {
+
+namespace {
+
+constexpr std::string_view kCommand = "symb evolve";
+constexpr kernel::Duration kMaxDuration = std::chrono::hours(24 * 7);
+
+constexpr OptionSpec kOptions[] = {
+    {"--out", "DIR", "output folder (default out/evolve/<scenario file name>)"},
+    {"--seed", "S", "seed, unsigned 64-bit (default: the scenario's; with --resume: the checkpoint's)"},
+    {"--duration", "D", "simulated time: 30min, 2h, ... (default: the scenario's; with --resume: the checkpoint's)"},
+    {"--checkpoint-every", "D", "simulated time between checkpoints (default 10min; 0 for none)"},
+    {"--resume", "", "carry on from DIR/checkpoint.txt (re-runs to it, checks it, continues)"},
+    {"--speed", "X", "virtual time at X times the wall clock (default: as fast as possible)"},
+    {"--quiet", "", "no progress line and no summary"},
+    {"--help", "", "this help"},
+};
+
+void print_help(std::ostream& out) {
+  out << "Usage: " << kCommand << " SCENARIO [options]\n\n"
+      << "Runs an evolution experiment headless on the deterministic virtual-time executor: a\n"
+      << "scenario whose robot has an evolution task (type one_plus_one: (1+1)-ONLINE, which\n"
+      << "replaces the controller task for every candidate) and a fitness task. Shows the\n"
+      << "evaluations, the champion's and the mean fitness and evaluations per second while it runs.\n\n"
+      << "Options:\n"
+      << describe_options(kOptions) << "\n"
+      << "Writes into the output folder: fitness.csv (one row per evaluation), fitness.svg,\n"
+      << "champion.genome (the final champion), champions/ (every new champion), checkpoint.txt,\n"
+      << "summary.txt. A checkpoint holds the seed, the scenario's hash, the time reached and a hash\n"
+      << "of the evaluations so far: --resume re-runs deterministically to that time, refuses if the\n"
+      << "history differs, and continues, giving the same files as a run never interrupted.\n\n"
+      << "Example: symb evolve scenarios/evolve_maze.yaml --out out/evo\n"
+      << "         symb run scenarios/braitenberg.yaml --genome out/evo/champion.genome\n";
+}
+
+std::string progress_text(const EvolveProgress& p) {
+  std::string s = (p.replaying ? "evolve (replaying to the checkpoint): " : "evolve: ") +
+                  fixed(p.simulated_seconds / 60, 1) + " / " + fixed(p.total_seconds / 60, 1) + " min (" +
+                  fixed(100 * p.fraction(), 0) + "%), " + std::to_string(p.evaluations) + " evaluations, best " +
+                  fixed(p.best, 3) + ", mean " + fixed(p.mean, 3);
+  if (p.wall_seconds > 0) s += ", " + fixed(p.per_second, 0) + " eval/s";
+  return s;
+}
+
+}  // namespace
+
+int run_evolve_command(std::span<const std::string_view> args, const CliContext& ctx) {
+  EvolveOptions options;
+  auto split = split_args(args, kOptions, 1);
+  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
+  const SplitArgs& parsed = std::get<SplitArgs>(split);
+  if (parsed.help) {
+    print_help(ctx.out);
+    return kExitOk;
+  }
+  if (parsed.positional.empty()) return usage_error(ctx, kCommand, UsageError{"missing SCENARIO (a .yaml file)"});
+  options.scenario_path = std::string(parsed.positional.front());
+  bool quiet = false;
+  for (const ParsedOption& o : parsed.options) {
+    if (o.name == "--out") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--out: empty folder name"});
+      options.out_dir = o.value;
+    } else if (o.name == "--seed") {
+      auto v = parse_u64("--seed", o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.seed = std::get<std::uint64_t>(v);
+    } else if (o.name == "--duration") {
+      auto v = parse_duration("--duration", o.value, kMaxDuration);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.duration = std::get<kernel::Duration>(v);
+    } else if (o.name == "--checkpoint-every") {
+      if (o.value == "0") {
+        options.checkpoint_every = kernel::Duration{0};
+        continue;
+      }
+      auto v = parse_duration("--checkpoint-every", o.value, kMaxDuration);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.checkpoint_every = std::get<kernel::Duration>(v);
+      if (options.checkpoint_every < std::chrono::seconds(1))
+        return usage_error(ctx, kCommand, UsageError{"--checkpoint-every: at least 1s (or 0 for none)"});
+    } else if (o.name == "--resume") {
+      options.resume = true;
+    } else if (o.name == "--speed") {
+      char* end = nullptr;
+      const std::string text(o.value);
+      const double v = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || v <= 0 || v > 1e6)
+        return usage_error(ctx, kCommand,
+                           UsageError{"--speed: expected a number above 0 and at most 1e6, not " + quote_arg(text)});
+      options.speed = v;
+    } else if (o.name == "--quiet") {
+      quiet = true;
+    }
+  }
+  if (options.out_dir.empty()) {
+    if (options.resume) return usage_error(ctx, kCommand, UsageError{"--resume needs --out DIR (the run's folder)"});
+    options.out_dir = std::filesystem::path("out") / "evolve" / std::filesystem::path(options.scenario_path).stem();
+  }
+
+  ProgressLine progress(ctx.err, !quiet, ctx.err_is_terminal);
+  options.on_progress = [&](const EvolveProgress& p) { progress.update(p.fraction(), progress_text(p)); };
+  auto result = run_evolution(options);
+  if (!result) {
+    progress.finish("evolve: stopped");
+    ctx.err << kCommand << ": " << result.error() << "\n";
+    return kExitFailure;
+  }
+  const EvolveResult& r = *result;
+  progress.finish("evolve: done, " + std::to_string(r.evaluations) + " evaluations");
+  if (!quiet) {
+    ctx.out << "evolve: " << r.scenario << ", seed " << r.seed << ", " << fixed(r.simulated_seconds / 60, 1)
+            << " min simulated in " << fixed(r.wall_seconds, 2) << " s: " << r.evaluations << " evaluations ("
+            << fixed(r.wall_seconds > 0 ? static_cast<double>(r.evaluations) / r.wall_seconds : 0, 0)
+            << " per second), " << r.champions << " new champions, champion fitness " << fixed(r.champion_fitness, 4)
+            << "\n";
+    if (r.resumed) ctx.out << "  resumed from the checkpoint at " << fixed(r.resumed_from_seconds, 1) << " s\n";
+    ctx.out << "results in " << options.out_dir.string() << "/\n";
+    for (const auto& f : r.files) ctx.out << "  " << f.string() << "\n";
+    ctx.out << std::flush;
+  }
+  return kExitOk;
+}
+
+}  // namespace symb::apps::evolve
