@@ -6,6 +6,7 @@
 
 #include "symb/control/network/description.hpp"
 #include "symb/control/network/network.hpp"
+#include "symb/evo/arbiter_task.hpp"
 #include "symb/evo/fitness_task.hpp"
 #include "symb/evo/one_plus_one_task.hpp"
 
@@ -133,6 +134,7 @@ os::TaskType one_plus_one_type() {
 
 kernel::Status register_evo_task_types(os::TaskTypeRegistry& registry, const control::ControlResources& /*resources*/) {
   if (auto st = registry.add(fitness_type()); !st) return st;
+  if (auto st = register_arbiter_task_type(registry); !st) return st;
   return registry.add(one_plus_one_type());
 }
 
