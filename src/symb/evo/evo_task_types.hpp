@@ -7,6 +7,7 @@
 //                 (one_plus_one_task.hpp)                              inputs, layers, activation,
 //                                                                      sigma..., task names
 //                 defaults: priority 1, period 1 s (only to retry a missing task), queue 8
+//   mu_plus_one   encapsulated (mu+1)-ONLINE (mu_plus_one_task.hpp)   mu, rho, sigma, evaluation, ...
 //   arbiter       forwards the best of several controller variants (arbiter_task.hpp)
 //
 // The candidate controllers are made through the node's own registry (type mlp), so a node that

@@ -1,0 +1,171 @@
+// Encapsulated (mu+1)-ONLINE on the simulated Thymio in the maze (issue 7, deliverable 3b): the
+// maze of scenarios/maze.yaml with its controller removed; a `fitness` task (Nolfi's per-step
+// fitness, formula one_plus_one) hooked from the IR sensor and a mu_plus_one task on the robot's
+// own node, which replaces the controller TASK by a new 7-2 tanh perceptron per candidate. After a
+// budget of virtual time the population's best member is replayed for 10 minutes in a fresh maze
+// and its mean per-step fitness (the same fitness task) is compared with the hand-written
+// Braitenberg perceptron's (scenarios/network/braitenberg.w), measured the same way. The setup is
+// tests/sim/evolution_scenario_test.cpp's, with the algorithm swapped.
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "symb/evo/fitness_task.hpp"
+#include "symb/evo/mu_plus_one_task.hpp"
+#include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/os/node.hpp"
+#include "symb/sim/scenario_session.hpp"
+
+namespace symb::sim {
+namespace {
+
+using namespace std::chrono_literals;
+
+Scenario load(const std::string& name) {
+  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
+  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
+  return s ? *s : Scenario{};
+}
+
+Scenario bare_maze() {
+  Scenario s = load("maze.yaml");
+  for (RobotSpec& r : s.robots) {
+    r.tasks.clear();
+    r.hooks.clear();
+  }
+  return s;
+}
+
+Scenario maze_with_perceptron(const std::string& weights) {
+  Scenario s = load("braitenberg.yaml");  // maze.yaml's world, the mlp controller
+  for (RobotSpec& r : s.robots)
+    for (TaskSpec& t : r.tasks)
+      for (os::ParamAssignment& p : t.params)
+        if (p.name == "weights") p.value = weights;
+  return s;
+}
+
+evo::FitnessTask* add_fitness(os::Node& node) {
+  auto f = std::make_unique<evo::FitnessTask>(evo::FitnessTaskOptions{});
+  evo::FitnessTask* p = f.get();
+  const auto id = node.create("fitness", std::move(f), {.priority = 1, .queue_capacity = 8});
+  EXPECT_TRUE(id.ok());
+  EXPECT_TRUE(node.hook(*node.find("ir"), *id).ok());
+  if (auto c = node.find("controller")) {
+    EXPECT_TRUE(node.hook(*c, *id).ok());
+  }
+  return p;
+}
+
+struct Replay {
+  double fitness = 0;  // mean per-step
+  std::uint64_t contact_steps = 0;
+  double distance = 0;
+};
+
+Replay replay(const Scenario& scenario, kernel::Duration duration) {
+  kernel::VirtualTimeExecutor executor;
+  auto session = ScenarioSession::create(scenario, executor);
+  EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
+  if (!session) return {};
+  evo::FitnessTask* fitness = add_fitness((*session)->robot(0).node());
+  (*session)->start();
+  executor.run_for(duration);
+  (*session)->stop();
+  const RobotState s = (*session)->world().state(0);
+  return {fitness->mean(), s.contact_steps, s.distance};
+}
+
+struct Evolved {
+  evo::Member best;
+  double mean_fitness = 0;
+  evo::MuPlusOneCounts counts;
+};
+
+Evolved evolve(std::uint64_t seed, kernel::Duration budget, const evo::MuPlusOneTaskOptions& evolution_options) {
+  kernel::VirtualTimeExecutor executor;
+  SessionOptions options;
+  options.seed = seed;
+  auto session = ScenarioSession::create(bare_maze(), executor, options);
+  EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
+  if (!session) return {};
+  os::Node& node = (*session)->robot(0).node();
+  add_fitness(node);
+  auto made = evo::MuPlusOneTask::create(evolution_options);
+  EXPECT_TRUE(made.ok()) << (made ? "" : made.error());
+  if (!made) return {};
+  evo::MuPlusOneTask* evolution = made->get();
+  EXPECT_TRUE(node.create("evolution", std::move(made).value(), {.priority = 1, .period = 1s}).ok());
+  (*session)->start();
+  executor.run_for(budget);
+  (*session)->stop();
+  EXPECT_EQ(evolution->state(), evo::EvolutionState::kRunning) << evolution->error();
+  Evolved e;
+  if (auto b = evolution->best()) e.best = *b;
+  const auto h = evolution->history();
+  if (!h.empty()) e.mean_fitness = h.back().mean_fitness;
+  e.counts = evolution->counts();
+  return e;
+}
+
+// The run's parameters, chosen by measurement (docs/evolution.md "(mu+1)-ONLINE"): mu = 10,
+// rho = 0.2, sigma = 0.5 (fixed), uniform crossover with p = 0.5, binary tournament, averaged
+// re-evaluation, tau = 20 s counted after 1 s of recovery, genes in [-4, 4]. Replay of the best
+// member (highest stored fitness), seeds 1..12, percent of Braitenberg (contact steps):
+//   240 min: 169 163 167 174 127(4287) 166 150 167 90(15463) 83(188) 164 79(537): 11 of 12 at
+//            >= 80 %, 8 of 12 without a contact. The test runs seeds 1..3 (all 0 contacts).
+//   120 min: 8 of 12 at >= 80 %, 7 of 12 without a contact (seed 3: 27 contact steps).
+//   Others at 120 min, 12 seeds: mu 10 sigma 0.5 rho 0.3: 11 >= 80 %, 6 without contact; mu 14
+//   sigma 0.7: 8 and 7; tau 30 s: 7 and 5; mu 6 sigma 0.5 (8 seeds): 6 and 4.
+// A failure is mostly a member scored once (lucky) in a spot of the maze that favours a gliding
+// wall-follower: the replay in the full maze then touches walls. The (1+1) run with its tuned
+// sigma_min does better at this budget (11 of 12, tests/sim/evolution_scenario_test.cpp).
+evo::MuPlusOneTaskOptions run_options() {
+  evo::MuPlusOneTaskOptions o;
+  o.algorithm.mu = 10;
+  o.algorithm.rho = 0.2;
+  o.algorithm.sigma = 0.5;
+  o.algorithm.crossover = 0.5;
+  o.swap.evaluation = 20s;
+  o.swap.recovery = 1s;
+  return o;
+}
+constexpr kernel::Duration kBudget = 240min;
+
+TEST(MuPlusOneScenario, ReachesBraitenbergInTheMazeWithThreeSeedsIn4Hours) {
+  const Replay baseline = replay(maze_with_perceptron("network/braitenberg.w"), 10min);
+  std::printf("braitenberg: fitness %.4f, %llu contact steps, %.0f cm\n", baseline.fitness,
+              static_cast<unsigned long long>(baseline.contact_steps), baseline.distance);
+  ASSERT_GT(baseline.fitness, 0.3);  // measured 0.465
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Evolved e = evolve(seed, kBudget, run_options());
+    EXPECT_GT(e.counts.evaluations, 650u);   // 240 min / 21 s = 685
+    EXPECT_GT(e.counts.reevaluations, 90u);  // rho 0.2 of 675
+    const Replay r = replay(maze_with_perceptron(evo::weights_text(e.best.genome)), 10min);
+    std::printf(
+        "seed %llu: %llu evaluations (%llu re-evaluations, %llu replacements), best %.4f (%llu runs), population "
+        "mean %.4f; replay fitness %.4f (%.0f%% of braitenberg), %llu contact steps, %.0f cm\n",
+        static_cast<unsigned long long>(seed), static_cast<unsigned long long>(e.counts.evaluations),
+        static_cast<unsigned long long>(e.counts.reevaluations), static_cast<unsigned long long>(e.counts.replacements),
+        e.best.fitness, static_cast<unsigned long long>(e.best.measurements), e.mean_fitness, r.fitness,
+        100 * r.fitness / baseline.fitness, static_cast<unsigned long long>(r.contact_steps), r.distance);
+    EXPECT_GE(r.fitness, 0.8 * baseline.fitness);
+    EXPECT_EQ(r.contact_steps, 0u);
+  }
+}
+
+TEST(MuPlusOneScenario, SameSeedSameBest) {
+  const Evolved a = evolve(3, 10min, run_options()), b = evolve(3, 10min, run_options());
+  const Evolved c = evolve(4, 10min, run_options());
+  EXPECT_EQ(a.best.genome, b.best.genome);
+  EXPECT_EQ(a.best.fitness, b.best.fitness);
+  EXPECT_NE(a.best.genome, c.best.genome);
+}
+
+}  // namespace
+}  // namespace symb::sim
