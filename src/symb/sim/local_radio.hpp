@@ -1,0 +1,115 @@
+// LocalRadio: a simulated short-range radio shared by the robots of one world, the medium that
+// swarm algorithms (mEDEA: evo/medea_task.hpp) broadcast over. Each robot has a RadioTask on its
+// own node, an IO stream like any other: a message with bytes (io::Bytes) that a task hooked to
+// the radio sends it is TRANSMITTED; the radio hands it to the medium, and at the next world step
+// the medium delivers it to the RadioTask of every OTHER robot whose centre is within `range` cm
+// of the sender's (positions after that step), which SENDS it on to whatever is hooked to it.
+//
+// A delivered message carries the bytes (the same shared blob, no copy) and one number, the
+// sender's robot index, so a receiver can tell senders apart (mEDEA keeps one genome per sender).
+//
+// Like a real radio it has a bandwidth: per step a robot transmits at most ONE message, the newest
+// handed to it since the last step (older ones are counted as overwritten). Deterministic: at a
+// step, senders in robot index order, each to its receivers in index order; a receiver's queue
+// that is full refuses the message (counted as dropped). Walls do not block the radio (range only).
+//
+// The medium is a world-runner observer (attach()); positions come from the runner's StepRecord.
+// Lifetime: the LocalRadio must outlive the runner it is attached to and every RadioTask made from
+// it (declare it before the ScenarioSession). Thread-safe: tasks and the runner may run on
+// different threads (ThreadExecutor).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "symb/io/bytes.hpp"
+#include "symb/kernel/result.hpp"
+#include "symb/os/ids.hpp"
+#include "symb/os/task.hpp"
+#include "symb/sim/world_runner.hpp"
+
+namespace symb::os {
+class Node;
+}
+
+namespace symb::sim {
+
+struct LocalRadioOptions {
+  double range = 50;                          // cm, centre to centre
+  std::size_t max_message_bytes = 64 * 1024;  // longer messages are refused (counted)
+};
+
+struct RadioCounts {
+  std::uint64_t transmitted = 0;   // messages that went on air (at most one per robot per step)
+  std::uint64_t overwritten = 0;   // replaced by a newer one before their step came
+  std::uint64_t too_long = 0;      // refused: longer than max_message_bytes, or no bytes at all
+  std::uint64_t delivered = 0;     // (message, receiver) pairs put in a receiver's queue
+  std::uint64_t out_of_range = 0;  // (message, other robot) pairs farther than range
+  std::uint64_t dropped = 0;       // in range but not delivered: no radio task, or a full queue
+};
+
+class LocalRadio;
+
+// The radio device of one robot, as a task. Port 0 in (from hooked tasks): bytes to transmit.
+// Port 0 out: bytes received, numbers = {sender robot index}. Messages without bytes are ignored.
+class RadioTask final : public os::Task {
+ public:
+  RadioTask(LocalRadio& radio, std::size_t robot) : radio_(radio), robot_(robot) {}
+
+ protected:
+  void on_start() override;
+  void on_message(const os::Message& m) override;
+  void on_stop() override;
+
+ private:
+  LocalRadio& radio_;
+  const std::size_t robot_;
+};
+
+class LocalRadio {
+ public:
+  // Fails for a range that is not finite and positive, or no robots.
+  static kernel::Result<std::unique_ptr<LocalRadio>> create(std::size_t robots, LocalRadioOptions options = {});
+  LocalRadio(const LocalRadio&) = delete;
+  LocalRadio& operator=(const LocalRadio&) = delete;
+
+  // Observes `runner`'s steps: from now on every step delivers what was transmitted before it.
+  void attach(WorldRunner& runner);
+  // Creates robot `robot`'s RadioTask on `node` under `name` (queue large enough for every other
+  // robot's message of one step). Does not hook it.
+  kernel::Result<os::TaskId> add_to(os::Node& node, std::size_t robot, std::string name = "radio");
+
+  // The medium's step: delivers the pending messages using the robots' positions in `record`.
+  // attach() calls it from the runner; tests may call it directly.
+  void step(const StepRecord& record);
+
+  std::size_t robot_count() const { return robots_.size(); }
+  const LocalRadioOptions& options() const { return options_; }
+  RadioCounts counts() const;
+  // Messages robot `robot`'s radio task received (delivered to its queue) so far.
+  std::uint64_t received_by(std::size_t robot) const;
+
+ private:
+  friend class RadioTask;
+  LocalRadio(std::size_t robots, LocalRadioOptions options) : options_(options), robots_(robots) {}
+  void connect(std::size_t robot, os::Node* node, os::TaskId task);
+  void disconnect(std::size_t robot, os::TaskId task);
+  void transmit(std::size_t robot, std::shared_ptr<const os::Blob> bytes);
+
+  struct Robot {
+    os::Node* node = nullptr;  // while its radio task runs
+    os::TaskId task;
+    std::shared_ptr<const os::Blob> pending;  // to go on air at the next step
+    std::uint64_t received = 0;
+  };
+
+  const LocalRadioOptions options_;
+  mutable std::mutex mu_;
+  std::vector<Robot> robots_;
+  RadioCounts counts_;
+};
+
+}  // namespace symb::sim

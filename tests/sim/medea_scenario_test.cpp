@@ -1,0 +1,187 @@
+// mEDEA with 20 robots (issue 7, "must show"): the swarm world of scenarios/swarm.yaml (300 x 300
+// cm, four walls) with 20 Thymios at seed-chosen places, each with a sim::RadioTask over one shared
+// sim::LocalRadio (range 35 cm) and an evo::MedeaTask that runs a random 7-2 tanh perceptron at
+// first. There is no fitness: a genome survives by being heard. Measured per 2-minute window of
+// virtual time: the share of active robots (sampled every second) and the mean distance travelled
+// per robot. Both must rise: genomes that drive (and so meet others) spread, robots that hear
+// nobody go inactive and stand still.
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "symb/evo/medea_task.hpp"
+#include "symb/io/bytes.hpp"
+#include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/os/node.hpp"
+#include "symb/sim/local_radio.hpp"
+#include "symb/sim/scenario_session.hpp"
+
+namespace symb::sim {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr std::size_t kRobots = 20;
+
+// swarm.yaml with `count` robots and no controller: only the device tasks.
+Scenario bare_swarm(std::size_t count) {
+  auto text = file_program_reader(SYMB_SCENARIO_DIR)("swarm.yaml");
+  EXPECT_TRUE(text.ok());
+  std::string yaml = text ? *text : std::string();
+  const auto at = yaml.find("count: 12");
+  EXPECT_NE(at, std::string::npos);
+  if (at != std::string::npos) yaml.replace(at, 9, "count: " + std::to_string(count));
+  auto s = parse_scenario(yaml, "swarm.yaml");
+  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
+  if (!s) return {};
+  Scenario scenario = *s;
+  for (RobotSpec& r : scenario.robots) {
+    r.tasks.clear();
+    r.hooks.clear();
+  }
+  return scenario;
+}
+
+struct Window {
+  double active_share = 0;  // mean over the window's one-second samples
+  double distance = 0;      // cm per robot
+};
+
+struct SwarmRun {
+  std::vector<Window> windows;
+  RadioCounts radio;
+  std::uint64_t lifetimes = 0, malformed = 0, controllers = 0;
+  std::vector<double> final_genes;  // robot 0's genome, for the determinism check
+};
+
+SwarmRun run_swarm(std::uint64_t seed, kernel::Duration duration, kernel::Duration window) {
+  SwarmRun out;
+  auto radio = LocalRadio::create(kRobots, {.range = 35});
+  EXPECT_TRUE(radio.ok());
+  if (!radio) return out;
+  kernel::VirtualTimeExecutor executor;
+  SessionOptions options;
+  options.seed = seed;
+  auto made_session = ScenarioSession::create(bare_swarm(kRobots), executor, options);
+  EXPECT_TRUE(made_session.ok()) << (made_session ? "" : made_session.error());
+  if (!made_session) return out;
+  std::unique_ptr<ScenarioSession> session = std::move(made_session).value();  // after the radio: dies first
+  ScenarioSession& s = *session;
+  EXPECT_EQ(s.robot_count(), kRobots);
+  (*radio)->attach(s.runner());
+  std::vector<evo::MedeaTask*> medea;
+  for (std::size_t i = 0; i < s.robot_count(); ++i) {
+    os::Node& node = s.robot(i).node();
+    EXPECT_TRUE((*radio)->add_to(node, i).ok());
+    evo::MedeaTaskOptions o;  // lifetime 12 s, sigma 0.2, genes in [-4, 4], a 7-2 tanh perceptron
+    auto made = evo::MedeaTask::create(o);
+    EXPECT_TRUE(made.ok());
+    medea.push_back(made->get());
+    EXPECT_TRUE(
+        node.create("medea", std::move(made).value(), {.priority = 1, .period = 300ms, .queue_capacity = 64}).ok());
+  }
+  s.start();
+  const auto seconds = static_cast<int>(std::chrono::duration_cast<std::chrono::seconds>(window).count());
+  std::vector<double> distance_before(kRobots, 0.0);
+  for (kernel::Duration t{0}; t < duration; t += window) {
+    Window w;
+    for (int k = 0; k < seconds; ++k) {
+      executor.run_for(1s);
+      std::size_t active = 0;
+      for (const evo::MedeaTask* m : medea) active += m->active() ? 1 : 0;
+      w.active_share += static_cast<double>(active) / kRobots;
+    }
+    w.active_share /= seconds;
+    for (std::size_t i = 0; i < kRobots; ++i) {
+      const double d = s.world().state(i).distance;
+      w.distance += d - distance_before[i];
+      distance_before[i] = d;
+    }
+    w.distance /= kRobots;
+    out.windows.push_back(w);
+  }
+  s.stop();
+  for (const evo::MedeaTask* m : medea) {
+    EXPECT_EQ(m->state(), evo::EvolutionState::kRunning) << m->error();
+    out.lifetimes += m->counts().lifetimes;
+    out.malformed += m->counts().malformed;
+    out.controllers += m->controllers_created();
+  }
+  out.radio = (*radio)->counts();
+  out.final_genes = medea[0]->genome().values;
+  session.reset();  // empties the nodes while the radio still exists
+  return out;
+}
+
+double mean_share(const std::vector<Window>& w, std::size_t from, std::size_t to) {
+  double sum = 0;
+  for (std::size_t i = from; i < to; ++i) sum += w[i].active_share;
+  return sum / static_cast<double>(to - from);
+}
+double mean_distance(const std::vector<Window>& w, std::size_t from, std::size_t to) {
+  double sum = 0;
+  for (std::size_t i = from; i < to; ++i) sum += w[i].distance;
+  return sum / static_cast<double>(to - from);
+}
+
+// Early: the first two windows (0-4 min); late: the last five (30-40 min). Measured (range 35 cm,
+// lifetime 12 s, sigma 0.2), active share and cm per robot per 2 min, early -> late:
+//   seed 1: 0.69 -> 0.91,  582 -> 1373     seed 4: 0.77 -> 0.94,  859 -> 1506
+//   seed 2: 0.87 -> 0.98, 1130 -> 1723     seed 5: 0.81 -> 0.96,  997 -> 1531
+//   seed 3: 0.77 -> 0.83,  772 ->  846     seed 6: 0.68 -> 0.92,  659 -> 1411
+// Over seeds 1-3: share 0.78 -> 0.91, distance 828 -> 1314 cm. Asserted: every seed rises in both,
+// and over the three seeds the share rises by at least 0.06 and the distance by at least 25%.
+// (Range 25 cm is harsher: with sigma 0.2 one seed of six died out, every robot inactive for good,
+// which mEDEA without a restart allows: nobody left to broadcast. Range 50 cm: nearly everyone
+// hears someone from the start, share 0.9+ throughout, the rise is lost in the noise.)
+TEST(MedeaScenario, ActiveShareAndDistanceRiseOverTime) {
+  double share_early = 0, share_late = 0, dist_early = 0, dist_late = 0;
+  const int kSeeds = 3;
+  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const SwarmRun r = run_swarm(seed, 40min, 2min);
+    ASSERT_EQ(r.windows.size(), 20u);
+    std::printf("seed %llu: windows (active share, cm per robot):", static_cast<unsigned long long>(seed));
+    for (const Window& w : r.windows) std::printf(" (%.2f, %.0f)", w.active_share, w.distance);
+    std::printf(
+        "\n  radio: %llu transmitted, %llu delivered, %llu out of range, %llu dropped; %llu lifetimes, %llu "
+        "controllers\n",
+        static_cast<unsigned long long>(r.radio.transmitted), static_cast<unsigned long long>(r.radio.delivered),
+        static_cast<unsigned long long>(r.radio.out_of_range), static_cast<unsigned long long>(r.radio.dropped),
+        static_cast<unsigned long long>(r.lifetimes), static_cast<unsigned long long>(r.controllers));
+    EXPECT_EQ(r.malformed, 0u);
+    EXPECT_GT(r.radio.delivered, 0u);
+    EXPECT_EQ(r.radio.dropped, 0u);
+    EXPECT_EQ(r.lifetimes, kRobots * 200);  // 40 min / 12 s each
+    const double se = mean_share(r.windows, 0, 2), sl = mean_share(r.windows, 15, 20);
+    const double de = mean_distance(r.windows, 0, 2), dl = mean_distance(r.windows, 15, 20);
+    std::printf("  active share %.2f -> %.2f, distance %.0f -> %.0f cm per robot per 2 min\n", se, sl, de, dl);
+    EXPECT_GT(sl, se);
+    EXPECT_GT(dl, de);
+    share_early += se / kSeeds, share_late += sl / kSeeds;
+    dist_early += de / kSeeds, dist_late += dl / kSeeds;
+  }
+  std::printf("over the seeds: active share %.2f -> %.2f, distance %.0f -> %.0f cm\n", share_early, share_late,
+              dist_early, dist_late);
+  EXPECT_GE(share_late, share_early + 0.06);
+  EXPECT_GE(dist_late, 1.25 * dist_early);
+}
+
+TEST(MedeaScenario, SameSeedSameRun) {
+  const SwarmRun a = run_swarm(4, 4min, 2min), b = run_swarm(4, 4min, 2min), c = run_swarm(5, 4min, 2min);
+  ASSERT_EQ(a.windows.size(), 2u);
+  for (std::size_t i = 0; i < a.windows.size(); ++i) {
+    EXPECT_EQ(a.windows[i].active_share, b.windows[i].active_share);
+    EXPECT_EQ(a.windows[i].distance, b.windows[i].distance);
+  }
+  EXPECT_EQ(a.final_genes, b.final_genes);
+  EXPECT_EQ(a.radio.delivered, b.radio.delivered);
+  EXPECT_NE(a.final_genes, c.final_genes);
+}
+
+}  // namespace
+}  // namespace symb::sim
