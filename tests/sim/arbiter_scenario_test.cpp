@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -166,6 +167,68 @@ TEST(ArbiterScenario, TheBadVariantAloneHitsWalls) {
   r.print("bad alone, 2 min");
   EXPECT_EQ(r.driver(), "bad");
   EXPECT_GT(r.contacts(), 100u);
+}
+
+// Embryogenesis in the maze: the demo's graph (ir -> mdl2e -> wheels) grown from a genome on the
+// bare robot drives as the scenario file's own graph does; while it drives, malformed genomes
+// are refused without touching the node.
+TEST(EmbryogenesisScenario, TheMazeDemoGrownFromAGenomeDrivesLikeTheScenario) {
+  constexpr const char* kDemo =
+      "task controller mdl2e program=mdl2e/obstacle_avoidance.mdl2e\n"
+      "hook ir -> controller\n"
+      "hook controller -> wheels\n";
+  kernel::VirtualTimeExecutor executor;
+  auto session = ScenarioSession::create(bare_maze(), executor);
+  ASSERT_TRUE(session.ok()) << session.error();
+  os::Node& node = (*session)->robot(0).node();
+  auto g = evo::parse_task_graph(kDemo);
+  ASSERT_TRUE(g.ok()) << g.error();
+  (*session)->start();
+  executor.run_for(1s);  // the bare robot stands
+  EXPECT_LT((*session)->world().state(0).distance, 0.5);
+  auto made = evo::develop(*g, node);
+  ASSERT_TRUE(made.ok()) << made.error();
+  // Malformed variants of the demo while it drives: each refused, the node unchanged.
+  const std::vector<std::string> bad = {
+      "task c2 mdl2e program=mdl2e/no_such_file.mdl2e\n",
+      "task c2 mdl2e program=mdl2e/obstacle_avoidance.mdl2e\nhook ir -> c2\nhook c2 -> wheels port 1\n",
+      "task c2 mdl2e program=mdl2e/obstacle_avoidance.mdl2e\nhook c2 -> ir\n",
+      "task c2 mdl2e program=mdl2e/obstacle_avoidance.mdl2e speed_limit=-1\n",
+      "hook ir -> wheels\n",
+      "hook controller -> wheels\n",
+      "task c2 sensor\n",
+  };
+  for (const std::string& text : bad) {
+    executor.run_for(10s);
+    const std::size_t tasks = node.task_count(), hooks = node.hooks().size();
+    auto bg = evo::parse_task_graph(text);
+    ASSERT_TRUE(bg.ok()) << bg.error();
+    auto r = evo::develop(*bg, node);
+    EXPECT_FALSE(r.ok()) << text;
+    if (!r.ok()) std::printf("refused: %s\n", r.error().c_str());
+    EXPECT_EQ(node.task_count(), tasks);
+    EXPECT_EQ(node.hooks().size(), hooks);
+  }
+  executor.run_for(10min - 1s - 70s);
+  const RobotState grown = (*session)->world().state(0);
+  (*session)->stop();
+
+  // The scenario file's own graph, same seed, same 10 minutes (it starts driving 1 s earlier).
+  kernel::VirtualTimeExecutor executor2;
+  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/maze.yaml");
+  ASSERT_TRUE(s.ok());
+  auto demo = ScenarioSession::create(*s, executor2);
+  ASSERT_TRUE(demo.ok()) << demo.error();
+  (*demo)->start();
+  executor2.run_for(10min);
+  const RobotState file = (*demo)->world().state(0);
+  (*demo)->stop();
+  std::printf("grown from a genome: %.0f cm, %llu contact steps; maze.yaml: %.0f cm, %llu contact steps\n",
+              grown.distance, static_cast<unsigned long long>(grown.contact_steps), file.distance,
+              static_cast<unsigned long long>(file.contact_steps));
+  EXPECT_EQ(grown.contact_steps, file.contact_steps);
+  EXPECT_GT(grown.distance, 0.9 * file.distance);
+  EXPECT_LT(grown.distance, 1.1 * file.distance);
 }
 
 TEST(ArbiterScenario, ItsTaskTypeIsInTheScenarioRegistry) {

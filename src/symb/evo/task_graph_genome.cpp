@@ -234,7 +234,8 @@ std::optional<os::ParamValue> new_value(const os::ParamSpec& spec, const os::Par
   switch (spec.type) {
     case os::ParamType::kBool: return os::ParamValue(!std::get<bool>(current));
     case os::ParamType::kInt: {
-      const double step = std::max(1.0, std::round(random.normal() * share * (hi - lo)));
+      double step = std::round(random.normal() * share * (hi - lo));
+      if (step == 0) step = random.below(2) ? 1.0 : -1.0;  // an integer always moves
       const double x = reflect(static_cast<double>(std::get<std::int64_t>(current)) + step, lo, hi);
       return os::ParamValue(static_cast<std::int64_t>(std::clamp(std::round(x), std::ceil(lo), std::floor(hi))));
     }
