@@ -3,12 +3,23 @@
 #include "symb/evo/medea.hpp"
 
 #include <array>
+#include <chrono>
 #include <cmath>
+#include <memory>
+#include <mutex>
+#include <set>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
+#include "symb/control/control_task_types.hpp"
+#include "symb/evo/evo_task_types.hpp"
 #include "symb/evo/genome.hpp"
+#include "symb/evo/medea_task.hpp"
+#include "symb/io/bytes.hpp"
+#include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/os/node.hpp"
 
 namespace symb::evo {
 namespace {
@@ -181,6 +192,145 @@ TEST(Medea, ReceivesGenomeTextsAndReusesARepeatedOne) {
   // Heard again in the next lifetime (cached text): back in the list.
   ASSERT_TRUE(m.receive_text(3, text).ok());
   EXPECT_EQ(m.received_count(), 1u);
+}
+
+// --- the task ----------------------------------------------------------------------------------
+
+using namespace std::chrono_literals;
+
+// A sensor that sends 7 IR readings every 30 ms: all zero (open space).
+class OpenSpaceSensor : public os::Task {
+ protected:
+  void on_tick() override { send(0, {0, 0, 0, 0, 0, 0, 0}); }
+};
+
+// Counts the wheel commands.
+class Wheels : public os::Task {
+ public:
+  std::uint64_t commands() const {
+    std::lock_guard lock(mu_);
+    return commands_;
+  }
+
+ protected:
+  void on_message(const os::Message&) override {
+    std::lock_guard lock(mu_);
+    ++commands_;
+  }
+
+ private:
+  mutable std::mutex mu_;
+  std::uint64_t commands_ = 0;
+};
+
+// A radio as sim::RadioTask behaves, without a medium: keeps what hooked tasks send it (the
+// broadcasts) and sends on what is posted to it (what it "received").
+class FakeRadio : public os::Task {
+ public:
+  std::vector<std::string> sent() const {
+    std::lock_guard lock(mu_);
+    return sent_;
+  }
+
+ protected:
+  void on_message(const os::Message& m) override {
+    if (!m.source.valid()) {
+      send(0, m.payload);
+      return;
+    }
+    std::lock_guard lock(mu_);
+    if (const io::Bytes* b = io::bytes_of(m)) sent_.emplace_back(b->text());
+  }
+
+ private:
+  mutable std::mutex mu_;
+  std::vector<std::string> sent_;
+};
+
+TEST(MedeaTask, BroadcastsRunsGoesInactiveAndComesBackWhenItHearsAGenome) {
+  kernel::VirtualTimeExecutor ex;
+  os::TaskTypeRegistry registry;
+  ASSERT_TRUE(control::register_control_task_types(registry, {}).ok());
+  ASSERT_TRUE(register_evo_task_types(registry, {}).ok());
+  os::Node node(ex, os::NodeConfig{.name = "bot", .seed = 3, .types = &registry});
+  (void)*node.create("ir", std::make_unique<OpenSpaceSensor>(), {.priority = 3, .period = 30ms});
+  auto w = std::make_unique<Wheels>();
+  Wheels* wheels = w.get();
+  (void)*node.create("wheels", std::move(w), {.queue_capacity = 8});
+  auto r = std::make_unique<FakeRadio>();
+  FakeRadio* radio = r.get();
+  const os::TaskId radio_id = *node.create("radio", std::move(r), {.priority = 2, .queue_capacity = 64});
+  MedeaTaskOptions o;
+  o.lifetime = 3s;
+  auto made = MedeaTask::create(o);
+  ASSERT_TRUE(made.ok()) << made.error();
+  MedeaTask* medea = made->get();
+  ASSERT_TRUE(
+      node.create("medea", std::move(made).value(), {.priority = 1, .period = 300ms, .queue_capacity = 64}).ok());
+  auto hear = [&](float sender, const std::string& text) {
+    os::Message m;
+    m.payload = os::Payload{sender};
+    m.payload.blob = std::make_shared<const io::Bytes>(text);
+    EXPECT_TRUE(node.post(radio_id, m).ok());
+  };
+
+  // Lifetime 1 (0-3 s): its random genome drives; it is broadcast at once and every 300 ms.
+  ex.run_for(2900ms);
+  EXPECT_EQ(medea->state(), EvolutionState::kRunning) << medea->error();
+  EXPECT_TRUE(medea->active());
+  EXPECT_TRUE(node.find("controller").has_value());
+  EXPECT_GT(wheels->commands(), 80u);
+  const std::vector<std::string> sent = radio->sent();
+  ASSERT_GE(sent.size(), 9u);
+  auto first = parse_genome_text(sent.front());
+  ASSERT_TRUE(first.ok()) << first.error();
+  EXPECT_EQ(std::get<RealGenome>(*first), medea->genome());
+  EXPECT_EQ(sent.back(), sent.front());  // the same genome all lifetime long
+
+  // Nothing heard: lifetime 2 is inactive: no controller, no broadcast, no wheel command.
+  ex.run_for(400ms);
+  EXPECT_FALSE(medea->active());
+  EXPECT_FALSE(node.find("controller").has_value());
+  const std::size_t broadcasts = radio->sent().size();
+  const std::uint64_t commands = wheels->commands();
+  ex.run_for(1s);
+  EXPECT_EQ(radio->sent().size(), broadcasts);
+  EXPECT_EQ(wheels->commands(), commands);
+
+  // It keeps listening: a malformed text is counted and ignored, a good genome is kept.
+  hear(4, "genome real\nvalues 1 2 oops");
+  RealGenome heard;
+  heard.values.assign(16, 2.5);
+  heard.sigma = 0.01;
+  hear(7, to_text(Genome{heard}));
+  ex.run_for(100ms);
+  EXPECT_EQ(medea->counts().malformed, 1u);
+  EXPECT_EQ(medea->counts().received, 1u);
+  ex.run_for(2s);  // lifetime 3 starts at 6 s with the heard genome, mutated
+  EXPECT_TRUE(medea->active());
+  EXPECT_TRUE(node.find("controller").has_value());
+  for (double v : medea->genome().values) EXPECT_NEAR(v, 2.5, 0.1);
+  EXPECT_GT(radio->sent().size(), broadcasts);
+  EXPECT_EQ(medea->controllers_created(), 2u);
+  EXPECT_EQ(medea->counts().lifetimes, 2u);
+  EXPECT_EQ(medea->counts().inactive_lifetimes, 1u);
+}
+
+TEST(MedeaTask, TypeIsRegisteredAndChecksItsParameters) {
+  os::TaskTypeRegistry registry;
+  ASSERT_TRUE(control::register_control_task_types(registry, {}).ok());
+  ASSERT_TRUE(register_evo_task_types(registry, {}).ok());
+  kernel::VirtualTimeExecutor ex;
+  os::Node node(ex, os::NodeConfig{.name = "bot", .types = &registry});
+  for (std::string_view params : {"sigma=8", "lo=4 hi=-4", "activation=relu", "layers=\"0\"", "radio=\"two words\"",
+                                  "sigma_probability=2", "lifetime=0s"}) {
+    auto a = os::parse_param_assignments(params);
+    ASSERT_TRUE(a.ok()) << params;
+    EXPECT_FALSE(node.create("medea", "medea", *a).ok()) << params;
+  }
+  auto ok = os::parse_param_assignments("inputs=5 layers=\"3 2\" lifetime=20s sigma=0.1 sigma_probability=0.5");
+  ASSERT_TRUE(ok.ok());
+  EXPECT_TRUE(node.create("medea", "medea", *ok).ok());
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -24,6 +25,102 @@ namespace symb::sim {
 namespace {
 
 using namespace std::chrono_literals;
+
+// --- the radio medium alone ------------------------------------------------------------------
+
+// Keeps what its radio sends on: the text and the sender index.
+class Listener : public os::Task {
+ public:
+  std::vector<std::pair<float, std::string>> heard;
+
+ protected:
+  void on_message(const os::Message& m) override {
+    const io::Bytes* b = io::bytes_of(m);
+    heard.emplace_back(m.numbers().empty() ? -1.0f : m.numbers()[0], b ? std::string(b->text()) : "");
+  }
+};
+
+// Sends the bytes it is told to, from a task (as a hooked genome source would).
+class Talker : public os::Task {
+ public:
+  std::vector<std::string> to_say;
+
+ protected:
+  void on_tick() override {
+    for (const std::string& t : to_say) send(0, io::text_payload(t));
+    to_say.clear();
+  }
+};
+
+StepRecord positions(std::initializer_list<std::pair<double, double>> xy) {
+  StepRecord r;
+  for (const auto& p : xy) {
+    RobotStep s;
+    s.state.pose = {p.first, p.second, 0};
+    r.robots.push_back(s);
+  }
+  return r;
+}
+
+TEST(LocalRadio, DeliversAtTheNextStepToTheOtherRobotsInRange) {
+  auto radio = LocalRadio::create(4, {.range = 50});
+  ASSERT_TRUE(radio.ok());
+  EXPECT_FALSE(LocalRadio::create(4, {.range = -1}).ok());
+  EXPECT_FALSE(LocalRadio::create(0).ok());
+  kernel::VirtualTimeExecutor ex;
+  std::vector<std::unique_ptr<os::Node>> nodes;
+  std::vector<Listener*> listeners;
+  std::vector<Talker*> talkers;
+  for (std::size_t i = 0; i < 4; ++i) {
+    nodes.push_back(std::make_unique<os::Node>(ex, os::NodeConfig{.name = "r" + std::to_string(i)}));
+    os::Node& n = *nodes.back();
+    const auto r = (*radio)->add_to(n, i);
+    ASSERT_TRUE(r.ok());
+    auto l = std::make_unique<Listener>();
+    listeners.push_back(l.get());
+    auto t = std::make_unique<Talker>();
+    talkers.push_back(t.get());
+    const auto lid = *n.create("listener", std::move(l));
+    const auto tid = *n.create("talker", std::move(t), {.period = 1s});
+    ASSERT_TRUE(n.hook(*r, lid).ok());
+    ASSERT_TRUE(n.hook(tid, *r).ok());
+  }
+  EXPECT_FALSE((*radio)->add_to(*nodes[0], 9).ok());
+  ex.run_for(10ms);  // the tasks start
+  // Robot 0 at the origin, 1 at 30 cm, 2 at exactly 50 cm, 3 at 80 cm.
+  const StepRecord where = positions({{0, 0}, {30, 0}, {0, 50}, {80, 0}});
+  talkers[0]->to_say = {"old", "new"};  // one message per step: "new" replaces "old"
+  talkers[3]->to_say = {"far"};
+  ex.run_for(1s);
+  EXPECT_TRUE(listeners[1]->heard.empty());  // nothing before the step
+  (*radio)->step(where);
+  ex.run_for(1ms);
+  ASSERT_EQ(listeners[1]->heard.size(), 2u);  // from 0, then from 3 (80 - 30 = 50 cm)
+  EXPECT_EQ(listeners[1]->heard[0], (std::pair<float, std::string>{0.0f, "new"}));
+  EXPECT_EQ(listeners[1]->heard[1], (std::pair<float, std::string>{3.0f, "far"}));
+  ASSERT_EQ(listeners[2]->heard.size(), 1u);
+  EXPECT_EQ(listeners[2]->heard[0].second, "new");
+  EXPECT_TRUE(listeners[0]->heard.empty());  // 3 is 80 cm away; no one hears itself
+  EXPECT_TRUE(listeners[3]->heard.empty());  // 0 is 80 cm away
+  const RadioCounts c = (*radio)->counts();
+  EXPECT_EQ(c.transmitted, 2u);
+  EXPECT_EQ(c.overwritten, 1u);
+  EXPECT_EQ(c.delivered, 3u);
+  EXPECT_EQ(c.out_of_range, 3u);  // 0 -> 3, 3 -> 0, 3 -> 2
+  EXPECT_EQ(c.dropped, 0u);
+  EXPECT_EQ((*radio)->received_by(1), 2u);
+  (*radio)->step(where);  // nothing pending: nothing on air
+  EXPECT_EQ((*radio)->counts().transmitted, 2u);
+  // A removed radio task no longer receives (counted as dropped).
+  ASSERT_TRUE(nodes[1]->remove(*nodes[1]->find("radio")).ok());
+  ex.run_for(1ms);
+  talkers[0]->to_say = {"again"};
+  ex.run_for(1s);
+  (*radio)->step(where);
+  EXPECT_EQ((*radio)->counts().dropped, 1u);
+  EXPECT_EQ((*radio)->counts().delivered, 4u);
+  for (auto& n : nodes) n->clear();
+}
 
 constexpr std::size_t kRobots = 20;
 

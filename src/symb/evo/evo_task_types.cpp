@@ -8,6 +8,7 @@
 #include "symb/control/network/network.hpp"
 #include "symb/evo/arbiter_task.hpp"
 #include "symb/evo/fitness_task.hpp"
+#include "symb/evo/medea_task.hpp"
 #include "symb/evo/mu_plus_one_task.hpp"
 #include "symb/evo/one_plus_one_task.hpp"
 
@@ -137,6 +138,7 @@ kernel::Status register_evo_task_types(os::TaskTypeRegistry& registry, const con
   if (auto st = registry.add(fitness_type()); !st) return st;
   if (auto st = register_arbiter_task_type(registry); !st) return st;
   if (auto st = register_mu_plus_one_task_types(registry); !st) return st;
+  if (auto st = register_medea_task_types(registry); !st) return st;
   return registry.add(one_plus_one_type());
 }
 

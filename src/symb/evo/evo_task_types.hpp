@@ -9,6 +9,7 @@
 //                 defaults: priority 1, period 1 s (only to retry a missing task), queue 8
 //   mu_plus_one   encapsulated (mu+1)-ONLINE (mu_plus_one_task.hpp)   mu, rho, sigma, evaluation, ...
 //   arbiter       forwards the best of several controller variants (arbiter_task.hpp)
+//   medea         mEDEA swarm evolution over a `radio` task (medea_task.hpp)  lifetime, sigma..., names
 //
 // The candidate controllers are made through the node's own registry (type mlp), so a node that
 // runs one_plus_one must also have the control layer's types.

@@ -280,9 +280,6 @@ os::TaskType medea_type() {
 
 }  // namespace
 
-kernel::Status register_medea_task_types(os::TaskTypeRegistry& registry,
-                                         const control::ControlResources& /*resources*/) {
-  return registry.add(medea_type());
-}
+kernel::Status register_medea_task_types(os::TaskTypeRegistry& registry) { return registry.add(medea_type()); }
 
 }  // namespace symb::evo

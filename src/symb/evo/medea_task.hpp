@@ -32,7 +32,6 @@
 #include <optional>
 #include <string>
 
-#include "symb/control/control_task_types.hpp"
 #include "symb/evo/medea.hpp"
 #include "symb/evo/one_plus_one_task.hpp"
 #include "symb/kernel/result.hpp"
@@ -98,6 +97,6 @@ class MedeaTask : public os::Task {
 };
 
 // Registers the task type `medea` (defaults: priority 1, period 300 ms, queue 64).
-kernel::Status register_medea_task_types(os::TaskTypeRegistry& registry, const control::ControlResources& resources);
+kernel::Status register_medea_task_types(os::TaskTypeRegistry& registry);
 
 }  // namespace symb::evo
