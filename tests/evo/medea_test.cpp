@@ -179,6 +179,15 @@ TEST(Medea, CountsAndIgnoresMalformedGenomes) {
   EXPECT_FALSE(m.active());
 }
 
+TEST(Medea, RefusesMoreSendersThanItKeeps) {
+  Medea m = make();
+  for (std::uint64_t s = 0; s < kMaxMedeaSenders; ++s) ASSERT_TRUE(m.receive(s, constant(0)).ok());
+  EXPECT_FALSE(m.receive(kMaxMedeaSenders, constant(0)).ok());
+  EXPECT_TRUE(m.receive(0, constant(1)).ok());  // a known sender is still updated
+  EXPECT_EQ(m.received_count(), kMaxMedeaSenders);
+  EXPECT_EQ(m.counts().malformed, 1u);
+}
+
 TEST(Medea, ReceivesGenomeTextsAndReusesARepeatedOne) {
   Medea m = make();
   const std::string text = to_text(Genome{constant(0.5)});

@@ -38,6 +38,8 @@ kernel::Status Medea::receive(std::uint64_t sender, const RealGenome& g) {
     st = kernel::Error{"medea: a genome of " + std::to_string(g.values.size()) + " genes, expected " +
                        std::to_string(options_.genes)};
   if (st && (g.lo != options_.lo || g.hi != options_.hi)) st = kernel::Error{"medea: a genome with other bounds"};
+  if (st && received_.size() >= kMaxMedeaSenders && received_.count(sender) == 0)
+    st = kernel::Error{"medea: more than " + std::to_string(kMaxMedeaSenders) + " senders in one lifetime"};
   if (!st) {
     ++counts_.malformed;
     return st;
@@ -48,11 +50,8 @@ kernel::Status Medea::receive(std::uint64_t sender, const RealGenome& g) {
 }
 
 kernel::Status Medea::receive_text(std::uint64_t sender, std::string_view text) {
-  if (auto last = heard_.find(sender); last != heard_.end() && last->second.first == text) {
-    received_[sender] = last->second.second;
-    ++counts_.received;
-    return {};
-  }
+  if (auto last = heard_.find(sender); last != heard_.end() && last->second.first == text)
+    return receive(sender, last->second.second);
   auto parsed = parse_genome_text(text);
   kernel::Status st;
   if (!parsed) {
@@ -65,6 +64,7 @@ kernel::Status Medea::receive_text(std::uint64_t sender, std::string_view text) 
     return st;
   }
   if (st = receive(sender, std::get<RealGenome>(*parsed)); !st) return st;
+  if (heard_.size() >= kMaxMedeaSenders) heard_.clear();  // only a cache
   heard_[sender] = {std::string(text), std::get<RealGenome>(*parsed)};
   return {};
 }

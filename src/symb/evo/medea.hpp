@@ -34,6 +34,10 @@
 
 namespace symb::evo {
 
+// Senders a robot keeps genomes from at once; a genome from one more is refused (counted as
+// malformed), so a flood of made-up senders cannot make the list grow without limit.
+inline constexpr std::size_t kMaxMedeaSenders = 4096;
+
 struct MedeaOptions {
   std::size_t genes = 16;
   double lo = -4, hi = 4;
