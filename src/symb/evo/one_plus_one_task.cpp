@@ -88,8 +88,8 @@ bool OnePlusOneTask::set_up() {
   const auto sensor = n.find(options_.sensor), actuator = n.find(options_.actuator), fitness = n.find(options_.fitness);
   if (!sensor || !actuator || !fitness) {
     if (!warned_missing_)
-      log(os::LogLevel::kWarn, "one_plus_one: waiting for the tasks '" + options_.sensor + "', '" +
-                                      options_.actuator + "' and '" + options_.fitness + "'");
+      log(os::LogLevel::kWarn, "one_plus_one: waiting for the tasks '" + options_.sensor + "', '" + options_.actuator +
+                                   "' and '" + options_.fitness + "'");
     warned_missing_ = true;
     return false;
   }
