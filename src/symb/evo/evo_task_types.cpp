@@ -4,9 +4,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "symb/control/network/description.hpp"
 #include "symb/control/network/network.hpp"
 #include "symb/evo/arbiter_task.hpp"
+#include "symb/evo/controller_swap.hpp"
 #include "symb/evo/fitness_task.hpp"
 #include "symb/evo/medea_task.hpp"
 #include "symb/evo/mu_plus_one_task.hpp"
@@ -49,25 +49,10 @@ os::TaskType fitness_type() {
   return t;
 }
 
-// The genome size of the mlp the parameters describe.
 std::size_t mlp_genome_size(const os::ParamSet& p) {
-  control::network::Topology topology;
-  topology.kind = control::network::Kind::kMlp;
-  topology.inputs = static_cast<std::size_t>(p.integer("inputs"));
-  auto sizes = control::network::parse_numbers(p.string("layers"), control::network::kMaxLayers);
-  if (!sizes) fail("layers: " + sizes.error());
-  topology.layers.clear();
-  for (float v : *sizes) {
-    if (!(v >= 1 && v <= static_cast<float>(control::network::kMaxLayerSize)) ||
-        v != static_cast<float>(static_cast<int>(v)))
-      fail("layers: sizes are whole numbers 1.." + std::to_string(control::network::kMaxLayerSize));
-    topology.layers.push_back(static_cast<std::size_t>(v));
-  }
-  auto a = control::network::parse_activation(p.string("activation"));
-  if (!a) fail("activation: " + a.error());
-  topology.activation = *a;
-  if (auto st = control::network::check(topology); !st) fail(st.error());
-  return control::network::genome_size(topology);
+  auto n = evo::mlp_genome_size(p.integer("inputs"), p.string("layers"), p.string("activation"));
+  if (!n) fail(n.error());
+  return *n;
 }
 
 os::TaskType one_plus_one_type() {

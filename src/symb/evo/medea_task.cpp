@@ -5,8 +5,8 @@
 #include <utility>
 #include <vector>
 
-#include "symb/control/network/description.hpp"
 #include "symb/control/network/network.hpp"
+#include "symb/evo/controller_swap.hpp"
 #include "symb/evo/genome.hpp"
 #include "symb/io/bytes.hpp"
 #include "symb/os/node.hpp"
@@ -203,25 +203,10 @@ using os::ParamType;
 
 [[noreturn]] void fail_make(const std::string& what) { throw std::invalid_argument(what); }
 
-// The genome size of the mlp the parameters describe.
 std::size_t mlp_genome_size(const os::ParamSet& p) {
-  control::network::Topology topology;
-  topology.kind = control::network::Kind::kMlp;
-  topology.inputs = static_cast<std::size_t>(p.integer("inputs"));
-  auto sizes = control::network::parse_numbers(p.string("layers"), control::network::kMaxLayers);
-  if (!sizes) fail_make("layers: " + sizes.error());
-  topology.layers.clear();
-  for (float v : *sizes) {
-    if (!(v >= 1 && v <= static_cast<float>(control::network::kMaxLayerSize)) ||
-        v != static_cast<float>(static_cast<int>(v)))
-      fail_make("layers: sizes are whole numbers 1.." + std::to_string(control::network::kMaxLayerSize));
-    topology.layers.push_back(static_cast<std::size_t>(v));
-  }
-  auto a = control::network::parse_activation(p.string("activation"));
-  if (!a) fail_make("activation: " + a.error());
-  topology.activation = *a;
-  if (auto st = control::network::check(topology); !st) fail_make(st.error());
-  return control::network::genome_size(topology);
+  auto n = evo::mlp_genome_size(p.integer("inputs"), p.string("layers"), p.string("activation"));
+  if (!n) fail_make(n.error());
+  return *n;
 }
 
 os::TaskType medea_type() {
