@@ -1,5 +1,9 @@
 #include "symb/os/node.hpp"
 
+#include <memory>
+#include <span>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "symb/kernel/thread_executor.hpp"
@@ -213,6 +217,35 @@ TEST(Node, ThreadExecutorRunsTheSameTaskCode) {
   auto got = col->received();
   // A slow reader may lose the oldest to keep-newest, but order is kept.
   for (std::size_t i = 1; i < got.size(); ++i) EXPECT_LT(got[i - 1].values.at(0), got[i].values.at(0));
+}
+
+// Payload copies carry the numbers in use and share the blob (they skip the unused tail).
+TEST(Payload, CopiesAndMovesKeepTheNumbersInUseAndShareTheBlob) {
+  struct Big final : Blob {
+    std::uint32_t kind() const override { return 7; }
+  };
+  Payload a{1.5f, -2.0f, 3.25f};
+  a.blob = std::make_shared<Big>();
+  const Payload b = a;  // copy
+  EXPECT_EQ(std::vector<float>(b.numbers().begin(), b.numbers().end()), (std::vector<float>{1.5f, -2.0f, 3.25f}));
+  EXPECT_EQ(b.blob, a.blob);
+  Payload c;
+  for (float& v : c.values) EXPECT_EQ(v, 0.0f);  // a default payload is all zeros
+  c = Payload{9.0f};
+  c = b;  // copy-assign over a shorter one
+  EXPECT_EQ(c.count, 3);
+  EXPECT_EQ(c.values[2], 3.25f);
+  Payload d = std::move(c);
+  EXPECT_EQ(d.count, 3);
+  EXPECT_EQ(d.values[1], -2.0f);
+  EXPECT_EQ(d.blob, a.blob);
+  EXPECT_EQ(c.blob, nullptr);  // NOLINT(bugprone-use-after-move): the blob moved with it
+  std::vector<float> many(40, 1.0f);
+  const Payload e{std::span<const float>(many)};
+  EXPECT_EQ(e.count, Payload::kInlineValues);
+  Payload f;
+  f = e;
+  EXPECT_EQ(f.numbers().size(), Payload::kInlineValues);
 }
 
 }  // namespace

@@ -124,25 +124,62 @@ std::size_t VirtualTimeExecutor::wait_injected(std::chrono::nanoseconds timeout)
 }
 
 void VirtualTimeExecutor::schedule(Slot& s, EventKind kind, Time t) {
-  events_.push(Event{t, seq_++, &s, s.priority, s.generation, s.tick_generation, kind});
+  push_event(Event{t, seq_++, &s, s.priority, s.generation, s.tick_generation, kind});
+}
+
+void VirtualTimeExecutor::push_event(const Event& e) {
+  const Later later;
+  std::size_t i = events_.size();
+  events_.emplace_back();
+  while (i > 0) {
+    const std::size_t parent = (i - 1) / 2;
+    if (!later(events_[parent], e)) break;
+    events_[i] = events_[parent];
+    i = parent;
+  }
+  events_[i] = e;
+}
+
+VirtualTimeExecutor::Event VirtualTimeExecutor::pop_event() {
+  const Later later;
+  const Event top = events_.front();
+  // The last event sifts down from the root, compared where it lies (a copy of it on the stack
+  // was read back field by field: another forwarding stall).
+  const std::size_t n = events_.size() - 1;
+  if (n > 0) {
+    const Event& last = events_[n];
+    std::size_t i = 0;
+    for (;;) {
+      std::size_t child = 2 * i + 1;
+      if (child >= n) break;
+      if (child + 1 < n && later(events_[child], events_[child + 1])) ++child;
+      if (!later(last, events_[child])) break;
+      events_[i] = events_[child];
+      i = child;
+    }
+    events_[i] = last;
+  }
+  events_.pop_back();
+  return top;
 }
 
 std::uint64_t VirtualTimeExecutor::run_until(Time until) {
   assert(!running_ && "run_until is not reentrant");
   running_ = true;
+  runner_.store(std::this_thread::get_id(), std::memory_order_relaxed);
   stop_requested_ = false;
   std::uint64_t handled = 0;
   for (;;) {
     if (inbox_pending_.load(std::memory_order_relaxed)) run_injected();
-    if (events_.empty() || events_.top().time > until || stop_requested_) break;
-    const Event e = events_.top();
-    events_.pop();
+    if (events_.empty() || events_.front().time > until || stop_requested_) break;
+    const Event e = pop_event();
     clock_.advance_to(e.time);
     handle(e);
     ++handled;
     if (!to_finalize_.empty()) finalize_pending();
   }
   running_ = false;
+  runner_.store(std::thread::id(), std::memory_order_relaxed);
   if (!stop_requested_ && until != kTimeNever) clock_.advance_to(until);
   return handled;
 }
@@ -150,19 +187,20 @@ std::uint64_t VirtualTimeExecutor::run_until(Time until) {
 std::uint64_t VirtualTimeExecutor::run_until_idle(Time limit) {
   assert(!running_ && "run_until_idle is not reentrant");
   running_ = true;
+  runner_.store(std::this_thread::get_id(), std::memory_order_relaxed);
   stop_requested_ = false;
   std::uint64_t handled = 0;
   for (;;) {
     if (inbox_pending_.load(std::memory_order_relaxed)) run_injected();
-    if (events_.empty() || events_.top().time > limit || stop_requested_) break;
-    const Event e = events_.top();
-    events_.pop();
+    if (events_.empty() || events_.front().time > limit || stop_requested_) break;
+    const Event e = pop_event();
     clock_.advance_to(e.time);
     handle(e);
     ++handled;
     if (!to_finalize_.empty()) finalize_pending();
   }
   running_ = false;
+  runner_.store(std::thread::id(), std::memory_order_relaxed);
   return handled;
 }
 

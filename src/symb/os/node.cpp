@@ -120,7 +120,6 @@ void TaskRecord::apply_pending_parameters() {
 void TaskRecord::on_activity_input() {
   apply_pending_parameters();
   for (;;) {
-    Message m;
     {
       std::lock_guard lock(in_mu);
       // A task suspended, faulted or deleted mid-batch leaves the rest queued; whoever resumes it
@@ -129,11 +128,14 @@ void TaskRecord::on_activity_input() {
         wake_pending = false;
         return;
       }
-      m = queue.take();
+      handling = std::move(queue.front());
+      queue.pop();
     }
+    const Message& m = handling;
     delivered.store(delivered.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     if (node.tracing_.load(std::memory_order_relaxed)) node.trace(*this, m);
     SYMB_GUARDED("on_message", task->on_message(m))
+    handling.payload.blob.reset();  // a large payload is freed when its last handler is done
   }
 }
 
@@ -203,6 +205,7 @@ using detail::TaskRecord;
 
 Node::Node(kernel::Executor& executor, NodeConfig config)
     : executor_(executor),
+      clock_(executor.clock()),
       config_(std::move(config)),
       log_(executor.clock(), config_.log_capacity),
       trace_mu_(executor.concurrent()) {}

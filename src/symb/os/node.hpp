@@ -73,7 +73,7 @@ class Node {
 
   const std::string& name() const { return config_.name; }
   std::uint64_t seed() const { return config_.seed; }
-  kernel::Time now() const { return executor_.clock().now(); }
+  kernel::Time now() const { return clock_.now(); }
   SysLog& log() { return log_; }
   const TaskTypeRegistry* types() const { return config_.types; }
   // A fresh stream for `purpose`, the same for the same node seed and purpose.
@@ -128,6 +128,8 @@ class Node {
   // a thread outside the executor (a device reader) may make under every executor. `fn` must
   // not assume the node or any task still exists when it runs: pass handles, not pointers.
   void inject(std::function<void()> fn) { executor_.inject(std::move(fn)); }
+  // See kernel::Executor::on_own_context: true when node calls may be made here directly.
+  bool on_own_context() const { return executor_.on_own_context(); }
 
   // --- accounting --------------------------------------------------------------------------------
   // Traffic into every task this node ever had, deleted ones included.
@@ -158,6 +160,7 @@ class Node {
   void probe(const detail::TaskRecord& from, std::string_view channel, std::span<const float> values);
 
   kernel::Executor& executor_;
+  const kernel::Clock& clock_;  // the executor's, looked up once: now() is called per message
   NodeConfig config_;
   SysLog log_;
   mutable std::mutex mu_;  // structure: the task table, hook lists' membership, states

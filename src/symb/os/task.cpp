@@ -21,11 +21,8 @@ std::size_t Task::pending_messages() const {
 }
 
 void Task::send(Port port, const Payload& payload) {
-  Message m;
-  m.source = record_->id;
-  m.port = port;
-  m.time = record_->node.now();
-  m.payload = payload;
+  // Built in one go: a default Message would clear its payload first.
+  const Message m{record_->id, port, record_->node.now(), payload};
   record_->node.send_from(*record_, m);
 }
 

@@ -87,6 +87,9 @@ struct TaskRecord final : kernel::Activity {
   TrafficCounters traffic;  // `delivered` is mirrored from `delivered` below when read
   std::array<SuppressionWindow, 2> suppression{};
   bool wake_pending = false;
+  // The message being handled, moved out of the queue (outside in_mu, so senders can queue
+  // more meanwhile). A member, not a local: a fresh Message would clear its payload each time.
+  Message handling;
   std::atomic<std::uint64_t> delivered{0};  // written by the task's own context only
 };
 

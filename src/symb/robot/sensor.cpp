@@ -181,14 +181,24 @@ void SensorTask::on_start() {
   // its node) can go away.
   os::Node* node = &this->node();
   std::weak_ptr<Link> weak = link_;
-  auto st = sensor_->attach([node, weak] {
-    node->inject([weak] {
-      auto link = weak.lock();
-      if (!link) return;
+  auto st = sensor_->attach([node, weak, self = id()] {
+    // Keep-newest: the notification must never be refused; at most one is ever in flight.
+    const auto wake = [](os::Node& n, os::TaskId task) {
       os::Message m;
       m.port = kWakePort;
-      // Keep-newest: the notification must never be refused; at most one is ever in flight.
-      (void)link->node->post(link->self, m, os::QueuePolicy::kKeepNewest);
+      (void)n.post(task, m, os::QueuePolicy::kKeepNewest);
+    };
+    // A simulated device publishes from a handler on the executor's own thread: the task is
+    // alive there (it detaches under this lock) and the post can be made at once. It is queued
+    // exactly where the injected one would have been, before any later event.
+    if (node->on_own_context()) {
+      wake(*node, self);
+      return;
+    }
+    node->inject([weak, wake] {
+      auto link = weak.lock();
+      if (!link) return;
+      wake(*link->node, link->self);
     });
   });
   if (!st) {
