@@ -284,5 +284,95 @@ TEST(MedeaScenario, SameSeedSameRun) {
   EXPECT_NE(a.final_genes, c.final_genes);
 }
 
+// --- the same swarm declared in a scenario file ------------------------------------------------
+
+struct FileRun {
+  std::vector<std::vector<float>> active;  // per robot: the "active" probe of each lifetime
+  std::size_t radio_tasks = 0;
+  RadioCounts radio;
+  std::vector<double> distance;  // cm per robot
+};
+
+// scenarios/medea_swarm.yaml as `symb run` runs it: world.radio gives every robot a `radio`
+// device task, the `medea` task finds it by name.
+FileRun run_file(std::uint64_t seed, kernel::Duration duration) {
+  FileRun out;
+  auto scenario = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/medea_swarm.yaml");
+  EXPECT_TRUE(scenario.ok()) << (scenario ? "" : scenario.error());
+  if (!scenario) return out;
+  kernel::VirtualTimeExecutor executor;
+  SessionOptions options;
+  options.seed = seed;
+  auto session = ScenarioSession::create(*scenario, executor, options);
+  EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
+  if (!session) return out;
+  ScenarioSession& s = **session;
+  EXPECT_NE(s.radio(), nullptr);
+  out.active.resize(s.robot_count());
+  for (std::size_t i = 0; i < s.robot_count(); ++i) {
+    os::Node& node = s.robot(i).node();
+    out.radio_tasks += node.find(std::string(kRadioTaskName)) ? 1 : 0;
+    std::vector<float>* mine = &out.active[i];
+    node.set_probe_sink([mine](const os::ProbeSample& p) {
+      if (p.channel == "active" && !p.values.empty()) mine->push_back(p.values[0]);
+    });
+  }
+  s.start();
+  executor.run_for(duration);
+  s.stop();
+  if (s.radio() != nullptr) out.radio = s.radio()->counts();
+  for (std::size_t i = 0; i < s.robot_count(); ++i) out.distance.push_back(s.world().state(i).distance);
+  return out;
+}
+
+TEST(MedeaScenario, RunsFromTheScenarioFileWithARadioPerRobot) {
+  const FileRun a = run_file(1, 4min), b = run_file(1, 4min), c = run_file(2, 4min);
+  ASSERT_EQ(a.active.size(), kRobots);
+  EXPECT_EQ(a.radio_tasks, kRobots);
+  std::size_t lifetimes = 0;
+  double active = 0;
+  for (const auto& r : a.active) {
+    lifetimes += r.size();
+    for (float v : r) active += v;
+  }
+  EXPECT_EQ(lifetimes, kRobots * 20);  // 4 min / 12 s
+  // Genomes travelled: the radio delivered, some robots stayed active, and they drove.
+  EXPECT_GT(a.radio.delivered, 1000u);
+  EXPECT_EQ(a.radio.dropped, 0u);
+  EXPECT_GT(active, 0.5 * static_cast<double>(lifetimes));
+  double travelled = 0;
+  for (double d : a.distance) travelled += d;
+  EXPECT_GT(travelled / kRobots, 100.0);
+  // Same seed, same run; another seed, another.
+  EXPECT_EQ(a.active, b.active);
+  EXPECT_EQ(a.distance, b.distance);
+  EXPECT_EQ(a.radio.delivered, b.radio.delivered);
+  EXPECT_NE(a.distance, c.distance);
+}
+
+// world.radio is checked where it is written; a hook to `radio` needs it.
+TEST(MedeaScenario, RadioMistakesAreReportedWhereTheyAre) {
+  const std::string head = "name: t\nworld:\n  arena: {width: 100, height: 100}\n";
+  const std::string robot = "robots:\n  - name: r\n    start: {x: 50, y: 50, heading: 0}\n";
+  const auto fails = [](const std::string& yaml, const std::string& where, const std::string& what) {
+    auto sc = parse_scenario(yaml, "t.yaml");
+    ASSERT_FALSE(sc.ok()) << yaml;
+    EXPECT_EQ(sc.error().rfind("t.yaml:" + where + ": ", 0), 0u) << sc.error();
+    EXPECT_NE(sc.error().find(what), std::string::npos) << sc.error();
+  };
+  fails(head + "  radio: {range: -3}\n" + robot, "4:18", "radio range");
+  fails(head + "  radio: {range: 30, power: 2}\n" + robot, "4:22", "power");
+  fails(head + "  radio: 30\n" + robot, "4:10", "radio is {range: CM");
+  fails(head + robot + "    hooks: [radio -> wheels]\n", "7:13", "only in a world that declares one");
+  fails(head + "  radio: {range: 30}\n" + robot + "    tasks:\n      - {name: radio, type: mlp}\n", "9:9", "is taken");
+  auto ok = parse_scenario(head + "  radio: {range: 30, max_message_bytes: 256}\n" + robot +
+                               "    tasks:\n      - {name: echo, type: mlp}\n    hooks: [radio -> echo]\n",
+                           "t.yaml");
+  ASSERT_TRUE(ok.ok()) << ok.error();
+  ASSERT_TRUE(ok->world.radio.has_value());
+  EXPECT_EQ(ok->world.radio->range, 30);
+  EXPECT_EQ(ok->world.radio->max_message_bytes, 256u);
+}
+
 }  // namespace
 }  // namespace symb::sim

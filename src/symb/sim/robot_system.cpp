@@ -9,6 +9,7 @@
 #include "symb/control/control_task_types.hpp"
 #include "symb/evo/evo_task_types.hpp"
 #include "symb/robot/robot_task_types.hpp"
+#include "symb/sim/local_radio.hpp"
 
 namespace symb::sim {
 
@@ -104,6 +105,9 @@ kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor
         return kernel::Error{"robot '" + spec.name + "': " + std::string(device) + ": " + r.error()};
     }
   }
+  if (devices.radio != nullptr)
+    if (auto r = devices.radio->add_to(node, devices.radio_index, std::string(kRadioTaskName)); !r)
+      return kernel::Error{"robot '" + spec.name + "': radio: " + r.error()};
   for (const char* device_task : {kIrTaskName.data(), kWheelsTaskName.data()})
     if (!node.find(device_task))
       return kernel::Error{"robot '" + spec.name + "': the device tasks made no task named '" +

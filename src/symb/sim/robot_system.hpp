@@ -11,6 +11,7 @@
 // before the error is returned, so nothing of it keeps running.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <memory>
 #include <string>
@@ -25,6 +26,8 @@
 #include "symb/sim/scenario.hpp"
 
 namespace symb::sim {
+
+class LocalRadio;
 
 // Resolves a program reference (an MDL2e file named in a task parameter) to its text.
 using ProgramReader = std::function<kernel::Result<std::string>(std::string_view)>;
@@ -43,6 +46,10 @@ struct RobotDevices {
   std::shared_ptr<robot::Actuator> wheels;  // 2 channels, Thymio motor units
   std::shared_ptr<robot::Sensor> pose;      // 3 channels (simulation only; may be null)
   std::shared_ptr<robot::Sensor> ground;    // 2 channels (simulation only; may be null)
+  // The world's radio medium (simulation only; may be null) and this robot's index on it: the
+  // robot then gets a device task kRadioTaskName, made before the scenario's own tasks.
+  LocalRadio* radio = nullptr;
+  std::size_t radio_index = 0;
 };
 
 struct RobotSystemOptions {

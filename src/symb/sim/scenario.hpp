@@ -9,6 +9,9 @@
 // and, in simulation, two more that are made only when the robot's hooks name them:
 //   pose    [x cm, y cm, heading rad] per control period (an overhead tracker)
 //   ground  [left, right] floor reflectance 0..1 per control period (see WorldSpec::zones)
+// and every robot of a world that declares a radio (world.radio) has one more:
+//   radio   a short-range radio (sim::LocalRadio): bytes sent to it go on air, bytes heard come
+//           out with the sender's robot index (mEDEA's medium)
 // In-process they sit on simulated drivers; on a board, on the serial link (see docs/scenarios.md).
 //
 // File format: docs/scenarios.md. Parsing: scenario_parser.cpp (yaml-cpp).
@@ -35,10 +38,13 @@ inline constexpr std::string_view kIrTaskName = "ir";
 inline constexpr std::string_view kWheelsTaskName = "wheels";
 inline constexpr std::string_view kPoseTaskName = "pose";
 inline constexpr std::string_view kGroundTaskName = "ground";
+inline constexpr std::string_view kRadioTaskName = "radio";
 
-// Whether `name` is one of the device tasks above.
+// Whether `name` is one of the device tasks above (taken, radio included, even where the world
+// has no radio: a scenario must not mean something else once it gets one).
 inline bool is_device_task_name(std::string_view name) {
-  return name == kIrTaskName || name == kWheelsTaskName || name == kPoseTaskName || name == kGroundTaskName;
+  return name == kIrTaskName || name == kWheelsTaskName || name == kPoseTaskName || name == kGroundTaskName ||
+         name == kRadioTaskName;
 }
 
 // Every robot keeps a disc of this radius (cm) around its start point free: no wall surface and

@@ -359,13 +359,26 @@ struct Parser {
   }
 
   void world(const YAML::Node& n) {
-    Map m(src, n, "world", {"arena", "wall_height", "walls", "zones"});
+    Map m(src, n, "world", {"arena", "wall_height", "walls", "zones", "radio"});
     Map arena(src, m.require("arena"), "arena", {"width", "height"});
     sc.world.width = rd.number(arena.require("width"), "arena width (cm)", kMinArena, kMaxArena);
     sc.world.height = rd.number(arena.require("height"), "arena height (cm)", kMinArena, kMaxArena);
     if (auto h = m.get("wall_height"); h.IsDefined()) sc.world.wall_height = rd.number(h, "wall_height (cm)", 1, 1000);
     for (const auto& w : rd.list(m.get("walls"), "walls", kMaxWalls)) sc.world.walls.push_back(wall(w));
     for (const auto& z : rd.list(m.get("zones"), "zones", kMaxZones)) sc.world.zones.push_back(zone(z));
+    if (auto r = m.get("radio"); r.IsDefined()) sc.world.radio = radio(r);
+  }
+
+  // {range: CM, max_message_bytes: N}
+  RadioSpec radio(const YAML::Node& n) {
+    if (!n.IsMap()) src.fail(n, "radio is {range: CM, max_message_bytes: N}" + Map::got(n));
+    Map m(src, n, "radio", {"range", "max_message_bytes"});
+    RadioSpec r;
+    const double diagonal = std::hypot(sc.world.width, sc.world.height);
+    r.range = rd.number(m.require("range"), "radio range (cm)", 1, std::max(1.0, diagonal));
+    if (auto b = m.get("max_message_bytes"); b.IsDefined())
+      r.max_message_bytes = static_cast<std::size_t>(rd.integer(b, "radio max_message_bytes", 16, 1 << 20));
+    return r;
   }
 
   // {rect: [x1, y1, x2, y2], ground: G, name: N} or {circle: [x, y, r], ground: G, name: N}.
@@ -539,7 +552,7 @@ struct Parser {
       if (is_device_task_name(ts.name))
         src.fail(ts.where, "task name '" + ts.name + "' is taken: it names a device task (" + std::string(kIrTaskName) +
                                ", " + std::string(kWheelsTaskName) + ", " + std::string(kPoseTaskName) + ", " +
-                               std::string(kGroundTaskName) + ")");
+                               std::string(kGroundTaskName) + ", " + std::string(kRadioTaskName) + ")");
       for (const auto& other : r.tasks)
         if (other.name == ts.name)
           src.fail(ts.where, "robot '" + r.name + "' already has a task '" + ts.name + "' (line " +
@@ -691,6 +704,7 @@ struct Parser {
 
   // Every name a hook of robot `r` may use.
   bool has_task(const RobotSpec& r, std::string_view name) const {
+    if (name == kRadioTaskName) return sc.world.radio.has_value();
     if (is_device_task_name(name)) return true;
     return std::any_of(r.tasks.begin(), r.tasks.end(), [&](const TaskSpec& t) { return t.name == name; });
   }
@@ -700,8 +714,12 @@ struct Parser {
       if (!has_task(r, *end)) {
         std::vector<std::string_view> names{kIrTaskName, kWheelsTaskName, kPoseTaskName, kGroundTaskName};
         for (const auto& t : r.tasks) names.push_back(t.name);
+        if (sc.world.radio) names.push_back(kRadioTaskName);
         std::string msg = "robot '" + r.name + "' has no task '" + *end + "'";
-        if (auto hint = os::closest_name(*end, names); !hint.empty()) msg += " (did you mean '" + hint + "'?)";
+        if (*end == kRadioTaskName)
+          msg += ": robots have a radio only in a world that declares one (world: radio: {range: CM})";
+        else if (auto hint = os::closest_name(*end, names); !hint.empty())
+          msg += " (did you mean '" + hint + "'?)";
         src.fail(end == &h.from ? h.where : to_where, msg);
       }
     if (h.from == h.to) src.fail(h.where, "task '" + h.from + "' is hooked to itself");

@@ -31,16 +31,23 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
   } catch (const std::exception& e) {
     return kernel::Error{scenario.file + ": " + e.what()};
   }
+  if (const auto& spec = scenario.world.radio) {
+    auto radio = LocalRadio::create(scenario.robots.size(), {spec->range, spec->max_message_bytes});
+    if (!radio) return kernel::Error{scenario.file + ": radio: " + radio.error()};
+    s->radio_ = std::move(radio).value();
+    s->radio_->attach(*s->runner_);
+  }
   for (std::size_t i = 0; i < scenario.robots.size(); ++i) {
     RobotSystemOptions ro;
     ro.control_period = scenario.control_period;
     ro.seed = robot_node_seed(s->seed_, i);
     ro.log_capacity = options.log_capacity;
     ro.read_program = read;
-    auto built = RobotSystem::build(executor, scenario.robots[i],
-                                    RobotDevices{s->runner_->ir_sensor(i), s->runner_->wheels(i),
-                                                 s->runner_->pose_sensor(i), s->runner_->ground_sensor(i)},
-                                    std::move(ro));
+    auto built =
+        RobotSystem::build(executor, scenario.robots[i],
+                           RobotDevices{s->runner_->ir_sensor(i), s->runner_->wheels(i), s->runner_->pose_sensor(i),
+                                        s->runner_->ground_sensor(i), s->radio_.get(), i},
+                           std::move(ro));
     if (!built) return kernel::Error{built.error()};
     s->robots_.push_back(std::move(built).value());
   }

@@ -15,6 +15,7 @@
 
 #include "symb/kernel/executor.hpp"
 #include "symb/kernel/result.hpp"
+#include "symb/sim/local_radio.hpp"
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 #include "symb/sim/world.hpp"
@@ -48,12 +49,15 @@ class ScenarioSession {
   RobotSystem& robot(std::size_t i) { return *robots_.at(i); }
   // The robot named `name`, or null.
   RobotSystem* find_robot(std::string_view name);
+  // The world's radio medium (world.radio in the scenario), or null.
+  LocalRadio* radio() { return radio_.get(); }
 
  private:
   ScenarioSession() = default;
   Scenario scenario_;
   std::uint64_t seed_ = 1;
   std::unique_ptr<World> world_;
+  std::unique_ptr<LocalRadio> radio_;  // observes runner_: destroyed after it
   std::unique_ptr<WorldRunner> runner_;
   std::vector<std::unique_ptr<RobotSystem>> robots_;  // destroyed before runner_ and world_
 };

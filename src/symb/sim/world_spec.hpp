@@ -6,7 +6,9 @@
 // the right, y upwards; an angle of 0 faces +x and grows counter-clockwise.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,12 +53,20 @@ struct ZoneSpec {
   }
 };
 
+// A short-range radio shared by the world's robots (sim::LocalRadio): every robot gets a device
+// task `radio` on it. Range centre to centre; walls do not block it.
+struct RadioSpec {
+  double range = 50;                          // cm
+  std::size_t max_message_bytes = 64 * 1024;  // longer messages are refused
+};
+
 struct WorldSpec {
-  double width = 0;             // cm
-  double height = 0;            // cm
-  double wall_height = 10.0;    // cm; Thymio2's IR sensors see objects at least as high as they are
-  std::vector<WallSpec> walls;  // inner walls; the arena's four sides are always walled
-  std::vector<ZoneSpec> zones;  // marked floor areas
+  double width = 0;                // cm
+  double height = 0;               // cm
+  double wall_height = 10.0;       // cm; Thymio2's IR sensors see objects at least as high as they are
+  std::vector<WallSpec> walls;     // inner walls; the arena's four sides are always walled
+  std::vector<ZoneSpec> zones;     // marked floor areas
+  std::optional<RadioSpec> radio;  // none: the robots have no radio
 };
 
 // The robot models a world can hold.
