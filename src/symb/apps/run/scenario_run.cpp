@@ -243,10 +243,25 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     auto spike_files = spikes.write(result.out_dir);
     if (!spike_files) return Error{spike_files.error()};
     result.files.insert(result.files.end(), spike_files->begin(), spike_files->end());
-    // A picture per probe series, for the first robots (a swarm would make hundreds).
-    std::size_t plots = 0;
+    // A picture per probe series, for the first robots (a swarm would make hundreds). The
+    // kMaxProbePlots pictures are shared fairly among the kinds of series (task and channel), so
+    // an evolution task's few probes are not crowded out by its controllers' many.
+    std::vector<std::vector<const ProbeSeries*>> kinds;
     for (const ProbeSeries* s : probes.series()) {
-      if (plots == kMaxProbePlots) break;
+      auto same = std::find_if(kinds.begin(), kinds.end(), [s](const auto& k) {
+        return k.front()->task == s->task && k.front()->channel == s->channel;
+      });
+      if (same == kinds.end())
+        kinds.push_back({s});
+      else
+        same->push_back(s);
+    }
+    const std::size_t per_kind = kinds.empty() ? 0 : std::max<std::size_t>(1, kMaxProbePlots / kinds.size());
+    std::vector<const ProbeSeries*> chosen;
+    for (const auto& k : kinds)
+      for (std::size_t i = 0; i < k.size() && i < per_kind && chosen.size() < kMaxProbePlots; ++i)
+        chosen.push_back(k[i]);
+    for (const ProbeSeries* s : chosen) {
       const fs::path dir = result.out_dir / "probes";
       std::error_code ec;
       fs::create_directories(dir, ec);
@@ -256,7 +271,6 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
       const fs::path file = dir / probe_file_name(*s);
       if (auto st = write_file(file, plot.str()); !st) return Error{st.error()};
       result.files.push_back(file);
-      ++plots;
     }
   }
   return result;
