@@ -98,10 +98,11 @@ void TaskRecord::on_activity_start() {
 void TaskRecord::apply_pending_parameters() {
   // `params` is set before the task starts and never replaced, so this unlocked test is safe
   // and spares the common case (no parameters) a lock per batch.
-  if (!params) return;
+  if (!params || !params->any_pending.load(std::memory_order_acquire)) return;
   std::vector<std::pair<std::string, ParamValue>> pending;
   {
     std::lock_guard lock(in_mu);
+    params->any_pending.store(false, std::memory_order_relaxed);
     if (params->pending.empty()) return;
     pending.swap(params->pending);
   }
@@ -483,6 +484,7 @@ Status Node::set_parameter(TaskId id, std::string_view param, std::string_view v
     auto v = parse_param_value(*spec, value);
     if (!v) return Error{v.error()};
     r->params->pending.emplace_back(spec->name, std::move(v).value());
+    r->params->any_pending.store(true, std::memory_order_release);
     // Wake the task so that it applies the change on its own context soon.
     if (!r->wake_pending && r->slot != nullptr) {
       r->wake_pending = true;

@@ -46,6 +46,8 @@ struct ParamState {
   const TaskType* type = nullptr;
   ParamSet values;
   std::vector<std::pair<std::string, ParamValue>> pending;  // applied on the task's context
+  // Set with every push to `pending`: the task's handlers test it (every message) without a lock.
+  std::atomic<bool> any_pending{false};
 };
 
 struct TaskRecord final : kernel::Activity {

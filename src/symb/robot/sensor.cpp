@@ -101,22 +101,21 @@ std::optional<SensorSample> Sensor::latest() const {
   return latest_;
 }
 
-bool Sensor::has_listener() const {
-  std::lock_guard lock(mu_);
-  return static_cast<bool>(notify_);
-}
+bool Sensor::has_listener() const { return listening_.load(std::memory_order_acquire); }
 
 kernel::Status Sensor::attach(std::function<void()> notify) {
   std::lock_guard lock(mu_);
   if (notify_) return Error{"sensor '" + name() + "' already feeds a task"};
   notify_ = std::move(notify);
   notified_ = false;
+  listening_.store(true, std::memory_order_release);
   return {};
 }
 
 void Sensor::detach() {
   std::lock_guard lock(mu_);
   notify_ = nullptr;
+  listening_.store(false, std::memory_order_release);
   // Whatever the task did not take is now unheard; keeping it would hand stale samples to the
   // next task as fresh ones.
   stats_.overwritten += mailbox_.size();
@@ -124,12 +123,13 @@ void Sensor::detach() {
   notified_ = false;
 }
 
-void Sensor::take(std::vector<SensorSample>& out) {
+SensorStats Sensor::take(std::vector<SensorSample>& out) {
   out.clear();
   std::lock_guard lock(mu_);
   notified_ = false;
   while (!mailbox_.empty()) out.push_back(mailbox_.take());
   stats_.taken += out.size();
+  return stats_;
 }
 
 // --- SensorTask ------------------------------------------------------------------------------------
@@ -219,7 +219,7 @@ void SensorTask::on_message(const os::Message& m) {
 }
 
 void SensorTask::drain() {
-  sensor_->take(batch_);
+  const SensorStats after = sensor_->take(batch_);
   std::array<float, os::Payload::kInlineValues> narrowed{};
   for (const SensorSample& s : batch_) {
     if (options_.ranges.empty()) {
@@ -235,7 +235,7 @@ void SensorTask::drain() {
     }
     forwarded_.fetch_add(1, std::memory_order_relaxed);
   }
-  report(sensor_->stats());
+  report(after);
 }
 
 void SensorTask::report(const SensorStats& st) {

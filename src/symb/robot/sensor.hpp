@@ -110,12 +110,15 @@ class Sensor : public io::Device {
   // may only hand work over (Node::inject), never call back into the sensor.
   kernel::Status attach(std::function<void()> notify);
   void detach();
-  // Moves the mailbox out, oldest first, and rearms the notification.
-  void take(std::vector<SensorSample>& out);
+  // Moves the mailbox out, oldest first, and rearms the notification. Returns the counters as
+  // they were then (one lock for both: a task drains every period).
+  SensorStats take(std::vector<SensorSample>& out);
 
   const std::vector<ChannelSpec> channels_;
   std::mutex open_mu_;  // serialises open/close (and the driver's activate/deactivate)
   std::atomic<bool> open_{false};
+  // Mirrors `notify_ != nullptr` for has_listener(), which a simulator asks every step.
+  std::atomic<bool> listening_{false};
 
   mutable std::mutex mu_;  // everything below
   kernel::RingBuffer<SensorSample> mailbox_;

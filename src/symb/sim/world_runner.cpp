@@ -148,7 +148,8 @@ void WorldRunner::tick() {
     if (pose_[i]->has_listener()) pose_[i]->publish_pose(r.state.pose, now);
     if (ground_[i]->has_listener()) ground_[i]->publish_readings(r.ground, now);
   }
-  steps_.fetch_add(1, std::memory_order_acq_rel);
+  // One writer (this handler): a plain store, not a locked read-modify-write per step.
+  steps_.store(steps_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   std::lock_guard lock(observers_mu_);
   for (const StepObserver& observer : observers_) observer(record_);
 }
