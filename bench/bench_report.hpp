@@ -61,6 +61,15 @@ class CollectingReporter : public benchmark::ConsoleReporter {
     const std::size_t n = v.size();
     return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
   }
+  // Largest value over the repetitions (0 when it did not run): for a rate, the repetition the
+  // shared machine disturbed least.
+  double best(const std::string& benchmark, const std::string& counter) const {
+    auto b = runs_.find(benchmark);
+    if (b == runs_.end()) return 0;
+    auto c = b->second.find(counter);
+    if (c == b->second.end() || c->second.empty()) return 0;
+    return *std::max_element(c->second.begin(), c->second.end());
+  }
   std::size_t repetitions(const std::string& benchmark) const {
     auto b = runs_.find(benchmark);
     if (b == runs_.end() || b->second.empty()) return 0;

@@ -14,8 +14,9 @@
 //                stepping through evaluations of 1 s recovery + 20 s counted at dt = 30 ms.
 //
 // Both run the same virtual time (kVirtual) from the same start, seed and parameters; the figure
-// is evaluations per CPU second of the (single) thread both run on. The ratio framework / raw is the framework's cost
-// for an evolution run (tasks, hooks, messages, the controller swap per candidate). Target >= 80 %.
+// is evaluations per CPU second of the (single) thread both run on. The ratio framework / raw is
+// the framework's cost for an evolution run (tasks, hooks, messages, the controller swap per
+// candidate), best repetition against best (see kRepetitions). Target >= 80 %.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -53,6 +54,10 @@ constexpr symb::kernel::Duration kEvaluation = 20s, kRecovery = 1s;
 constexpr double kSigmaMin = 0.05;
 constexpr std::uint64_t kSeed = 1;
 constexpr double kTarget = 0.80;
+// Interleaved repetitions of each side. The box is shared: a repetition's rate varies by up to a
+// third with the neighbours' load, so the verdict compares each side's least disturbed repetition
+// (the best rate); the medians are printed beside it.
+constexpr int kRepetitions = 9;
 
 // CPU seconds of this process: the box is shared and loaded, wall time would count the time the
 // scheduler gave to other jobs. Both sides run on this thread only (virtual-time executor).
@@ -278,29 +283,37 @@ void BM_RawEnkiLoop(benchmark::State& state) {
 int main(int argc, char** argv) {
   for (auto [name, fn] : {std::pair{"BM_RawEnkiLoop", &BM_RawEnkiLoop}, std::pair{"BM_Framework", &BM_Framework},
                           std::pair{"BM_FrameworkFixedController", &BM_FrameworkFixedController}})
-    benchmark::RegisterBenchmark(name, fn)->Iterations(1)->Repetitions(5)->UseManualTime()->Unit(
-        benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(name, fn)
+        ->Iterations(1)
+        ->Repetitions(kRepetitions)
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond);
   symb::bench::CollectingReporter reporter(false);
   if (!symb::bench::run_interleaved(argc, argv, reporter)) return 1;
-  const double raw = reporter.median("BM_RawEnkiLoop", "evals_per_s");
-  const double fw = reporter.median("BM_Framework", "evals_per_s");
-  const double ratio = raw > 0 ? fw / raw : 0;
+  const auto line = [&](const char* label, const char* name) {
+    std::printf("%-16s %10.1f %10.1f %12.0f %10.3f\n", label, reporter.best(name, "evals_per_s"),
+                reporter.median(name, "evals_per_s"), reporter.median(name, "evaluations"),
+                reporter.median(name, "champion"));
+  };
   std::printf(
-      "\nmaze (1+1)-ONLINE, %.0f min virtual, 1 s recovery + 20 s evaluation, dt 30 ms, one core, per CPU second, "
-      "median of "
-      "repetitions\n",
-      std::chrono::duration<double>(kVirtual).count() / 60);
-  std::printf("%-16s %14s %12s %10s\n", "", "evaluations/s", "evaluations", "champion");
-  std::printf("%-16s %14.1f %12.0f %10.3f\n", "raw Enki loop", raw, reporter.median("BM_RawEnkiLoop", "evaluations"),
-              reporter.median("BM_RawEnkiLoop", "champion"));
-  std::printf("%-16s %14.1f %12.0f %10.3f\n", "framework", fw, reporter.median("BM_Framework", "evaluations"),
-              reporter.median("BM_Framework", "champion"));
-  std::printf("%-16s %14.1f   (breakdown: braitenberg.yaml's fixed perceptron, no fitness, no evolution)\n",
-              "framework fixed", reporter.median("BM_FrameworkFixedController", "evals_per_s"));
+      "\nmaze (1+1)-ONLINE, %.0f min virtual, 1 s recovery + 20 s evaluation, dt 30 ms, one core, evaluations per "
+      "CPU second over %d interleaved repetitions\n",
+      std::chrono::duration<double>(kVirtual).count() / 60, kRepetitions);
+  std::printf("%-16s %10s %10s %12s %10s\n", "", "best", "median", "evaluations", "champion");
+  line("raw Enki loop", "BM_RawEnkiLoop");
+  line("framework", "BM_Framework");
+  std::printf("%-16s %10.1f %10.1f   (breakdown: braitenberg.yaml's fixed perceptron, no fitness, no evolution)\n",
+              "framework fixed", reporter.best("BM_FrameworkFixedController", "evals_per_s"),
+              reporter.median("BM_FrameworkFixedController", "evals_per_s"));
   for (const auto& e : reporter.errors()) std::printf("ERROR %s\n", e.c_str());
-  const bool met = ratio >= kTarget && reporter.errors().empty();
+  const double raw_best = reporter.best("BM_RawEnkiLoop", "evals_per_s");
+  const double raw_median = reporter.median("BM_RawEnkiLoop", "evals_per_s");
+  const double best = raw_best > 0 ? reporter.best("BM_Framework", "evals_per_s") / raw_best : 0;
+  const double median = raw_median > 0 ? reporter.median("BM_Framework", "evals_per_s") / raw_median : 0;
+  const bool met = best >= kTarget && reporter.errors().empty();
   std::printf(
-      "evolution: the framework at %.0f%% of the raw Enki loop's evaluations per second (target >= %.0f%%): %s\n",
-      100 * ratio, 100 * kTarget, met ? "MET" : "NOT MET");
+      "evolution: the framework at %.0f%% of the raw Enki loop's evaluations per second, best against best "
+      "(medians: %.0f%%; target >= %.0f%%): %s\n",
+      100 * best, 100 * median, 100 * kTarget, met ? "MET" : "NOT MET");
   return 0;
 }
