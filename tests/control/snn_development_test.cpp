@@ -567,6 +567,8 @@ TEST(DevelopmentDocExample, GrowsTheCrossedBraitenbergWiring) {
   EXPECT_TRUE(SpikingNetwork::create(net->spec).ok());
 }
 
+// A large development run completes and keeps its cells; how long it takes is printed, not
+// asserted (timing belongs to bench/, and the sanitizer builds are 10-50x slower).
 TEST(DevelopmentSpeed, LargeGridManyMorphogensTwoThousandTicks) {
   std::string text = "grid 64 64\nticks 2000\n";
   for (int m = 0; m < 16; ++m) {
@@ -586,8 +588,7 @@ TEST(DevelopmentSpeed, LargeGridManyMorphogensTwoThousandTicks) {
   ASSERT_TRUE(net.ok());
   EXPECT_EQ(net->cell_ids.size(), 16u);
   RecordProperty("seconds", std::to_string(seconds));
-  std::printf("64x64, 16 morphogens, 2000 ticks: %.3f s\n", seconds);
-  EXPECT_LT(seconds, 5.0);  // about 0.1-0.2 s in release; sanitizer builds are ~10x slower
+  std::printf("64x64, 16 morphogens, 2000 ticks: %.3f s (about 0.1-0.2 s in release)\n", seconds);
 }
 
 }  // namespace

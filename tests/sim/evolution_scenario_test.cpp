@@ -19,6 +19,8 @@
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"
 
+#include "support/tsan_skip.hpp"
+
 namespace symb::sim {
 namespace {
 
@@ -142,6 +144,7 @@ evo::OnePlusOneTaskOptions run_options() {
 constexpr kernel::Duration kBudget = 120min;
 
 TEST(EvolutionScenario, OnePlusOneOnlineReachesBraitenbergInTheMazeWithFiveSeeds) {
+  SYMB_SKIP_UNDER_TSAN();
   const Replay baseline = replay(maze_with_perceptron("network/braitenberg.w"), 10min);
   std::printf("braitenberg: fitness %.4f, %llu contact steps, %.0f cm\n", baseline.fitness,
               static_cast<unsigned long long>(baseline.contact_steps), baseline.distance);

@@ -15,6 +15,8 @@
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"
 
+#include "support/tsan_skip.hpp"
+
 namespace symb::sim {
 namespace {
 
@@ -58,6 +60,7 @@ Outcome run(const Scenario& scenario, kernel::Duration duration, std::uint64_t s
 }
 
 TEST(LindaScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
+  SYMB_SKIP_UNDER_TSAN();
   const Scenario sc = load("linda_maze.yaml");
   for (std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE(seed);

@@ -20,6 +20,8 @@
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"
 
+#include "support/tsan_skip.hpp"
+
 namespace symb::sim {
 namespace {
 
@@ -145,6 +147,7 @@ evo::MuPlusOneTaskOptions run_options() {
 constexpr kernel::Duration kBudget = 240min;
 
 TEST(MuPlusOneScenario, ReachesBraitenbergInTheMazeWithThreeSeedsIn4Hours) {
+  SYMB_SKIP_UNDER_TSAN();
   const Replay baseline = replay(maze_with_perceptron("network/braitenberg.w"), 10min);
   std::printf("braitenberg: fitness %.4f, %llu contact steps, %.0f cm\n", baseline.fitness,
               static_cast<unsigned long long>(baseline.contact_steps), baseline.distance);
