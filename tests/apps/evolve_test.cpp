@@ -169,6 +169,54 @@ TEST(Evolve, ResumedRunEqualsUninterruptedRun) {
   fs::remove_all(b);
 }
 
+// The same experiment with encapsulated (mu+1)-ONLINE: evolve_maze.yaml with the evolution task
+// swapped for a mu_plus_one one. Its best member is the champion (with its fixed sigma), and a
+// resumed run gives the same files.
+TEST(Evolve, MuPlusOneExperimentWritesItsBestAndResumes) {
+  const fs::path dir = scratch("mu");
+  fs::create_directories(dir);
+  std::string yaml = read(kScenario);
+  const std::string from = "type: one_plus_one\n        params: {evaluation: 20s, recovery: 1s, sigma_min: 0.05,";
+  const auto at = yaml.find(from);
+  ASSERT_NE(at, std::string::npos) << "evolve_maze.yaml changed: update this test";
+  yaml.replace(at, from.size(),
+               "type: mu_plus_one\n        params: {evaluation: 20s, recovery: 1s, mu: 5, sigma: 0.5,");
+  const fs::path scenario = dir / "evolve_maze_mu.yaml";
+  write(scenario, yaml);
+  EvolveOptions o = options(dir / "whole", 20min);
+  o.scenario_path = scenario.string();
+  auto whole = run_evolution(o);
+  ASSERT_TRUE(whole.ok()) << whole.error();
+  EXPECT_GT(whole->evaluations, 50u);
+  EXPECT_GE(whole->champions, 1u);
+  EXPECT_GT(whole->champion_fitness, 0.0);
+  const std::string csv = read(dir / "whole" / "fitness.csv");
+  EXPECT_EQ(static_cast<std::uint64_t>(std::count(csv.begin(), csv.end(), '\n')), whole->evaluations + 1);
+  auto genome = evo::parse_genome_text(read(dir / "whole" / "champion.genome"));
+  ASSERT_TRUE(genome.ok()) << genome.error();
+  ASSERT_EQ(evo::kind_of(*genome), evo::GenomeKind::kReal);
+  const auto& real = std::get<evo::RealGenome>(*genome);
+  EXPECT_EQ(real.values.size(), 16u);
+  EXPECT_EQ(real.sigma_min, 0.5);
+  EXPECT_EQ(real.sigma_max, 0.5);
+  EXPECT_EQ(listing(dir / "whole" / "champions").size(), whole->champions);
+
+  EvolveOptions part = options(dir / "part", 20min);
+  part.scenario_path = scenario.string();
+  part.stop_at = 10min;
+  ASSERT_TRUE(run_evolution(part).ok());
+  EvolveOptions resume;
+  resume.scenario_path = scenario.string();
+  resume.out_dir = dir / "part";
+  resume.resume = true;
+  auto resumed = run_evolution(resume);
+  ASSERT_TRUE(resumed.ok()) << resumed.error();
+  EXPECT_EQ(resumed->history_hash, whole->history_hash);
+  EXPECT_EQ(read(dir / "part" / "fitness.csv"), csv);
+  EXPECT_EQ(read(dir / "part" / "champion.genome"), read(dir / "whole" / "champion.genome"));
+  fs::remove_all(dir);
+}
+
 TEST(Evolve, ResumeRefusesAnotherScenarioFile) {
   const fs::path dir = scratch("other"), b = dir / "run";
   fs::create_directories(dir);

@@ -129,6 +129,13 @@ void MuPlusOneTask::finish_evaluation(double fitness) {
   probe("best_fitness", {static_cast<float>(best.fitness)});
   probe("mean_fitness", {static_cast<float>(mean)});
   probe("evaluations", {static_cast<float>(a.counts().evaluations)});
+  // The best member's genes whenever another genome becomes the best (as floats: what the mlp
+  // drove with), so whoever watches the run (symb evolve) can save it.
+  if (probing() && best.genome.values != probed_best_) {
+    probed_best_ = best.genome.values;
+    std::vector<float> genes(probed_best_.begin(), probed_best_.end());
+    probe("champion", genes);
+  }
   start_candidate();
 }
 

@@ -15,7 +15,8 @@
 // inputs, layers, activation, lo, hi, controller, sensor, actuator, fitness (task names).
 // Random numbers from the task's own stream (Task::random()).
 // Probes after every evaluation: "fitness" [measured, kind: 0 initial, 1 child, 2 re-evaluation],
-// "best_fitness", "mean_fitness", "evaluations".
+// "best_fitness", "mean_fitness", "evaluations", and "champion" (the best member's genes) when
+// another genome becomes the best.
 // A missing task: a warning, then a retry every tick (period 1 s); a controller that cannot be
 // created: the error is logged and evolution stops (state kFailed). Removing the evolution task
 // leaves the candidate of the moment driving.
@@ -82,6 +83,7 @@ class MuPlusOneTask : public os::Task {
   ControllerSwap swap_;
   std::optional<MuPlusOne> algorithm_;
   bool warned_missing_ = false;
+  std::vector<double> probed_best_;  // the genes of the last "champion" probe
 
   mutable std::mutex mu_;  // what the getters read
   EvolutionState state_ = EvolutionState::kWaiting;

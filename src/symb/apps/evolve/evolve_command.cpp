@@ -27,9 +27,10 @@ constexpr OptionSpec kOptions[] = {
 void print_help(std::ostream& out) {
   out << "Usage: " << kCommand << " SCENARIO [options]\n\n"
       << "Runs an evolution experiment headless on the deterministic virtual-time executor: a\n"
-      << "scenario whose robot has an evolution task (type one_plus_one: (1+1)-ONLINE, which\n"
-      << "replaces the controller task for every candidate) and a fitness task. Shows the\n"
-      << "evaluations, the champion's and the mean fitness and evaluations per second while it runs.\n\n"
+      << "scenario whose robot has an evolution task (type one_plus_one: (1+1)-ONLINE, or\n"
+      << "mu_plus_one: encapsulated (mu+1)-ONLINE; each replaces the controller task for every\n"
+      << "candidate) and a fitness task. Shows the evaluations, the champion's (the best member's)\n"
+      << "and the mean fitness and evaluations per second while it runs.\n\n"
       << "Options:\n"
       << describe_options(kOptions) << "\n"
       << "Writes into the output folder: fitness.csv (one row per evaluation), fitness.svg,\n"

@@ -10,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <sstream>
+#include <string_view>
 #include <thread>
 #include <utility>
 
@@ -29,7 +30,9 @@ namespace fs = std::filesystem;
 using kernel::Error;
 
 constexpr std::size_t kMeanWindow = 20;
-constexpr const char* kEvolutionType = "one_plus_one";
+// The evolution task types symb evolve can watch: both publish "fitness", their best so far
+// ("champion_fitness" / "best_fitness"), "evaluations" and "champion" genes.
+constexpr std::string_view kEvolutionTypes[] = {"one_plus_one", "mu_plus_one"};
 
 double seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
 
@@ -95,7 +98,7 @@ class Watcher {
       pending_.time = s.time;
       pending_.fitness = s.values[0];
       pending_.kind = s.values.size() > 1 ? static_cast<int>(s.values[1]) : 0;
-    } else if (s.channel == "champion_fitness") {
+    } else if (s.channel == "champion_fitness" || s.channel == "best_fitness") {
       pending_.champion_fitness = s.values[0];
     } else if (s.channel == "sigma") {
       pending_.sigma = s.values[0];
@@ -164,10 +167,12 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   std::string robot_name, task_name;
   for (const sim::RobotSpec& r : scenario.robots)
     for (const sim::TaskSpec& t : r.tasks)
-      if (robot_name.empty() && t.type == kEvolutionType) robot_name = r.name, task_name = t.name;
+      if (robot_name.empty() &&
+          std::find(std::begin(kEvolutionTypes), std::end(kEvolutionTypes), t.type) != std::end(kEvolutionTypes))
+        robot_name = r.name, task_name = t.name;
   if (robot_name.empty())
-    return Error{options.scenario_path + ": no evolution task (a task of type " + kEvolutionType +
-                 "; see scenarios/evolve_maze.yaml)"};
+    return Error{options.scenario_path +
+                 ": no evolution task (a task of type one_plus_one or mu_plus_one; see scenarios/evolve_maze.yaml)"};
 
   const fs::path out = options.out_dir;
   const fs::path checkpoint_path = out / "checkpoint.txt";
@@ -212,7 +217,10 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   if (!evolution_id) return Error{"the evolution task '" + task_name + "' was not created"};
   GenomeFrame frame;
   if (auto p = node.parameters(*evolution_id); p.ok()) {
-    frame = {p->real("lo"), p->real("hi"), p->real("sigma_min"), p->real("sigma_max")};
+    // (mu+1) mutates with one fixed sigma: its genomes' sigma range is that one value.
+    const bool fixed_sigma = p->find("sigma_min") == nullptr;
+    frame = {p->real("lo"), p->real("hi"), p->real(fixed_sigma ? "sigma" : "sigma_min"),
+             p->real(fixed_sigma ? "sigma" : "sigma_max")};
   } else {
     return Error{"the evolution task's parameters: " + p.error()};
   }

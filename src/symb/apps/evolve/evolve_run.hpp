@@ -1,6 +1,7 @@
 // Running an evolution experiment headless (`symb evolve`): a scenario with an evolution task
-// (type one_plus_one) on the virtual-time executor, watched through the task's probes
-// ("fitness", "champion_fitness", "sigma", "evaluations", "champion"), with periodic checkpoints
+// (type one_plus_one or mu_plus_one) on the virtual-time executor, watched through the task's
+// probes ("fitness", "champion_fitness" or "best_fitness", "sigma" (1+1 only), "evaluations",
+// "champion"), with periodic checkpoints
 // (evolve_checkpoint.hpp) and an output folder:
 //   fitness.csv      one row per evaluation: time, kind, fitness, champion fitness, sigma
 //   fitness.svg      fitness and champion fitness over time
@@ -8,8 +9,9 @@
 //   champions/       every new champion's genome, numbered by evaluation
 //   checkpoint.txt   the last checkpoint
 //   summary.txt      what ran, what came out
-// The evolution task is the first task of type one_plus_one in the scenario (one robot evolves;
-// the others, if any, just run).
+// The evolution task is the first task of type one_plus_one or mu_plus_one in the scenario (one
+// robot evolves; the others, if any, just run). For (mu+1) the "champion" is the population's
+// best member, and its genomes' sigma range is the task's fixed sigma.
 #pragma once
 
 #include <cstdint>
