@@ -14,20 +14,23 @@ constexpr std::size_t kHistoryLimit = 1 << 16;  // evaluations kept for history(
 
 }  // namespace
 
+namespace {
+
+ControllerSwapOptions swap_options(const OnePlusOneTaskOptions& o) {
+  return {o.evaluation,        o.recovery, o.controller_type, o.controller,
+          o.controller_params, o.sensor,   o.actuator,        o.fitness};
+}
+
+}  // namespace
+
 kernel::Result<std::unique_ptr<OnePlusOneTask>> OnePlusOneTask::create(OnePlusOneTaskOptions options) {
   if (auto st = check(options.algorithm); !st) return kernel::Error{st.error()};
-  if (options.evaluation.count() <= 0) return kernel::Error{"one_plus_one: evaluation must be positive"};
-  if (options.recovery.count() < 0) return kernel::Error{"one_plus_one: recovery must not be negative"};
-  for (const std::string* n : {&options.controller, &options.sensor, &options.actuator, &options.fitness})
-    if (!os::is_valid_name(*n)) return kernel::Error{"one_plus_one: '" + *n + "' cannot name a task"};
-  if (!os::is_valid_name(options.controller_type))
-    return kernel::Error{"one_plus_one: '" + options.controller_type + "' cannot name a task type"};
-  auto params = os::parse_param_assignments(options.controller_params);
-  if (!params) return kernel::Error{"one_plus_one: controller parameters: " + params.error()};
-  for (const auto& a : *params)
-    if (a.name == "weights") return kernel::Error{"one_plus_one: controller parameters: weights are the genome's"};
+  if (auto st = check(swap_options(options), "one_plus_one"); !st) return kernel::Error{st.error()};
   return std::unique_ptr<OnePlusOneTask>(new OnePlusOneTask(std::move(options)));
 }
+
+OnePlusOneTask::OnePlusOneTask(OnePlusOneTaskOptions options)
+    : options_(std::move(options)), swap_(swap_options(options_), "one_plus_one") {}
 
 EvolutionState OnePlusOneTask::state() const {
   std::lock_guard lock(mu_);
@@ -84,81 +87,39 @@ void OnePlusOneTask::on_tick() {
 
 // Finds the tasks evolution works with and hooks the fitness task to this one.
 bool OnePlusOneTask::set_up() {
-  os::Node& n = node();
-  const auto sensor = n.find(options_.sensor), actuator = n.find(options_.actuator), fitness = n.find(options_.fitness);
-  if (!sensor || !actuator || !fitness) {
+  auto ready = swap_.set_up(node(), id());
+  if (!ready) {
+    fail(ready.error());
+    return false;
+  }
+  if (!*ready) {
     if (!warned_missing_)
       log(os::LogLevel::kWarn, "one_plus_one: waiting for the tasks '" + options_.sensor + "', '" + options_.actuator +
                                    "' and '" + options_.fitness + "'");
     warned_missing_ = true;
     return false;
   }
-  if (auto h = n.hook(*fitness, id()); !h) {
-    fail("one_plus_one: cannot hook '" + options_.fitness + "': " + h.error());
-    return false;
-  }
-  sensor_ = *sensor, actuator_ = *actuator, fitness_ = *fitness;
-  {
-    std::lock_guard lock(mu_);
-    state_ = EvolutionState::kRunning;
-  }
+  std::lock_guard lock(mu_);
+  state_ = EvolutionState::kRunning;
   return true;
 }
 
 // Replaces the controller task by a new one running algorithm_->next().
 void OnePlusOneTask::start_candidate() {
-  os::Node& n = node();
-  if (have_controller_) {
-    (void)n.remove(controller_);  // gone already (removed by someone else) is fine
-    have_controller_ = false;
-  } else if (auto existing = n.find(options_.controller)) {
-    (void)n.remove(*existing);  // the scenario's own controller: the first candidate replaces it
-  }
-  auto params = os::parse_param_assignments(options_.controller_params);
-  if (!params) {
-    fail("one_plus_one: controller parameters: " + params.error());
+  if (auto st = swap_.swap(node(), algorithm_->next(), now()); !st) {
+    fail(st.error());
     return;
   }
-  std::vector<os::ParamAssignment> assignments = std::move(params).value();
-  assignments.push_back({"weights", weights_text(algorithm_->next()), 1});
-  auto created = n.create(options_.controller_type, options_.controller, assignments);
-  if (!created) {
-    fail("one_plus_one: cannot create the candidate controller: " + created.error());
-    return;
-  }
-  controller_ = *created;
-  have_controller_ = true;
-  for (auto [from, to] :
-       {std::pair{sensor_, controller_}, std::pair{controller_, actuator_}, std::pair{controller_, fitness_}}) {
-    if (auto h = n.hook(from, to); !h) {
-      fail("one_plus_one: cannot hook the candidate controller: " + h.error());
-      return;
-    }
-  }
-  started_ = now();
-  counted_sum_ = 0;
-  counted_steps_ = 0;
   std::lock_guard lock(mu_);
   ++created_;
 }
 
 void OnePlusOneTask::on_message(const os::Message& m) {
-  if (state() != EvolutionState::kRunning || !have_controller_ || m.source != fitness_) return;
-  const auto v = m.numbers();
-  if (v.size() < 2 || !std::isfinite(v[0])) return;
-  const double step = v.size() >= 3 ? static_cast<double>(v[2]) : static_cast<double>(v[0]) - last_sum_;
-  last_sum_ = v[0];
-  const kernel::Time t = now();
-  if (t < started_ + options_.recovery) return;  // recovery: not counted
-  if (std::isfinite(step)) {
-    counted_sum_ += step;
-    ++counted_steps_;
-  }
-  if (t >= started_ + options_.recovery + options_.evaluation) finish_evaluation();
+  if (state() != EvolutionState::kRunning) return;
+  if (auto fitness = swap_.feed(m, now())) finish_evaluation(*fitness);
 }
 
-void OnePlusOneTask::finish_evaluation() {
-  const double fitness = counted_steps_ == 0 ? 0.0 : counted_sum_ / static_cast<double>(counted_steps_);
+void OnePlusOneTask::finish_evaluation(double fitness) {
   const Candidate kind = algorithm_->candidate_kind();
   const std::uint64_t successes_before = algorithm_->counts().successes;
   algorithm_->report(fitness);
@@ -171,7 +132,7 @@ void OnePlusOneTask::finish_evaluation() {
     champion_fitness_ = a.champion_fitness();
     counts_ = a.counts();
     if (history_.size() < kHistoryLimit)
-      history_.push_back({now(), kind, fitness, a.champion_fitness(), a.sigma(), counted_steps_});
+      history_.push_back({now(), kind, fitness, a.champion_fitness(), a.sigma(), swap_.counted_steps()});
   }
   probe("fitness", {static_cast<float>(fitness), static_cast<float>(static_cast<int>(kind))});
   probe("champion_fitness", {static_cast<float>(a.champion_fitness())});

@@ -37,6 +37,7 @@
 #include <string>
 #include <vector>
 
+#include "symb/evo/controller_swap.hpp"
 #include "symb/evo/one_plus_one.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/os/ids.hpp"
@@ -86,21 +87,16 @@ class OnePlusOneTask : public os::Task {
   void on_message(const os::Message& m) override;
 
  private:
-  explicit OnePlusOneTask(OnePlusOneTaskOptions options) : options_(std::move(options)) {}
+  explicit OnePlusOneTask(OnePlusOneTaskOptions options);
   bool set_up();
   void start_candidate();
-  void finish_evaluation();
+  void finish_evaluation(double fitness);
   void fail(const std::string& why);
 
   OnePlusOneTaskOptions options_;
+  ControllerSwap swap_;
   std::optional<OnePlusOne> algorithm_;
-  os::TaskId sensor_, actuator_, fitness_, controller_;
-  bool have_controller_ = false;
   bool warned_missing_ = false;
-  kernel::Time started_{0};
-  double counted_sum_ = 0;
-  std::uint64_t counted_steps_ = 0;
-  double last_sum_ = 0;  // for [sum, steps] messages without the step
 
   mutable std::mutex mu_;  // what the getters read
   EvolutionState state_ = EvolutionState::kWaiting;
