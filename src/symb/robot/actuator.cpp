@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "symb/io/number_text.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/os/node.hpp"
 
 namespace symb::robot {
@@ -147,9 +148,9 @@ void ActuatorSinkTask::on_start() {
 }
 
 void ActuatorSinkTask::on_message(const os::Message& m) {
-  received_.fetch_add(1, std::memory_order_relaxed);
+  kernel::bump(received_);
   if (m.payload.blob) {
-    ignored_.fetch_add(1, std::memory_order_relaxed);
+    kernel::bump(ignored_);
     return;
   }
   std::span<const float> values = m.numbers();
@@ -164,13 +165,13 @@ void ActuatorSinkTask::on_message(const os::Message& m) {
   }
   auto r = actuator_->set(values);
   if (!r) {
-    failed_.fetch_add(1, std::memory_order_relaxed);
+    kernel::bump(failed_);
     if (fail_warning_.note(now()))
       log(os::LogLevel::kWarn, std::to_string(fail_warning_.count()) + " command(s) refused, latest: " + r.error() +
                                    " (previous output kept)");
     return;
   }
-  applied_.fetch_add(1, std::memory_order_relaxed);
+  kernel::bump(applied_);
   last_applied_ = now();
   timed_out_ = false;
   const std::size_t clamped = *r + narrowed_clamps;
@@ -183,7 +184,7 @@ void ActuatorSinkTask::on_tick() {
   if (options_.timeout.count() <= 0 || timed_out_ || now() - last_applied_ < options_.timeout) return;
   // Once per silence: re-applying every tick would bury the log and fight the shell's ioctls.
   timed_out_ = true;
-  timeouts_.fetch_add(1, std::memory_order_relaxed);
+  kernel::bump(timeouts_);
   const std::vector<float> safe = safe_output();
   auto r = actuator_->set(safe);
   if (timeout_warning_.note(now()))

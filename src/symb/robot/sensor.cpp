@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "symb/io/number_text.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/os/node.hpp"
 #include "symb/robot/ports.hpp"
 
@@ -227,13 +228,13 @@ void SensorTask::drain() {
     } else {
       const Conditioned c = condition_sample(options_.ranges, s.numbers(), narrowed);
       if (!c.ok()) {
-        rejected_.fetch_add(1, std::memory_order_relaxed);
+        kernel::bump(rejected_);
         continue;
       }
-      if (c.clamped > 0) clamped_.fetch_add(c.clamped, std::memory_order_relaxed);
+      if (c.clamped > 0) kernel::bump(clamped_, c.clamped);
       send(kDataPort, std::span<const float>(narrowed.data(), s.count));
     }
-    forwarded_.fetch_add(1, std::memory_order_relaxed);
+    kernel::bump(forwarded_);
   }
   report(after);
 }

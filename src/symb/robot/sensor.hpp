@@ -25,6 +25,7 @@
 //    hardware with the device (activate() on open, deactivate() on close).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -51,7 +52,21 @@ namespace symb::robot {
 struct SensorSample {
   kernel::Time time{0};
   std::uint8_t count = 0;
-  std::array<float, os::Payload::kInlineValues> values{};
+  // Only values[0, count) is ever read; copies move just those (a sample is built and copied
+  // three times per reading, with 7 of its 32 numbers in use for the IR).
+  std::array<float, os::Payload::kInlineValues> values;
+
+  SensorSample() = default;
+  SensorSample(const SensorSample& o) : time(o.time), count(o.count) {
+    std::copy_n(o.values.begin(), count, values.begin());
+  }
+  SensorSample& operator=(const SensorSample& o) {
+    time = o.time;
+    count = o.count;
+    std::copy_n(o.values.begin(), count, values.begin());
+    return *this;
+  }
+  ~SensorSample() = default;
 
   std::span<const float> numbers() const { return {values.data(), count}; }
 };

@@ -52,6 +52,7 @@ std::shared_ptr<SimGroundSensor> WorldRunner::ground_sensor(std::size_t robot) c
 void WorldRunner::add_observer(StepObserver observer) {
   std::lock_guard lock(observers_mu_);
   observers_.push_back(std::move(observer));
+  has_observers_.store(true, std::memory_order_release);
 }
 
 kernel::Status WorldRunner::start() {
@@ -150,6 +151,7 @@ void WorldRunner::tick() {
   }
   // One writer (this handler): a plain store, not a locked read-modify-write per step.
   steps_.store(steps_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
+  if (!has_observers_.load(std::memory_order_acquire)) return;
   std::lock_guard lock(observers_mu_);
   for (const StepObserver& observer : observers_) observer(record_);
 }

@@ -129,6 +129,7 @@ class WorldRunner final : private kernel::Activity {
 
   std::mutex observers_mu_;
   std::vector<StepObserver> observers_;
+  std::atomic<bool> has_observers_{false};  // lets a step without observers skip their lock
 
   mutable std::mutex state_mu_;  // slot_, attached_, error_
   std::condition_variable released_cv_;
