@@ -52,23 +52,27 @@ class CollectingReporter : public benchmark::ConsoleReporter {
   // Median over the repetitions of `benchmark` (function name, plus "/arg" when it has one); 0 when
   // it did not run, so a filtered run prints zeros instead of crashing.
   double median(const std::string& benchmark, const std::string& counter) const {
-    auto b = runs_.find(benchmark);
-    if (b == runs_.end()) return 0;
-    auto c = b->second.find(counter);
-    if (c == b->second.end() || c->second.empty()) return 0;
-    std::vector<double> v = c->second;
+    std::vector<double> v = samples(benchmark, counter);
+    if (v.empty()) return 0;
     std::sort(v.begin(), v.end());
     const std::size_t n = v.size();
     return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
   }
-  // Largest value over the repetitions (0 when it did not run): for a rate, the repetition the
-  // shared machine disturbed least.
+  // Largest and smallest value over the repetitions (0 when it did not run).
   double best(const std::string& benchmark, const std::string& counter) const {
+    const std::vector<double> v = samples(benchmark, counter);
+    return v.empty() ? 0 : *std::max_element(v.begin(), v.end());
+  }
+  double lowest(const std::string& benchmark, const std::string& counter) const {
+    const std::vector<double> v = samples(benchmark, counter);
+    return v.empty() ? 0 : *std::min_element(v.begin(), v.end());
+  }
+  // Every repetition's value of `counter` (none when it did not run).
+  std::vector<double> samples(const std::string& benchmark, const std::string& counter) const {
     auto b = runs_.find(benchmark);
-    if (b == runs_.end()) return 0;
+    if (b == runs_.end()) return {};
     auto c = b->second.find(counter);
-    if (c == b->second.end() || c->second.empty()) return 0;
-    return *std::max_element(c->second.begin(), c->second.end());
+    return c == b->second.end() ? std::vector<double>{} : c->second;
   }
   std::size_t repetitions(const std::string& benchmark) const {
     auto b = runs_.find(benchmark);

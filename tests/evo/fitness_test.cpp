@@ -142,6 +142,27 @@ TEST(FitnessTask, OneStepPerReadingWithTheLatestCommand) {
   EXPECT_NEAR(out[2][2], 1.0, 1e-6);
 }
 
+// every=N: one report per N readings, [sum, steps, window sum, N]; the sum and step count are the
+// same as at every=1, and changing `every` at runtime takes effect at the next report.
+TEST(FitnessTask, EveryNthStepReportsTheWindowSinceTheLast) {
+  Rig rig("formula=one_plus_one every=3");
+  rig.post({500, 500});
+  for (int i = 0; i < 7; ++i) rig.post({0, 0, 0, 0, 0, 0, 0});  // 1 per step: straight, nothing seen
+  auto out = rig.rec->values();
+  ASSERT_EQ(out.size(), 2u);  // after readings 3 and 6
+  EXPECT_EQ(out[0], (std::vector<float>{3, 3, 3, 3}));
+  EXPECT_EQ(out[1], (std::vector<float>{6, 6, 3, 3}));
+  ASSERT_TRUE(rig.node->set_parameter(rig.fitness, "every", "1").ok());
+  rig.ex.run_for(1ms);
+  rig.post({0, 0, 0, 0, 0, 0, 0});  // the 8th reading: the open window (7, 8) goes out whole
+  rig.post({0, 0, 0, 0, 0, 0, 0});  // then one per step again
+  out = rig.rec->values();
+  ASSERT_EQ(out.size(), 4u);
+  EXPECT_EQ(out[2], (std::vector<float>{8, 8, 2, 2}));
+  EXPECT_EQ(out[3], (std::vector<float>{9, 9, 1}));
+  EXPECT_FALSE(rig.node->set_parameter(rig.fitness, "every", "0").ok());
+}
+
 TEST(FitnessTask, EachFormulaByName) {
   for (const char* f : {"floreano_mondada", "one_plus_one", "liolib"}) {
     SCOPED_TRACE(f);

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -270,30 +271,46 @@ TEST(OnePlusOneTask, SameNodeSeedSameEvolution) {
   EXPECT_NE(a, c);
 }
 
-TEST(OnePlusOneTask, RecoveryIsNotCountedAndEveryEvaluationIsRecorded) {
-  // Made in code this time (the registry's factory does the same), to read its history.
+// 20 s of (1+1)-ONLINE in open space, made in code (the registry's factory does the same) to read
+// its history; the fitness task made with `fitness_params`.
+struct OpenSpaceRun {
+  std::vector<EvaluationRecord> history;
+  EvolutionState state = EvolutionState::kWaiting;
+  std::uint64_t controllers = 0, evaluations = 0;
+  std::optional<RealGenome> champion;
+  double champion_fitness = 0;
+};
+
+OpenSpaceRun run_in_open_space(const std::vector<os::ParamAssignment>& fitness_params) {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry registry;
-  ASSERT_TRUE(control::register_control_task_types(registry, {}).ok());
-  ASSERT_TRUE(register_evo_task_types(registry, {}).ok());
+  EXPECT_TRUE(control::register_control_task_types(registry, {}).ok());
+  EXPECT_TRUE(register_evo_task_types(registry, {}).ok());
   os::Node node(ex, os::NodeConfig{.name = "bot", .seed = 5, .types = &registry});
   const auto ir = *node.create("ir", std::make_unique<OpenSpaceSensor>(), {.priority = 3, .period = 30ms});
   (void)*node.create("wheels", std::make_unique<Wheels>());
-  const auto f = *node.create("fitness", "fitness", {});
-  ASSERT_TRUE(node.hook(ir, f).ok());
+  const auto f = *node.create("fitness", "fitness", fitness_params);
+  EXPECT_TRUE(node.hook(ir, f).ok());
   OnePlusOneTaskOptions o;
   o.evaluation = 300ms;
   o.recovery = 90ms;
   auto made = OnePlusOneTask::create(o);
-  ASSERT_TRUE(made.ok()) << (made ? "" : made.error());
+  EXPECT_TRUE(made.ok()) << (made ? "" : made.error());
+  if (!made) return {};
   OnePlusOneTask* evo = made->get();
-  ASSERT_TRUE(node.create("evolution", std::move(made).value(), {.priority = 1, .period = 1s}).ok());
+  EXPECT_TRUE(node.create("evolution", std::move(made).value(), {.priority = 1, .period = 1s}).ok());
   ex.run_for(20s);
-  EXPECT_EQ(evo->state(), EvolutionState::kRunning);
-  const auto h = evo->history();
+  return {evo->history(),  evo->state(),           evo->controllers_created(), evo->counts().evaluations,
+          evo->champion(), evo->champion_fitness()};
+}
+
+TEST(OnePlusOneTask, RecoveryIsNotCountedAndEveryEvaluationIsRecorded) {
+  const OpenSpaceRun run = run_in_open_space({});
+  EXPECT_EQ(run.state, EvolutionState::kRunning);
+  const auto& h = run.history;
   ASSERT_GT(h.size(), 45u);  // 20 s / 390 ms = 51
-  EXPECT_EQ(evo->controllers_created(), h.size() + 1);
-  EXPECT_EQ(evo->counts().evaluations, h.size());
+  EXPECT_EQ(run.controllers, h.size() + 1);
+  EXPECT_EQ(run.evaluations, h.size());
   EXPECT_EQ(h.front().kind, Candidate::kFirst);
   for (const EvaluationRecord& r : h) {
     // 300 ms of a 30 ms sensor after 90 ms not counted: 10 steps, 11 when the edges coincide.
@@ -302,9 +319,25 @@ TEST(OnePlusOneTask, RecoveryIsNotCountedAndEveryEvaluationIsRecorded) {
     EXPECT_GE(r.fitness, 0.0);
     EXPECT_LE(r.fitness, 1.0);
   }
-  ASSERT_TRUE(evo->champion().has_value());
-  EXPECT_EQ(evo->champion()->values.size(), 16u);
-  EXPECT_EQ(evo->champion_fitness(), h.back().champion_fitness);
+  ASSERT_TRUE(run.champion.has_value());
+  EXPECT_EQ(run.champion->values.size(), 16u);
+  EXPECT_EQ(run.champion_fitness, h.back().champion_fitness);
+}
+
+// With the fitness task reporting every 4 steps, an evaluation counts whole reports: its window
+// starts and ends on one, so it holds a multiple of 4 steps, about the 10 of the evaluation time.
+TEST(OnePlusOneTask, FitnessReportedEveryNStepsCountsWholeReports) {
+  const OpenSpaceRun run = run_in_open_space({{"formula", "one_plus_one", 1}, {"every", "4", 1}});
+  EXPECT_EQ(run.state, EvolutionState::kRunning);
+  const auto& h = run.history;
+  ASSERT_GT(h.size(), 40u);
+  for (const EvaluationRecord& r : h) {
+    EXPECT_EQ(r.steps % 4, 0u) << r.steps;
+    EXPECT_GE(r.steps, 8u);
+    EXPECT_LE(r.steps, 16u);
+    EXPECT_GE(r.fitness, 0.0);
+    EXPECT_LE(r.fitness, 1.0);
+  }
 }
 
 TEST(OnePlusOneTask, ParametersAreChecked) {

@@ -60,9 +60,12 @@ Scenario maze_with_perceptron(const std::string& weights) {
   return s;
 }
 
-// Adds a fitness task hooked from `ir` (and from the controller when there is one).
-evo::FitnessTask* add_fitness(os::Node& node) {
-  auto f = std::make_unique<evo::FitnessTask>(evo::FitnessTaskOptions{});
+// Adds a fitness task hooked from `ir` (and from the controller when there is one), reporting
+// after every `every`-th step.
+evo::FitnessTask* add_fitness(os::Node& node, std::uint32_t every = 1) {
+  evo::FitnessTaskOptions o;
+  o.every = every;
+  auto f = std::make_unique<evo::FitnessTask>(o);
   evo::FitnessTask* p = f.get();
   const auto id = node.create("fitness", std::move(f), {.priority = 1, .queue_capacity = 8});
   EXPECT_TRUE(id.ok());
@@ -92,6 +95,10 @@ Replay replay(const Scenario& scenario, kernel::Duration duration) {
   return {fitness->mean(), s.contact_steps, s.distance};
 }
 
+// The fitness task reports every 5 steps (150 ms), as scenarios/evolve_maze.yaml has it: a
+// candidate's window starts and ends up to 4 steps late, for a fifth of the messages.
+constexpr std::uint32_t kFitnessEvery = 5;
+
 struct Evolved {
   evo::RealGenome champion;
   double champion_fitness = 0;
@@ -106,7 +113,7 @@ Evolved evolve(std::uint64_t seed, kernel::Duration budget, const evo::OnePlusOn
   EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
   if (!session) return {};
   os::Node& node = (*session)->robot(0).node();
-  add_fitness(node);
+  add_fitness(node, kFitnessEvery);
   auto made = evo::OnePlusOneTask::create(evolution_options);
   EXPECT_TRUE(made.ok());
   evo::OnePlusOneTask* evolution = made->get();

@@ -90,11 +90,13 @@ std::optional<double> ControllerSwap::feed(const os::Message& m, kernel::Time no
   const auto v = m.numbers();
   if (v.size() < 2 || !std::isfinite(v[0])) return std::nullopt;
   const double step = v.size() >= 3 ? static_cast<double>(v[2]) : static_cast<double>(v[0]) - last_sum_;
+  // [sum, steps, window sum, N]: a report of N steps (fitness task's `every`).
+  const std::uint64_t steps = v.size() >= 4 && v[3] >= 1 && v[3] <= 1e6 ? static_cast<std::uint64_t>(v[3]) : 1;
   last_sum_ = v[0];
   if (now < started_ + options_.recovery) return std::nullopt;  // recovery: not counted
   if (std::isfinite(step)) {
     counted_sum_ += step;
-    ++counted_steps_;
+    counted_steps_ += steps;
   }
   if (now < started_ + options_.recovery + options_.evaluation) return std::nullopt;
   return counted_steps_ == 0 ? 0.0 : counted_sum_ / static_cast<double>(counted_steps_);

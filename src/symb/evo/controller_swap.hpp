@@ -7,9 +7,10 @@
 //            controller's name: a scenario's own controller) and create a new task of the
 //            controller type with the candidate genome as its `weights`, hooked
 //            sensor -> controller -> actuator and controller -> fitness;
-//   feed     every fitness message [sum, steps, step]: the steps inside `recovery` after the swap
-//            are not counted, the counted ones are added, and once `recovery + evaluation` has
-//            passed the candidate's fitness (the MEAN counted step value) is returned.
+//   feed     every fitness message [sum, steps, step] (or [sum, steps, window sum, N] for a report
+//            of N steps): the steps inside `recovery` after the swap are not counted, the counted
+//            ones are added, and once `recovery + evaluation` has passed the candidate's fitness
+//            (the MEAN counted step value) is returned.
 //
 // The clock is the fitness messages' arrival time: no sensor data, no progress. Non-finite steps
 // are skipped. Used by mu_plus_one_task (and open to any other algorithm of the evo layer).

@@ -27,7 +27,7 @@ os::TaskType fitness_type() {
   t.name = "fitness";
   t.doc =
       "on-line fitness: IR readings (>= 3 numbers) and wheel commands (2 numbers) in on port 0, "
-      "[sum, steps, step] out on port 0 after every reading";
+      "[sum, steps, step] out on port 0 after every reading (every N-th: see every)";
   const FitnessTaskOptions d;
   t.params = {
       {"formula", ParamType::kString, std::string(to_string(d.formula)), 1.0, 32.0,
@@ -35,6 +35,8 @@ os::TaskType fitness_type() {
       {"reset", ParamType::kBool, false, std::nullopt, std::nullopt, "true: zero the sum and the step count"},
       {"command_timeout", ParamType::kDuration, d.command_timeout, 0.0, 3600.0,
        "a wheel command older than this counts as stopped wheels"},
+      {"every", ParamType::kInt, static_cast<std::int64_t>(d.every), 1.0, 1000.0,
+       "report after every N-th step: [sum, steps, step] at 1, [sum, steps, window sum, N] above"},
   };
   t.defaults.priority = 1;
   t.defaults.queue_capacity = 8;
@@ -44,6 +46,7 @@ os::TaskType fitness_type() {
     if (!f) fail("formula: '" + p.string("formula") + "' is none of floreano_mondada, one_plus_one, liolib");
     o.formula = *f;
     o.command_timeout = p.duration("command_timeout");
+    o.every = static_cast<std::uint32_t>(p.integer("every"));
     return std::make_unique<FitnessTask>(o);
   };
   return t;

@@ -3,48 +3,55 @@
 #include <string>
 #include <variant>
 
+#include "symb/kernel/counter.hpp"
 #include "symb/os/message.hpp"
 
 namespace symb::evo {
 
 FitnessStats FitnessTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
+  return {sum_.load(std::memory_order_relaxed), steps_.load(std::memory_order_relaxed),
+          commands_.load(std::memory_order_relaxed), ignored_.load(std::memory_order_relaxed)};
 }
 
 double FitnessTask::mean() const {
-  std::lock_guard lock(mu_);
-  return stats_.steps == 0 ? 0.0 : stats_.sum / static_cast<double>(stats_.steps);
+  const FitnessStats s = stats();
+  return s.steps == 0 ? 0.0 : s.sum / static_cast<double>(s.steps);
 }
 
 void FitnessTask::on_message(const os::Message& m) {
   const auto values = m.numbers();
   if (m.port != 0 || m.payload.blob || values.size() < 2) {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
+    kernel::bump(ignored_);
     return;
   }
   if (values.size() == 2) {
     left_ = values[0], right_ = values[1];
     command_time_ = now();
     have_command_ = true;
-    std::lock_guard lock(mu_);
-    ++stats_.commands;
+    kernel::bump(commands_);
     return;
   }
   const bool fresh = have_command_ && now() - command_time_ <= options_.command_timeout;
   const double step = fitness_step(options_.formula, fresh ? left_ : 0.0, fresh ? right_ : 0.0, values);
-  float out[3];
-  {
-    std::lock_guard lock(mu_);
-    stats_.sum += step;
-    ++stats_.steps;
-    out[0] = static_cast<float>(stats_.sum);
-    out[1] = static_cast<float>(stats_.steps);
-    out[2] = static_cast<float>(step);
-  }
-  send(0, std::span<const float>(out, 3));
+  const double sum = sum_.load(std::memory_order_relaxed) + step;
+  const std::uint64_t steps = steps_.load(std::memory_order_relaxed) + 1;
+  sum_.store(sum, std::memory_order_relaxed);
+  steps_.store(steps, std::memory_order_relaxed);
+  float out[4] = {static_cast<float>(sum), static_cast<float>(steps), static_cast<float>(step), 0.0f};
   probe("fitness", std::span<const float>(out, 3));
+  window_sum_ += step;
+  if (++window_steps_ < options_.every) return;
+  // One step: [sum, steps, step]. More (every > 1, or the rest of a window when `every` was
+  // lowered meanwhile): [sum, steps, window sum, window steps]. No step goes unreported.
+  std::size_t n = 3;
+  if (window_steps_ > 1) {
+    out[2] = static_cast<float>(window_sum_);
+    out[3] = static_cast<float>(window_steps_);
+    n = 4;
+  }
+  window_sum_ = 0;
+  window_steps_ = 0;
+  send(0, std::span<const float>(out, n));
 }
 
 kernel::Status FitnessTask::on_parameter(std::string_view name, const os::ParamValue& value) {
@@ -57,11 +64,19 @@ kernel::Status FitnessTask::on_parameter(std::string_view name, const os::ParamV
   }
   if (name == "reset") {
     if (const auto* b = std::get_if<bool>(&value); b && *b) {
-      std::lock_guard lock(mu_);
-      stats_.sum = 0;
-      stats_.steps = 0;
+      sum_.store(0, std::memory_order_relaxed);
+      steps_.store(0, std::memory_order_relaxed);
+      window_sum_ = 0;
+      window_steps_ = 0;
     }
     return {};
+  }
+  if (name == "every") {
+    if (const auto* n = std::get_if<std::int64_t>(&value); n && *n >= 1 && *n <= 1000) {
+      options_.every = static_cast<std::uint32_t>(*n);
+      return {};
+    }
+    return kernel::Error{"every: a whole number 1..1000"};
   }
   if (name == "command_timeout") {
     if (const auto* d = std::get_if<kernel::Duration>(&value)) {
