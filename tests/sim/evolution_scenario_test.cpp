@@ -19,6 +19,7 @@
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"
 
+#include "support/maze_evolution.hpp"
 #include "support/tsan_skip.hpp"
 
 namespace symb::sim {
@@ -34,66 +35,12 @@ constexpr std::uint64_t kSeeds = 5;
 
 using namespace std::chrono_literals;
 
-Scenario load(const std::string& name) {
-  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
-  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
-  return s ? *s : Scenario{};
-}
-
-// The maze with no controller: only the device tasks.
-Scenario bare_maze() {
-  Scenario s = load("maze.yaml");
-  for (RobotSpec& r : s.robots) {
-    r.tasks.clear();
-    r.hooks.clear();
-  }
-  return s;
-}
-
-// The maze with a 7-2 tanh perceptron whose weights are `weights` (numbers or a file reference).
-Scenario maze_with_perceptron(const std::string& weights) {
-  Scenario s = load("braitenberg.yaml");  // maze.yaml's world, the mlp controller
-  for (RobotSpec& r : s.robots)
-    for (TaskSpec& t : r.tasks)
-      for (os::ParamAssignment& p : t.params)
-        if (p.name == "weights") p.value = weights;
-  return s;
-}
-
-// Adds a fitness task hooked from `ir` (and from the controller when there is one), reporting
-// after every `every`-th step.
-evo::FitnessTask* add_fitness(os::Node& node, std::uint32_t every = 1) {
-  evo::FitnessTaskOptions o;
-  o.every = every;
-  auto f = std::make_unique<evo::FitnessTask>(o);
-  evo::FitnessTask* p = f.get();
-  const auto id = node.create("fitness", std::move(f), {.priority = 1, .queue_capacity = 8});
-  EXPECT_TRUE(id.ok());
-  EXPECT_TRUE(node.hook(*node.find("ir"), *id).ok());
-  if (auto c = node.find("controller")) {
-    EXPECT_TRUE(node.hook(*c, *id).ok());
-  }
-  return p;
-}
-
-struct Replay {
-  double fitness = 0;  // mean per-step
-  std::uint64_t contact_steps = 0;
-  double distance = 0;
-};
-
-Replay replay(const Scenario& scenario, kernel::Duration duration) {
-  kernel::VirtualTimeExecutor executor;
-  auto session = ScenarioSession::create(scenario, executor);
-  EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
-  if (!session) return {};
-  evo::FitnessTask* fitness = add_fitness((*session)->robot(0).node());
-  (*session)->start();
-  executor.run_for(duration);
-  (*session)->stop();
-  const RobotState s = (*session)->world().state(0);
-  return {fitness->mean(), s.contact_steps, s.distance};
-}
+using maze_test::add_fitness;
+using maze_test::bare_maze;
+using maze_test::load;
+using maze_test::maze_with_perceptron;
+using maze_test::Replay;
+using maze_test::replay;
 
 // The fitness task reports every 5 steps (150 ms), as scenarios/evolve_maze.yaml has it: a
 // candidate's window starts and ends up to 4 steps late, for a fifth of the messages.
