@@ -36,6 +36,10 @@ class RingBuffer {
     head_ = wrap(head_ + 1);
     return true;
   }
+  // The i-th element from the oldest (i < size()).
+  const T& at(std::size_t i) const { return slots_[wrap(head_ + i)]; }
+  // The newest element (!empty()).
+  T& back() { return slots_[wrap(head_ + size_ - 1)]; }
   T& front() { return slots_[head_]; }
   const T& front() const { return slots_[head_]; }
   void pop() {

@@ -7,6 +7,17 @@
 //  - inhibition: Node::inhibit blocks a sender's output through its hooks (to one receiver or to
 //    all) for a window [t, t + window).
 // Both compare the window against the message's send time, so they are exact in virtual time.
+//
+// Accounting per hook (an edge sender -> receiver), checked exactly by tests/os, at every moment:
+//   sent      == skipped + attempted                   every send of the sender while hooked
+//   attempted == delivered + dropped() + queued        every message offered to the receiver
+// where `sent` counts the sender's sends since the hook was made, `skipped` those the hook let
+// pass (disabled, another port), and the rest is the receiver's TrafficCounters for this hook
+// only. Node::hooks() gives it per live hook, Node::hook_traffic() summed over every hook the node
+// ever had.
+//
+// Cycles: a hook may close a cycle (a -> b -> a). What bounds it is kMaxHops (message.hpp): a
+// chain of answers longer than that faults the task that would extend it.
 #pragma once
 
 #include <cstdint>
@@ -15,6 +26,7 @@
 #include "symb/kernel/bounded_queue.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/os/ids.hpp"
+#include "symb/os/task.hpp"
 
 namespace symb::os {
 
@@ -32,6 +44,26 @@ struct HookOptions {
   kernel::Duration suppress_window{0};
 };
 
+// One hook's accounting, or a sum of several (see the top of this file).
+struct HookTraffic {
+  std::uint64_t sent = 0;     // the sender's sends while hooked
+  std::uint64_t skipped = 0;  // of those, not offered (disabled, another port)
+  TrafficCounters traffic;    // offered to the receiver through the hook, and what became of them
+  std::uint64_t queued = 0;   // in the receiver's queue now
+
+  // Both equations hold.
+  bool closes() const {
+    return sent == skipped + traffic.attempted && traffic.attempted == traffic.delivered + traffic.dropped() + queued;
+  }
+  HookTraffic& operator+=(const HookTraffic& o) {
+    sent += o.sent;
+    skipped += o.skipped;
+    traffic += o.traffic;
+    queued += o.queued;
+    return *this;
+  }
+};
+
 struct HookInfo {
   HookId id;
   TaskId sender;
@@ -40,6 +72,7 @@ struct HookInfo {
   std::string receiver_name;
   HookOptions options;
   kernel::Time inhibited_until{0};
+  HookTraffic accounting;
 };
 
 const char* to_string(QueuePolicy p);

@@ -67,13 +67,28 @@ struct Payload {
   std::span<const float> numbers() const { return {values, count}; }
 };
 
+// How many answers in a row a message may be: a message sent while handling a message is one hop
+// further than it; one sent from on_start, on_tick or from outside any task starts again at 0. A
+// chain longer than kMaxHops is a cycle of tasks that answer every message (a -> b -> a): it
+// would keep a virtual-time run at one instant for ever and spin a thread executor's cores, so
+// the node refuses the send that would exceed it and faults its sender, naming the cycle in the
+// log and in Node::cycle_error(). The longest chain in the shipped scenarios is 3 hops (sensor ->
+// controller -> actuator -> watchdog, see tests/os/cycle_test.cpp): the bound leaves a margin of
+// 300 for deeper graphs of our users'.
+inline constexpr std::uint16_t kMaxHops = 1000;
+
 struct Message {
   TaskId source;  // invalid for messages posted from outside any task
   Port port = 0;
+  std::uint16_t hops = 0;  // see kMaxHops; set by the node
+  // The hook it came through, as the receiver's hook slot + 1 (0: posted); set by the node, for
+  // the per-hook accounting. It and `hops` fill what was padding: the message is no larger.
+  std::uint32_t edge = 0;
   kernel::Time time{0};  // the sender's node clock at send
   Payload payload;
 
   std::span<const float> numbers() const { return payload.numbers(); }
 };
+static_assert(sizeof(Message) == 16 + sizeof(kernel::Time) + sizeof(Payload), "Message grew past its padding");
 
 }  // namespace symb::os

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <exception>
 
+#include "symb/kernel/counter.hpp"
 #include "symb/os/task_record.hpp"
 
 namespace symb::os {
@@ -127,13 +128,22 @@ void TaskRecord::on_activity_input() {
       // wakes it again.
       if (queue.empty() || state.load(std::memory_order_relaxed) != TaskState::kRunning) {
         wake_pending = false;
+        next_hops = 0;
         return;
       }
       handling = std::move(queue.front());
       queue.pop();
+      if (InHook* e = in_hook(handling.edge)) {
+        ++e->traffic.delivered;
+        if (!e->hooked) retire_in_hook_if_done(handling.edge);
+      }
     }
     const Message& m = handling;
-    delivered.store(delivered.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    kernel::bump(delivered);
+    next_hops = static_cast<std::uint16_t>(m.hops + 1);
+    if (m.hops > longest_chain.load(std::memory_order_relaxed)) longest_chain.store(m.hops, std::memory_order_relaxed);
+    if (m.hops > kMaxHops / 2) [[unlikely]]
+      deep_source.store((std::uint64_t{m.source.index} << 32) | m.source.generation, std::memory_order_relaxed);
     if (node.tracing_.load(std::memory_order_relaxed)) node.trace(*this, m);
     SYMB_GUARDED("on_message", task->on_message(m))
     handling.payload.blob.reset();  // a large payload is freed when its last handler is done
@@ -160,14 +170,17 @@ void TaskRecord::on_activity_stop() {
 
 void TaskRecord::on_activity_released() { node.release(*this); }
 
-kernel::ActivitySlot* TaskRecord::offer(const Message& m, int hook_priority, QueuePolicy policy,
+kernel::ActivitySlot* TaskRecord::offer(const Message& m, std::uint32_t edge, int hook_priority, QueuePolicy policy,
                                         kernel::Duration suppress_window, bool* accepted) {
   std::lock_guard lock(in_mu);
   if (accepted != nullptr) *accepted = false;
+  InHook* e = in_hook(edge);
   ++traffic.attempted;
+  if (e != nullptr) ++e->traffic.attempted;
   for (const auto& w : suppression) {
     if (hook_priority < w.level && m.time < w.until) {
       ++traffic.suppressed;
+      if (e != nullptr) ++e->traffic.suppressed;
       return nullptr;
     }
   }
@@ -187,15 +200,55 @@ kernel::ActivitySlot* TaskRecord::offer(const Message& m, int hook_priority, Que
   if (queue.full()) {
     if (policy == QueuePolicy::kRefuse) {
       ++traffic.refused;
+      if (e != nullptr) ++e->traffic.refused;
       return nullptr;
     }
     ++traffic.overwritten;
+    // The oldest message goes: counted against the hook it came through.
+    const std::uint32_t old_edge = queue.front().edge;
+    queue.pop();
+    if (InHook* o = in_hook(old_edge)) {
+      ++o->traffic.overwritten;
+      if (!o->hooked) retire_in_hook_if_done(old_edge);
+    }
   }
-  queue.push_overwrite(m);
+  queue.push(m);
+  queue.back().edge = edge;
   if (accepted != nullptr) *accepted = true;
   if (wake_pending || slot == nullptr) return nullptr;
   wake_pending = true;
   return slot;
+}
+
+std::uint32_t TaskRecord::add_in_hook(std::uint32_t serial) {
+  std::uint32_t slot_index;
+  if (!free_in_hooks.empty()) {
+    slot_index = free_in_hooks.back();
+    free_in_hooks.pop_back();
+  } else {
+    slot_index = static_cast<std::uint32_t>(in_hooks.size());
+    in_hooks.emplace_back();
+  }
+  in_hooks[slot_index] = InHook{};
+  in_hooks[slot_index].serial = serial;
+  in_hooks[slot_index].hooked = true;
+  return slot_index + 1;
+}
+
+void TaskRecord::end_in_hook(std::uint32_t edge, std::uint64_t sent_while_hooked, std::uint64_t skipped) {
+  InHook& e = in_hooks[edge - 1];
+  e.hooked = false;
+  e.sent = sent_while_hooked;
+  e.skipped = skipped;
+  retire_in_hook_if_done(edge);
+}
+
+void TaskRecord::retire_in_hook_if_done(std::uint32_t edge) {
+  InHook& e = in_hooks[edge - 1];
+  if (e.hooked || e.serial == 0 || e.in_flight() != 0) return;
+  retired_hooks += HookTraffic{e.sent, e.skipped, e.traffic, 0};
+  e.serial = 0;
+  free_in_hooks.push_back(edge - 1);
 }
 
 }  // namespace detail
@@ -396,10 +449,15 @@ Status Node::remove(TaskId id) {
     for (auto& s : slots_) {
       if (!s.record) continue;
       std::lock_guard out(s.record->out_mu);
-      std::erase_if(s.record->hooks, [&](const detail::Hook& h) { return h.receiver == r; });
+      std::erase_if(s.record->hooks, [&](const detail::Hook& h) {
+        if (h.receiver != r) return false;
+        end_hook(*s.record, h);
+        return true;
+      });
     }
     {
       std::lock_guard out(r->out_mu);
+      for (const auto& h : r->hooks) end_hook(*r, h);
       r->hooks.clear();
     }
     const TaskState before = r->state.exchange(TaskState::kDeleted);
@@ -424,10 +482,19 @@ void Node::release(TaskRecord& r) {
     {
       std::lock_guard in(r.in_mu);
       r.traffic.discarded += r.queue.size();
+      while (!r.queue.empty()) {
+        if (detail::InHook* e = r.in_hook(r.queue.front().edge)) ++e->traffic.discarded;
+        r.queue.pop();
+      }
       r.queue.clear();
       TrafficCounters t = r.traffic;
       t.delivered = r.delivered.load();
       retired_ += t;
+      // Every hook into it ended in remove(): what is left are their final counts.
+      retired_hooks_ += r.retired_hooks;
+      for (const auto& e : r.in_hooks)
+        if (e.serial != 0) retired_hooks_ += HookTraffic{e.sent, e.skipped, e.traffic, 0};
+      retired_longest_chain_ = std::max(retired_longest_chain_, r.longest_chain.load(std::memory_order_relaxed));
     }
     auto& s = slots_[r.id.index];
     dying = std::move(s.record);
@@ -573,6 +640,11 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   h.suppress_window = options.suppress_window;
   {
     std::lock_guard out(s->out_mu);
+    h.sent_before = s->sent.load(std::memory_order_relaxed);
+    {
+      std::lock_guard in(r->in_mu);
+      h.edge = r->add_in_hook(h.serial);
+    }
     // Higher-priority hooks deliver first; equal priorities keep hook order.
     auto at =
         std::find_if(s->hooks.begin(), s->hooks.end(), [&](const detail::Hook& x) { return x.priority < h.priority; });
@@ -589,6 +661,7 @@ Status Node::unhook(HookId id) {
     auto it =
         std::find_if(s.hooks.begin(), s.hooks.end(), [&](const detail::Hook& h) { return h.serial == id.serial; });
     if (it != s.hooks.end()) {
+      end_hook(s, *it);
       s.hooks.erase(it);
       return {};
     }
@@ -625,10 +698,53 @@ std::vector<HookInfo> Node::hooks() const {
       i.receiver_name = h.receiver->name;
       i.options = HookOptions{h.priority, h.policy, h.enabled, h.port, h.suppress_window};
       i.inhibited_until = h.inhibited_until;
+      i.accounting = accounting(*s.record, h);
       out.push_back(std::move(i));
     }
   }
   return out;
+}
+
+HookTraffic Node::accounting(const TaskRecord& s, const detail::Hook& h) {
+  HookTraffic a;
+  a.sent = s.sent.load(std::memory_order_relaxed) - h.sent_before;
+  a.skipped = h.skipped;
+  TaskRecord& r = *h.receiver;
+  std::lock_guard in(r.in_mu);
+  a.traffic = r.in_hooks[h.edge - 1].traffic;
+  // Counted, not derived: a message lost between the counters would show here.
+  for (std::size_t k = 0; k < r.queue.size(); ++k)
+    if (r.queue.at(k).edge == h.edge) ++a.queued;
+  return a;
+}
+
+void Node::end_hook(const TaskRecord& s, const detail::Hook& h) {
+  std::lock_guard in(h.receiver->in_mu);
+  h.receiver->end_in_hook(h.edge, s.sent.load(std::memory_order_relaxed) - h.sent_before, h.skipped);
+}
+
+HookTraffic Node::hook_traffic() const {
+  std::lock_guard lock(mu_);
+  HookTraffic t = retired_hooks_;
+  for (const auto& s : slots_) {
+    if (!s.record) continue;
+    {
+      std::lock_guard out(s.record->out_mu);
+      for (const auto& h : s.record->hooks) t += accounting(*s.record, h);
+    }
+    TaskRecord& r = *s.record;
+    std::lock_guard in(r.in_mu);
+    t += r.retired_hooks;
+    for (const auto& e : r.in_hooks) {
+      if (e.serial == 0 || e.hooked) continue;  // live hooks were counted from their sender
+      HookTraffic ended{e.sent, e.skipped, e.traffic, 0};
+      const auto edge = static_cast<std::uint32_t>(&e - r.in_hooks.data()) + 1;
+      for (std::size_t k = 0; k < r.queue.size(); ++k)
+        if (r.queue.at(k).edge == edge) ++ended.queued;
+      t += ended;
+    }
+  }
+  return t;
 }
 
 Status Node::suppress(TaskId receiver, int level, kernel::Duration window) {
@@ -679,25 +795,88 @@ Status Node::post(TaskId receiver, const Message& message, QueuePolicy policy) {
   Message m = message;
   m.time = now();
   bool accepted = false;
-  if (kernel::ActivitySlot* wake = r->offer(m, 0, policy, kernel::Duration{0}, &accepted)) wake->wake();
+  if (kernel::ActivitySlot* wake = r->offer(m, 0, 0, policy, kernel::Duration{0}, &accepted)) wake->wake();
   if (!accepted) return Error{"task '" + r->name + "' did not take the message (queue full or suppressed)"};
   return {};
 }
 
 void Node::send_from(TaskRecord& from, const Message& m) {
+  if (m.hops > kMaxHops) [[unlikely]] {
+    cut_cycle(from);
+    return;
+  }
   std::lock_guard out(from.out_mu);
-  from.sent.store(from.sent.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+  kernel::bump(from.sent);
   for (auto& h : from.hooks) {
-    if (!h.enabled || (h.port >= 0 && h.port != m.port)) continue;
+    if (!h.enabled || (h.port >= 0 && h.port != m.port)) {
+      ++h.skipped;
+      continue;
+    }
     if (m.time < h.inhibited_until) {
       std::lock_guard in(h.receiver->in_mu);
       ++h.receiver->traffic.attempted;
       ++h.receiver->traffic.inhibited;
+      detail::InHook& e = *h.receiver->in_hook(h.edge);
+      ++e.traffic.attempted;
+      ++e.traffic.inhibited;
       continue;
     }
     // The wake happens while out_mu is held: that keeps the receiver alive (see Hook).
-    if (kernel::ActivitySlot* wake = h.receiver->offer(m, h.priority, h.policy, h.suppress_window)) wake->wake();
+    if (kernel::ActivitySlot* wake = h.receiver->offer(m, h.edge, h.priority, h.policy, h.suppress_window))
+      wake->wake();
   }
+}
+
+void Node::cut_cycle(TaskRecord& from) {
+  // Called from `from`'s on_message, on its own context; a second send of the same handler finds
+  // the task faulted already.
+  if (from.state.load() != TaskState::kRunning) return;
+  // The trail back: each task's last deep message came from the one before it in the cycle.
+  constexpr std::size_t kMaxNames = 12;
+  std::vector<std::string> trail{from.name};
+  std::vector<TaskId> seen{from.id};
+  bool closed = false;
+  {
+    std::lock_guard lock(mu_);
+    TaskId prev = from.handling.source;
+    while (seen.size() < kMaxNames) {
+      const TaskRecord* r = lookup_locked(prev);
+      if (r == nullptr) break;
+      trail.push_back(r->name);
+      if (std::find(seen.begin(), seen.end(), prev) != seen.end()) {
+        closed = true;
+        break;
+      }
+      seen.push_back(prev);
+      const std::uint64_t bits = r->deep_source.load(std::memory_order_relaxed);
+      prev = TaskId{static_cast<std::uint32_t>(bits >> 32), static_cast<std::uint32_t>(bits)};
+    }
+  }
+  std::string names;
+  for (auto it = trail.rbegin(); it != trail.rend(); ++it) names += (names.empty() ? "" : " -> ") + *it;
+  if (!closed) names += " (and more)";
+  const std::string what = "message cycle " + names + ": more than " + std::to_string(kMaxHops) +
+                           " answers in a row, each sent while handling the one before, with no tick or outside "
+                           "input between; cut by faulting '" +
+                           from.name + "' (a cycle of hooks must not answer every message)";
+  {
+    std::lock_guard lock(mu_);
+    if (cycle_error_.empty()) cycle_error_ = "node '" + config_.name + "': " + what;
+  }
+  from.fault("on_message", what.c_str());
+}
+
+std::string Node::cycle_error() const {
+  std::lock_guard lock(mu_);
+  return cycle_error_;
+}
+
+std::uint32_t Node::longest_chain() const {
+  std::lock_guard lock(mu_);
+  std::uint16_t n = retired_longest_chain_;
+  for (const auto& s : slots_)
+    if (s.record) n = std::max(n, s.record->longest_chain.load(std::memory_order_relaxed));
+  return n;
 }
 
 TrafficCounters Node::traffic() const {

@@ -35,6 +35,7 @@ namespace symb::os {
 
 namespace detail {
 struct TaskRecord;
+struct Hook;
 struct TaskSlot {
   std::unique_ptr<TaskRecord> record;
   std::uint32_t generation = 0;
@@ -112,7 +113,10 @@ class Node {
   kernel::Result<HookId> hook(TaskId sender, TaskId receiver, HookOptions options = {});
   kernel::Status unhook(HookId id);
   kernel::Status set_hook_enabled(HookId id, bool enabled);
+  // Every live hook, with its accounting (see hook.hpp).
   std::vector<HookInfo> hooks() const;
+  // The accounting of every hook this node ever had, removed ones included, summed.
+  HookTraffic hook_traffic() const;
   // Blocks delivery into `receiver` through hooks of priority < `level` for [now, now + window).
   kernel::Status suppress(TaskId receiver, int level, kernel::Duration window);
   // Blocks `sender`'s output to `receiver` (to every receiver when `receiver` is invalid) for
@@ -141,6 +145,14 @@ class Node {
   void set_tracing(bool on);
   std::uint64_t trace_hash() const;
 
+  // --- cycles (see kMaxHops in message.hpp) ------------------------------------------------------
+  // The first cycle of answers the node cut, as a sentence naming its tasks ("message cycle
+  // a -> b -> a: ..."); empty when there was none. A run driver (symb run) stops on it and reports
+  // it as the run's error.
+  std::string cycle_error() const;
+  // The longest chain of answers any task of this node handled (in hops, kMaxHops at most).
+  std::uint32_t longest_chain() const;
+
   // --- probes: tasks' internal state for people and plots ----------------------------------------
   // Installs (or, with an empty function, removes) the sink of Task::probe(). Without a sink a
   // probe costs one atomic load, so controllers probe unconditionally or check Task::probing().
@@ -156,6 +168,11 @@ class Node {
   kernel::Status start_locked(detail::TaskRecord& r);
   void release(detail::TaskRecord& r);
   void send_from(detail::TaskRecord& from, const Message& m);
+  void cut_cycle(detail::TaskRecord& from);
+  // Under `s`'s out_mu: the accounting of hook `h` of sender `s` (takes the receiver's in_mu).
+  static HookTraffic accounting(const detail::TaskRecord& s, const detail::Hook& h);
+  // Under `s`'s out_mu: `h` goes; its receiver keeps its counts until its messages are handled.
+  static void end_hook(const detail::TaskRecord& s, const detail::Hook& h);
   void trace(const detail::TaskRecord& receiver, const Message& m);
   void probe(const detail::TaskRecord& from, std::string_view channel, std::span<const float> values);
 
@@ -169,7 +186,10 @@ class Node {
   std::vector<std::uint32_t> free_slots_;
   std::size_t live_records_ = 0;
   std::uint32_t hook_serial_ = 0;
-  TrafficCounters retired_;  // traffic of deleted tasks
+  TrafficCounters retired_;    // traffic of deleted tasks
+  HookTraffic retired_hooks_;  // hooks into deleted tasks
+  std::uint16_t retired_longest_chain_ = 0;
+  std::string cycle_error_;
   std::atomic<bool> tracing_{false};
   mutable kernel::OptionalMutex trace_mu_;
   std::uint64_t trace_hash_ = 0xcbf29ce484222325ULL;

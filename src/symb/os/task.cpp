@@ -22,7 +22,8 @@ std::size_t Task::pending_messages() const {
 
 void Task::send(Port port, const Payload& payload) {
   // Built in one go: a default Message would clear its payload first.
-  const Message m{record_->id, port, record_->node.now(), payload};
+  const Message m{
+      .source = record_->id, .port = port, .hops = record_->next_hops, .time = record_->node.now(), .payload = payload};
   record_->node.send_from(*record_, m);
 }
 

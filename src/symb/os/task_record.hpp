@@ -23,9 +23,14 @@ namespace symb::os::detail {
 struct TaskRecord;
 
 // One entry of a sender's hook list. The receiver pointer is safe: a task is unhooked from every
-// sender, under that sender's out_mu, before it can be freed.
+// sender, under that sender's out_mu, before it can be freed. Its traffic is counted at the
+// receiver (InHook, slot `edge` - 1), except what never reaches the receiver: the sends it let
+// pass (disabled, another port), counted here under out_mu.
 struct Hook {
   std::uint32_t serial = 0;
+  std::uint32_t edge = 0;         // the receiver's in_hooks slot + 1
+  std::uint64_t sent_before = 0;  // the sender's `sent` when the hook was made
+  std::uint64_t skipped = 0;      // sends not offered: disabled, or another port
   std::int32_t priority = 0;
   std::int32_t port = -1;
   QueuePolicy policy = QueuePolicy::kKeepNewest;
@@ -33,6 +38,20 @@ struct Hook {
   TaskRecord* receiver = nullptr;
   kernel::Duration suppress_window{0};
   kernel::Time inhibited_until{0};
+};
+
+// A hook's accounting at its receiver, under the receiver's in_mu. Every message it queues is
+// tagged with the slot (Message::edge), so its fate (handled, overwritten, discarded) is counted
+// here too. When the hook goes, `sent` and `skipped` are copied from the sender's side; the slot
+// is freed (its counts folded into TaskRecord::retired_hooks) once none of its messages is queued.
+struct InHook {
+  std::uint32_t serial = 0;  // 0: a free slot
+  bool hooked = false;
+  std::uint64_t sent = 0;     // valid once !hooked
+  std::uint64_t skipped = 0;  // valid once !hooked
+  TrafficCounters traffic;
+
+  std::uint64_t in_flight() const { return traffic.attempted - traffic.delivered - traffic.dropped(); }
 };
 
 // A suppression in force at a receiver: hooks below `level` are blocked until `until`.
@@ -60,10 +79,18 @@ struct TaskRecord final : kernel::Activity {
   void on_activity_stop() override;
   void on_activity_released() override;
 
-  // Offers `m` to this task's queue; returns the slot to wake (outside any lock) or null.
-  // `*accepted` (when given) tells whether the message was queued.
-  kernel::ActivitySlot* offer(const Message& m, int priority, QueuePolicy policy, kernel::Duration suppress_window,
-                              bool* accepted = nullptr);
+  // Offers `m` to this task's queue through hook slot `edge` (0: posted); returns the slot to
+  // wake (outside any lock) or null. `*accepted` (when given) tells whether the message was queued.
+  kernel::ActivitySlot* offer(const Message& m, std::uint32_t edge, int priority, QueuePolicy policy,
+                              kernel::Duration suppress_window, bool* accepted = nullptr);
+  // Under in_mu: the counters of hook slot `edge` (0: none).
+  InHook* in_hook(std::uint32_t edge) { return edge == 0 ? nullptr : &in_hooks[edge - 1]; }
+  // Under in_mu: a slot for a new hook into this task; returns its `edge`.
+  std::uint32_t add_in_hook(std::uint32_t serial);
+  // Under in_mu: the hook of slot `edge` is gone; `sent` and `skipped` from the sender's side.
+  void end_in_hook(std::uint32_t edge, std::uint64_t sent, std::uint64_t skipped);
+  // Under in_mu: frees the slot when the hook is gone and none of its messages is queued.
+  void retire_in_hook_if_done(std::uint32_t edge);
   void fault(const char* where, const char* what);
   void apply_pending_parameters();
 
@@ -82,11 +109,22 @@ struct TaskRecord final : kernel::Activity {
   kernel::OptionalMutex out_mu;
   std::vector<Hook> hooks;
   std::atomic<std::uint64_t> sent{0};  // written by the task's own context only
+  // Hops of what this task sends now (see kMaxHops): the handled message's + 1 inside
+  // on_message, 0 elsewhere. The task's own context only.
+  std::uint16_t next_hops = 0;
+  // The longest chain this task handled (most hops), and the source of the last message it
+  // handled that was more than half way to kMaxHops: the trail that names a cycle. Written by the
+  // task's own context only.
+  std::atomic<std::uint16_t> longest_chain{0};
+  std::atomic<std::uint64_t> deep_source{~std::uint64_t{0}};
 
   // Input side, under in_mu.
   kernel::OptionalMutex in_mu;
   kernel::RingBuffer<Message> queue;
-  TrafficCounters traffic;  // `delivered` is mirrored from `delivered` below when read
+  TrafficCounters traffic;                   // `delivered` is mirrored from `delivered` below when read
+  std::vector<InHook> in_hooks;              // per hook into this task (see InHook)
+  std::vector<std::uint32_t> free_in_hooks;  // free slots of in_hooks
+  HookTraffic retired_hooks;                 // hooks into this task whose slot was freed
   std::array<SuppressionWindow, 2> suppression{};
   bool wake_pending = false;
   // The message being handled, moved out of the queue (outside in_mu, so senders can queue
