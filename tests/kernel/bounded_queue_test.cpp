@@ -1,5 +1,6 @@
 #include "symb/kernel/bounded_queue.hpp"
 
+#include <atomic>
 #include <chrono>
 #include <thread>
 
@@ -34,22 +35,41 @@ TEST(BoundedQueue, PushTimesOutWhenFull) {
   EXPECT_FALSE(q.push_for(2, 10ms));
 }
 
+// Waits (up to 10 s) until `n` threads are blocked in `q`: what the next two tests need before
+// they push or close, rather than a sleep that a loaded machine may outlast.
+bool until_waiting(const BoundedQueue<int>& q, std::size_t n) {
+  const auto end = std::chrono::steady_clock::now() + 10s;
+  while (q.waiting() < n && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(1ms);
+  return q.waiting() == n;
+}
+
 TEST(BoundedQueue, BlockedPopWakesOnPush) {
   BoundedQueue<int> q(1);
+  std::atomic<bool> blocked{false};
   std::thread producer([&] {
-    std::this_thread::sleep_for(10ms);
+    blocked = until_waiting(q, 1);
     q.push(42, FullPolicy::kRefuse);
   });
-  EXPECT_EQ(q.pop_for(5s), 42);
+  EXPECT_EQ(q.pop_for(20s), 42);
   producer.join();
+  EXPECT_TRUE(blocked);
+  EXPECT_EQ(q.waiting(), 0u);
 }
 
 TEST(BoundedQueue, CloseWakesWaiters) {
-  BoundedQueue<int> q(1);
-  std::thread waiter([&] { EXPECT_EQ(q.pop_for(10s), std::nullopt); });
-  std::this_thread::sleep_for(10ms);
-  q.close();
-  waiter.join();
+  BoundedQueue<int> empty(1);
+  BoundedQueue<int> full(1);
+  ASSERT_TRUE(full.push_for(1, 1ms));
+  std::thread popper([&] { EXPECT_EQ(empty.pop_for(20s), std::nullopt); });
+  std::thread pusher([&] { EXPECT_FALSE(full.push_for(2, 20s)); });
+  ASSERT_TRUE(until_waiting(empty, 1));
+  ASSERT_TRUE(until_waiting(full, 1));
+  const auto t0 = std::chrono::steady_clock::now();
+  empty.close();
+  full.close();
+  popper.join();
+  pusher.join();
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 10s);  // woken, not timed out
 }
 
 TEST(BoundedQueue, EveryItemCrossesThreadsExactlyOnce) {

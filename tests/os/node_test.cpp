@@ -189,16 +189,22 @@ TEST(Node, DestructorStopsEveryTaskOnBothExecutors) {
     ex.run_for(10ms);
   }
   EXPECT_EQ(stops, 3);
+  std::atomic<int> thread_starts{0};
   std::atomic<int> thread_stops{0};
   {
     kernel::ThreadExecutor ex;
     Node node(ex, {});
     for (int i = 0; i < 3; ++i) {
       auto s = std::make_unique<Scripted>();
+      s->start = [&](Scripted&) { thread_starts.fetch_add(1); };
       s->stop = [&](Scripted&) { thread_stops.fetch_add(1); };
       ASSERT_TRUE(node.create("s" + std::to_string(i), std::move(s), {.period = 1ms}));
     }
-    std::this_thread::sleep_for(10ms);
+    // on_stop runs only for a task whose on_start ran: wait for that, not for a fixed time (a
+    // thread not yet scheduled when the node goes would never start, nor stop).
+    const auto end = std::chrono::steady_clock::now() + 10s;
+    while (thread_starts.load() < 3 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(1ms);
+    ASSERT_EQ(thread_starts.load(), 3);
   }
   EXPECT_EQ(thread_stops.load(), 3);
 }

@@ -31,6 +31,11 @@ class BoundedQueue {
     std::lock_guard lock(mu_);
     return ring_.size();
   }
+  // Threads blocked in pop_for() or push_for() now: lets a test wait until a waiter really waits.
+  std::size_t waiting() const {
+    std::lock_guard lock(mu_);
+    return waiting_;
+  }
 
   // Never blocks: a full queue applies `policy`.
   PushResult push(const T& v, FullPolicy policy) {
@@ -49,7 +54,10 @@ class BoundedQueue {
   bool push_for(const T& v, std::chrono::duration<Rep, Period> timeout) {
     {
       std::unique_lock lock(mu_);
-      if (!not_full_.wait_for(lock, timeout, [&] { return closed_ || !ring_.full(); })) return false;
+      ++waiting_;
+      const bool room = not_full_.wait_for(lock, timeout, [&] { return closed_ || !ring_.full(); });
+      --waiting_;
+      if (!room) return false;
       if (closed_) return false;
       ring_.push(v);
     }
@@ -75,7 +83,10 @@ class BoundedQueue {
     std::optional<T> v;
     {
       std::unique_lock lock(mu_);
-      if (!not_empty_.wait_for(lock, timeout, [&] { return closed_ || !ring_.empty(); })) return v;
+      ++waiting_;
+      const bool any = not_empty_.wait_for(lock, timeout, [&] { return closed_ || !ring_.empty(); });
+      --waiting_;
+      if (!any) return v;
       if (ring_.empty()) return v;
       v = ring_.take();
     }
@@ -99,6 +110,7 @@ class BoundedQueue {
   std::condition_variable not_full_;
   RingBuffer<T> ring_;
   bool closed_ = false;
+  std::size_t waiting_ = 0;
 };
 
 }  // namespace symb::kernel
