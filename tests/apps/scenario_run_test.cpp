@@ -55,6 +55,47 @@ TEST(ScenarioRun, ProbesOfTheControllersReachTheOutputFolder) {
   fs::remove_all(out);
 }
 
+// Two tasks hooked in a ring that answer every message (issue 15): the robot's node cuts the cycle
+// (os/message.hpp, kMaxHops) and the run stops at once with an error that names it, under both
+// executors, instead of never leaving its first instant.
+TEST(ScenarioRun, AHookCycleStopsTheRunWithAnErrorNamingIt) {
+  std::ifstream in(std::string(SYMB_SCENARIO_DIR) + "/braitenberg.yaml");
+  std::ostringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const auto replace = [&yaml](const std::string& from, const std::string& to) {
+    const auto at = yaml.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    yaml.replace(at, from.size(), to);
+  };
+  replace("weights: network/", std::string("weights: ") + SYMB_SCENARIO_DIR + "/network/");
+  replace("    hooks:\n",
+          "      - {name: a, type: mlp, params: {inputs: 2, layers: \"2\"}}\n"
+          "      - {name: b, type: mlp, params: {inputs: 2, layers: \"2\"}}\n"
+          "    hooks:\n      - controller -> a\n      - a -> b\n      - b -> a\n");
+  const fs::path file = fs::temp_directory_path() / ("symb_run_cycle_" + std::to_string(::getpid()) + ".yaml");
+  {
+    std::ofstream out(file, std::ios::binary);
+    out << yaml;
+  }
+  for (const bool realtime : {false, true}) {
+    RunOptions o;
+    o.scenario_path = file.string();
+    o.realtime = realtime;
+    o.duration = realtime ? std::chrono::duration_cast<kernel::Duration>(20s) : kernel::Duration{10min};
+    const auto t0 = std::chrono::steady_clock::now();
+    auto r = run_scenario(o);
+    ASSERT_FALSE(r.ok()) << (realtime ? "threads" : "virtual time");
+    EXPECT_NE(r.error().find("node 'thymio': message cycle "), std::string::npos) << r.error();
+    EXPECT_TRUE(r.error().find("a -> b -> a") != std::string::npos ||
+                r.error().find("b -> a -> b") != std::string::npos)
+        << r.error();
+    // Stopped at the cut: the first slice (1 s of virtual time) or the first check (0.1 s).
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 15s) << (realtime ? "threads" : "virtual time");
+  }
+  fs::remove(file);
+}
+
 // A spiking controller (linda_maze.yaml): its spikes land in an AEDAT 2.0 file that reads back
 // with exactly the spikes the run counted, in time order, from neurons the grown network has;
 // beside it a raster and the grown network's picture.
