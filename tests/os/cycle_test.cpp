@@ -39,14 +39,20 @@ std::size_t errors_in(SysLog& log) {
   return n;
 }
 
+// Two echoes hooked both ways: a -> b -> a.
+std::pair<TaskId, TaskId> echo_ring(Node& node, std::atomic<std::uint64_t>& handled) {
+  const TaskId a = *node.create("a", echo(handled));
+  const TaskId b = *node.create("b", echo(handled));
+  EXPECT_TRUE(node.hook(a, b));
+  EXPECT_TRUE(node.hook(b, a));
+  return {a, b};
+}
+
 TEST(HookCycle, VirtualTimeRunAdvancesAndTheErrorNamesTheCycle) {
   kernel::VirtualTimeExecutor ex;
   Node node(ex, {"robot", 1});
   std::atomic<std::uint64_t> handled{0};
-  const TaskId a = *node.create("a", echo(handled));
-  const TaskId b = *node.create("b", echo(handled));
-  ASSERT_TRUE(node.hook(a, b));
-  ASSERT_TRUE(node.hook(b, a));
+  const auto [a, b] = echo_ring(node, handled);
   // A bystander with a period: its ticks show that time goes on.
   int ticks = 0;
   auto t = std::make_unique<Scripted>();
@@ -167,10 +173,7 @@ TEST(HookCycle, ThreadExecutorCutsTheCycleAndThenStaysQuiet) {
   kernel::ThreadExecutor ex;
   Node node(ex, {"robot", 1});
   std::atomic<std::uint64_t> handled{0};
-  const TaskId a = *node.create("a", echo(handled));
-  const TaskId b = *node.create("b", echo(handled));
-  ASSERT_TRUE(node.hook(a, b));
-  ASSERT_TRUE(node.hook(b, a));
+  const auto [a, b] = echo_ring(node, handled);
   ASSERT_TRUE(node.post(a, Message{}));
   // Waits for what is asserted: the cut, then both tasks idle (a faulted, b with nothing to answer).
   const auto deadline = std::chrono::steady_clock::now() + 30s;
