@@ -117,5 +117,31 @@ TEST(Mdl2eParser, DeepNestingIsBoundedNotACrash) {
   EXPECT_NE(error_of(wide).find("stack slots"), std::string::npos) << error_of(wide);
 }
 
+// A chain of and/or is long, not deep: the parser keeps it flat and the compiler walks it with an
+// explicit stack, so a chain as long as the byte code holds compiles and runs, and a longer one is
+// a located error, never a stack overflow.
+TEST(Mdl2eParser, LongAndOrChainCompilesWithoutRecursion) {
+  constexpr int kTerms = 19000;  // 3 bytes each: just under the 60,000 bytes of expression code
+  std::string chain = "sensor ir[2]\ninterrupt a = ir[0] > 1\ninterrupt b = ir[1] > 1\nplan p { atom stop until a";
+  for (int i = 1; i < kTerms; ++i) chain += i % 2 ? " or b" : " and a";
+  chain += " }\n";
+  auto program = compile_source(chain);
+  ASSERT_TRUE(program.ok()) << program.error();
+  using testing::events;
+  using testing::ms;
+  Interpreter in(*program);
+  std::vector<double> sensors{0, 0};
+  (void)in.step(ms(0), {.sensors = sensors});
+  sensors[1] = 5;  // the last term is 'or b': the chain turns true
+  const Output out = in.step(ms(1), {.sensors = sensors});
+  EXPECT_EQ(events(out), "interrupted:stop completed:p plan_ended:p");
+
+  std::string longer = "interrupt a = external\nplan p { atom stop until a";
+  for (int i = 1; i < 150000; ++i) longer += " or a";
+  longer += " }\n";
+  EXPECT_NE(error_of(longer).find("interrupt expressions are too large in all"), std::string::npos) << error_of(longer);
+  EXPECT_EQ(error_of(longer).rfind("2:", 0), 0u) << error_of(longer);
+}
+
 }  // namespace
 }  // namespace symb::control::mdl2e

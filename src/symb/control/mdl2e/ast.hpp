@@ -22,8 +22,8 @@ struct Expr {
   enum class Kind : std::uint8_t { kRef, kTrue, kFalse, kNot, kAnd, kOr };
   Kind kind = Kind::kTrue;
   std::string name;            // kRef: the basic interrupt's name
-  Loc loc;                     // where the operator or name starts
-  std::vector<Expr> operands;  // kNot: 1; kAnd, kOr: 2
+  Loc loc;                     // where the (first) operator or name starts
+  std::vector<Expr> operands;  // kNot: 1; kAnd, kOr: 2 or more, a chain's terms in order
 };
 
 // `until EXPR`, `for DURATION`, `loop [N]` after an atom, behaviour, call or plan.

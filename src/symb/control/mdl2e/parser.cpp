@@ -315,34 +315,32 @@ class Parser {
     return failed(k.loc, "expected 'atom', 'behaviour', 'do', 'task' or '}', got " + describe(k));
   }
 
-  bool expr_or(ast::Expr& out, int depth) {
-    if (!expr_and(out, depth)) return false;
-    while (is_word("or")) {
-      ast::Expr e;
-      e.kind = ast::Expr::Kind::kOr;
-      e.loc = next().loc;
+  // A chain `a or b or c ...` is one flat node with an operand per term, however long; only
+  // parentheses and 'not' nest, and those are bounded by kMaxExprNesting.
+  bool expr_or(ast::Expr& out, int depth) { return chain(out, depth, "or", ast::Expr::Kind::kOr); }
+  bool expr_and(ast::Expr& out, int depth) { return chain(out, depth, "and", ast::Expr::Kind::kAnd); }
+
+  bool chain(ast::Expr& out, int depth, std::string_view op, ast::Expr::Kind kind) {
+    ast::Expr first;
+    if (!term(first, depth, kind)) return false;
+    if (!is_word(op)) {
+      out = std::move(first);
+      return true;
+    }
+    out = ast::Expr{};
+    out.kind = kind;
+    out.loc = peek().loc;
+    out.operands.push_back(std::move(first));
+    while (is_word(op)) {
+      next();
       ast::Expr rhs;
-      if (!expr_and(rhs, depth)) return false;
-      e.operands.push_back(std::move(out));
-      e.operands.push_back(std::move(rhs));
-      out = std::move(e);
+      if (!term(rhs, depth, kind)) return false;
+      out.operands.push_back(std::move(rhs));
     }
     return true;
   }
-
-  bool expr_and(ast::Expr& out, int depth) {
-    if (!expr_not(out, depth)) return false;
-    while (is_word("and")) {
-      ast::Expr e;
-      e.kind = ast::Expr::Kind::kAnd;
-      e.loc = next().loc;
-      ast::Expr rhs;
-      if (!expr_not(rhs, depth)) return false;
-      e.operands.push_back(std::move(out));
-      e.operands.push_back(std::move(rhs));
-      out = std::move(e);
-    }
-    return true;
+  bool term(ast::Expr& out, int depth, ast::Expr::Kind kind) {
+    return kind == ast::Expr::Kind::kOr ? expr_and(out, depth) : expr_not(out, depth);
   }
 
   bool expr_not(ast::Expr& out, int depth) {
