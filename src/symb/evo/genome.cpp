@@ -301,7 +301,7 @@ kernel::Status check(const Genome& g) {
 
 kernel::Result<Genome> parse_genome_text(std::string_view text) {
   if (text.size() > kMaxGenomeTextBytes)
-    return Error{"1:1: genome text longer than " + std::to_string(kMaxGenomeTextBytes) + " bytes"};
+    return kernel::located_error({1, 1}, "genome text longer than " + std::to_string(kMaxGenomeTextBytes) + " bytes");
   RealParser real;
   std::optional<GenomeKind> kind;
   std::size_t line_number = 0, start = 0;

@@ -22,7 +22,8 @@ class Parser {
 
   kernel::Result<Network> run() {
     if (text_.size() > kMaxDescriptionBytes)
-      return Error{"1:1: description longer than " + std::to_string(kMaxDescriptionBytes) + " bytes"};
+      return kernel::located_error({1, 1},
+                                   "description longer than " + std::to_string(kMaxDescriptionBytes) + " bytes");
     // Statements end at a line's end or a ';'.
     auto st = kernel::for_each_line(text_, [&](std::string_view line, std::size_t number) -> kernel::Status {
       auto words = kernel::split_words(line, number, ";");

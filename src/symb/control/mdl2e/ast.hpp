@@ -9,13 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "symb/kernel/source_text.hpp"
+
 namespace symb::control::mdl2e::ast {
 
 // A position in the source: both 1-based.
-struct Loc {
-  std::uint32_t line = 1;
-  std::uint32_t column = 1;
-};
+using Loc = kernel::TextLocation;
 
 // An interrupt expression over named basic interrupts: AND, OR, NOT, TRUE, FALSE, parentheses.
 struct Expr {

@@ -10,7 +10,7 @@
 namespace symb::control::mdl2e {
 namespace {
 
-std::string at(ast::Loc loc) { return std::to_string(loc.line) + ":" + std::to_string(loc.column) + ": "; }
+std::string at(ast::Loc loc) { return kernel::location_prefix(loc); }
 
 std::string hint(std::string_view name, const std::vector<std::string_view>& candidates) {
   const std::string c = os::closest_name(name, candidates);
