@@ -26,13 +26,6 @@ using kernel::location_prefix;
 // Shown in a message: a token cut short, so a huge token cannot make a huge error.
 std::string shown(std::string_view s) { return s.size() <= 32 ? std::string(s) : std::string(s.substr(0, 29)) + "..."; }
 
-std::string number_text(double v) {
-  char buf[64];
-  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  (void)ec;  // 64 characters hold any double
-  return std::string(buf, end);
-}
-
 bool looks_numeric(std::string_view s) {
   const char c = s.empty() ? ' ' : s[0];
   return (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.';
@@ -84,20 +77,25 @@ class RealParser {
   kernel::Result<RealGenome> finish(std::size_t end_line, std::size_t end_column) {
     if (!values_at_) return Error{location_prefix(end_line, end_column) + "missing 'values' (the genes)"};
     if (!(g_.lo < g_.hi))
-      return hi_at_->error("bounds: lo " + number_text(g_.lo) + " must be below hi " + number_text(g_.hi));
+      return hi_at_->error("bounds: lo " + kernel::shortest_text<double>(g_.lo) + " must be below hi " +
+                           kernel::shortest_text<double>(g_.hi));
     const Token& sigma_at = sigma_value_at_ ? *sigma_value_at_ : *values_at_;
     if (!(g_.sigma_min > 0))
-      return (min_at_ ? *min_at_ : sigma_at).error("sigma min " + number_text(g_.sigma_min) + " must be above 0");
+      return (min_at_ ? *min_at_ : sigma_at)
+          .error("sigma min " + kernel::shortest_text<double>(g_.sigma_min) + " must be above 0");
     if (!(g_.sigma_min <= g_.sigma_max))
       return (max_at_ ? *max_at_ : sigma_at)
-          .error("sigma max " + number_text(g_.sigma_max) + " below min " + number_text(g_.sigma_min));
+          .error("sigma max " + kernel::shortest_text<double>(g_.sigma_max) + " below min " +
+                 kernel::shortest_text<double>(g_.sigma_min));
     if (!(g_.sigma >= g_.sigma_min && g_.sigma <= g_.sigma_max))
-      return sigma_at.error("sigma " + number_text(g_.sigma) + " outside [" + number_text(g_.sigma_min) + ", " +
-                            number_text(g_.sigma_max) + "] (its min and max)");
+      return sigma_at.error("sigma " + kernel::shortest_text<double>(g_.sigma) + " outside [" +
+                            kernel::shortest_text<double>(g_.sigma_min) + ", " +
+                            kernel::shortest_text<double>(g_.sigma_max) + "] (its min and max)");
     for (std::size_t i = 0; i < g_.values.size(); ++i)
       if (g_.values[i] < g_.lo || g_.values[i] > g_.hi)
-        return value_at_[i].error("value " + std::to_string(i) + ": " + number_text(g_.values[i]) +
-                                  " outside bounds [" + number_text(g_.lo) + ", " + number_text(g_.hi) + "]");
+        return value_at_[i].error("value " + std::to_string(i) + ": " + kernel::shortest_text<double>(g_.values[i]) +
+                                  " outside bounds [" + kernel::shortest_text<double>(g_.lo) + ", " +
+                                  kernel::shortest_text<double>(g_.hi) + "]");
     if (auto st = check(g_); !st) return Error{location_prefix(header_, 1) + st.error()};  // unreachable: checked above
     return std::move(g_);
   }
@@ -230,12 +228,14 @@ void line_diff(std::string_view a_text, std::string_view b_text, std::vector<std
 
 void real_diff(const RealGenome& a, const RealGenome& b, std::vector<std::string>& out, std::size_t& dropped) {
   auto changed = [&](const char* what, double x, double y) {
-    if (!(x == y)) add_line(out, dropped, std::string(what) + ": " + number_text(x) + " -> " + number_text(y));
+    if (!(x == y))
+      add_line(out, dropped,
+               std::string(what) + ": " + kernel::shortest_text<double>(x) + " -> " + kernel::shortest_text<double>(y));
   };
   if (!(a.lo == b.lo && a.hi == b.hi))
     add_line(out, dropped,
-             "bounds: [" + number_text(a.lo) + ", " + number_text(a.hi) + "] -> [" + number_text(b.lo) + ", " +
-                 number_text(b.hi) + "]");
+             "bounds: [" + kernel::shortest_text<double>(a.lo) + ", " + kernel::shortest_text<double>(a.hi) + "] -> [" +
+                 kernel::shortest_text<double>(b.lo) + ", " + kernel::shortest_text<double>(b.hi) + "]");
   changed("sigma", a.sigma, b.sigma);
   changed("sigma min", a.sigma_min, b.sigma_min);
   changed("sigma max", a.sigma_max, b.sigma_max);
@@ -245,7 +245,8 @@ void real_diff(const RealGenome& a, const RealGenome& b, std::vector<std::string
   for (std::size_t i = 0; i < common; ++i)
     if (!(a.values[i] == b.values[i]))
       add_line(out, dropped,
-               "value " + std::to_string(i) + ": " + number_text(a.values[i]) + " -> " + number_text(b.values[i]));
+               "value " + std::to_string(i) + ": " + kernel::shortest_text<double>(a.values[i]) + " -> " +
+                   kernel::shortest_text<double>(b.values[i]));
 }
 
 bool coin(kernel::RandomStream& random) { return random.uniform() < 0.5; }
@@ -367,13 +368,13 @@ std::string to_text(const Genome& g) {
   if (const auto* n = std::get_if<control::ahhs::Network>(&g)) return out + control::ahhs::to_text(*n);
   if (const auto* l = std::get_if<control::snn::Genome>(&g)) return out + control::snn::to_text(*l);
   const RealGenome& r = std::get<RealGenome>(g);
-  out += "bounds " + number_text(r.lo) + " " + number_text(r.hi) + "\n";
-  out +=
-      "sigma " + number_text(r.sigma) + " min " + number_text(r.sigma_min) + " max " + number_text(r.sigma_max) + "\n";
+  out += "bounds " + kernel::shortest_text<double>(r.lo) + " " + kernel::shortest_text<double>(r.hi) + "\n";
+  out += "sigma " + kernel::shortest_text<double>(r.sigma) + " min " + kernel::shortest_text<double>(r.sigma_min) +
+         " max " + kernel::shortest_text<double>(r.sigma_max) + "\n";
   out += "values";
   for (std::size_t i = 0; i < r.values.size(); ++i) {
     out += i > 0 && i % 8 == 0 ? "\n  " : " ";
-    out += number_text(r.values[i]);
+    out += kernel::shortest_text<double>(r.values[i]);
   }
   out += "\n";
   return out;

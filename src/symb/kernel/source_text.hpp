@@ -134,6 +134,15 @@ inline bool is_identifier(std::string_view s, std::size_t max_length = std::stri
   return true;
 }
 
+// The shortest text that reads back to exactly `v` (std::to_chars): the form every text writer of
+// the project (genomes, descriptions) uses, so that parse(to_text(x)) == x.
+template <class Real>
+std::string shortest_text(Real v) {
+  char buf[64];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+  return ec == std::errc() ? std::string(buf, end) : std::string("0");  // 64 characters hold any double
+}
+
 // How deep a recursive parser or compiler may go. Each recursive step holds a Level while it is
 // inside; a Level that is past the bound converts to false, and the caller reports a located
 // error instead of descending, so the native stack holds at most `limit` frames of that step

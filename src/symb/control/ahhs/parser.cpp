@@ -292,12 +292,6 @@ class Parser {
   Token end_;
 };
 
-std::string number(float v) {
-  char buf[64];
-  auto [p, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  return ec == std::errc() ? std::string(buf, p) : std::string("0");
-}
-
 }  // namespace
 
 kernel::Result<Network> parse_network(std::string_view text) { return Parser(text).run(); }
@@ -308,8 +302,10 @@ std::string to_text(const Network& n) {
   for (std::size_t h = 0; h < n.hormones.size(); ++h) {
     const Hormone& x = n.hormones[h];
     const std::string name = x.name.empty() ? "h" + std::to_string(h) : x.name;
-    out += "hormone " + name + " base " + number(x.base) + " decay " + number(x.decay) + " diffusion " +
-           number(x.diffusion) + " min " + number(x.min) + " max " + number(x.max) + " start " + number(x.start) + "\n";
+    out += "hormone " + name + " base " + kernel::shortest_text<float>(x.base) + " decay " +
+           kernel::shortest_text<float>(x.decay) + " diffusion " + kernel::shortest_text<float>(x.diffusion) + " min " +
+           kernel::shortest_text<float>(x.min) + " max " + kernel::shortest_text<float>(x.max) + " start " +
+           kernel::shortest_text<float>(x.start) + "\n";
   }
   for (const Placement& s : n.sensors)
     out += "sensor " + std::to_string(s.index) + " in " + std::to_string(s.compartment) + "\n";
@@ -323,8 +319,9 @@ std::string to_text(const Network& n) {
     out += r.kind == RuleKind::kSensor ? std::to_string(r.source) : hname(r.source);
     out += " -> ";
     out += r.kind == RuleKind::kActuator ? std::to_string(r.target) : hname(r.target);
-    out += " centre " + number(r.centre) + " width " + number(r.width) + " fixed " + number(r.fixed) + " dependent " +
-           number(r.dependent);
+    out += " centre " + kernel::shortest_text<float>(r.centre) + " width " + kernel::shortest_text<float>(r.width) +
+           " fixed " + kernel::shortest_text<float>(r.fixed) + " dependent " +
+           kernel::shortest_text<float>(r.dependent);
     if (r.compartment != kEveryCompartment) out += " in " + std::to_string(r.compartment);
     out += "\n";
   }

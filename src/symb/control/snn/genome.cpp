@@ -29,13 +29,6 @@ using kernel::location_prefix;
 
 std::string quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
 
-std::string number_text(float v) {
-  char buf[64];
-  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  if (ec != std::errc()) return "0";
-  return std::string(buf, end);
-}
-
 const char* direction_name(Direction d) {
   switch (d) {
     case Direction::kNorth: return "north";
@@ -155,13 +148,13 @@ class Parser {
     const char* last = first + text.size();
     auto [p, ec] = std::from_chars(first, last, v);
     if (ec == std::errc::result_out_of_range && p == last)
-      return t.error(std::string(what) + " " + quoted(text) + " out of range " + number_text(lo) + ".." +
-                     number_text(hi));
+      return t.error(std::string(what) + " " + quoted(text) + " out of range " + kernel::shortest_text<float>(lo) +
+                     ".." + kernel::shortest_text<float>(hi));
     if (ec != std::errc() || p != last || !std::isfinite(v))
       return t.error(std::string(what) + " must be a decimal number, got " + quoted(text));
     if (v < lo || v > hi)
-      return t.error(std::string(what) + " " + std::string(text) + " out of range " + number_text(lo) + ".." +
-                     number_text(hi));
+      return t.error(std::string(what) + " " + std::string(text) + " out of range " + kernel::shortest_text<float>(lo) +
+                     ".." + kernel::shortest_text<float>(hi));
     return v;
   }
 
@@ -531,17 +524,18 @@ std::string to_text(const Genome& g) {
   out += "grid " + std::to_string(g.width) + " " + std::to_string(g.height) + "\n";
   out += "ticks " + std::to_string(g.ticks) + "\n";
   out += "warmup " + std::to_string(g.warmup) + "\n";
-  out += "noise " + number_text(g.noise) + "\n";
+  out += "noise " + kernel::shortest_text<float>(g.noise) + "\n";
   out += std::string("integration ") + to_string(g.integration) + "\n";
-  out += "reach " + number_text(g.reach) + "\n";
+  out += "reach " + kernel::shortest_text<float>(g.reach) + "\n";
   for (const auto& m : g.morphogens)
-    out += "morphogen " + m.name + " diffusion " + number_text(m.diffusion) + " decay " + number_text(m.decay) + "\n";
+    out += "morphogen " + m.name + " diffusion " + kernel::shortest_text<float>(m.diffusion) + " decay " +
+           kernel::shortest_text<float>(m.decay) + "\n";
   for (const auto& s : g.sources)
     out += "source " + name(s.morphogen) + " at " + std::to_string(s.x) + " " + std::to_string(s.y) + " rate " +
-           number_text(s.rate) + "\n";
+           kernel::shortest_text<float>(s.rate) + "\n";
   for (const auto& c : g.seeds)
     out += "seed at " + std::to_string(c.x) + " " + std::to_string(c.y) + " class " + to_string(c.cls) + " bias " +
-           number_text(c.bias) + "\n";
+           kernel::shortest_text<float>(c.bias) + "\n";
   for (const auto& c : g.inputs)
     out += "input " + std::to_string(c.channel) + " at " + std::to_string(c.x) + " " + std::to_string(c.y) + "\n";
   for (const auto& c : g.outputs)
@@ -550,15 +544,17 @@ std::string to_text(const Genome& g) {
     out += "gene ";
     if (gene.once) out += "once ";
     if (gene.only) out += std::string("class ") + to_string(*gene.only) + " ";
-    out += "when " + number_text(gene.bias);
-    for (const auto& t : gene.terms) out += " " + number_text(t.weight) + "*" + name(t.morphogen);
+    out += "when " + kernel::shortest_text<float>(gene.bias);
+    for (const auto& t : gene.terms) out += " " + kernel::shortest_text<float>(t.weight) + "*" + name(t.morphogen);
     out += std::string(" do ") + action_name(gene.action);
     auto dir = [&] {
       out += std::string(" ") + direction_name(gene.direction);
       if (gene.direction == Direction::kUp || gene.direction == Direction::kDown) out += " " + name(gene.morphogen);
     };
     switch (gene.action) {
-      case ActionKind::kSecrete: out += " " + name(gene.morphogen) + " " + number_text(gene.amount); break;
+      case ActionKind::kSecrete:
+        out += " " + name(gene.morphogen) + " " + kernel::shortest_text<float>(gene.amount);
+        break;
       case ActionKind::kMove: dir(); break;
       case ActionKind::kDivide:
         dir();
@@ -568,10 +564,10 @@ std::string to_text(const Genome& g) {
       case ActionKind::kPrune: break;
       case ActionKind::kGrow:
         out += std::string(" ") + direction_name(gene.direction) + " " + name(gene.morphogen) + " weight " +
-               number_text(gene.amount) + " delay " + std::to_string(gene.delay);
+               kernel::shortest_text<float>(gene.amount) + " delay " + std::to_string(gene.delay);
         break;
       case ActionKind::kWeight:
-      case ActionKind::kBias: out += " " + number_text(gene.amount); break;
+      case ActionKind::kBias: out += " " + kernel::shortest_text<float>(gene.amount); break;
       case ActionKind::kClass: out += std::string(" ") + to_string(gene.cls); break;
     }
     out += "\n";
