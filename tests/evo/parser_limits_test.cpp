@@ -44,9 +44,9 @@ TEST(ParserLimits, LongInputsAreReadInALoopToALocatedError) {
     cases.emplace_back(outcome(control::ahhs::parse_network("compartments 2\n" + repeat("link 0 1\n", 20000))),
                        "3:1: this link is given twice");
     // Network: a weight list of 100,000 numbers, one a line.
-    cases.emplace_back(outcome(control::network::parse_description("type mlp\ninputs 1\nlayers 1\nweights\n" +
-                                                                   repeat("1\n", 100000))),
-                       "more than 20000 numbers");
+    cases.emplace_back(
+        outcome(control::network::parse_description("type mlp\ninputs 1\nlayers 1\nweights\n" + repeat("1\n", 100000))),
+        "more than 20000 numbers");
     // Linda: a line past its length, and more genes than allowed.
     cases.emplace_back(outcome(control::snn::parse_genome("grid 4 4 " + repeat("x", 5000))),
                        "1:1025: line longer than 1024 characters");
