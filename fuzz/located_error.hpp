@@ -2,22 +2,12 @@
 // "LINE:COLUMN: " that every parser of the project promises.
 #pragma once
 
-#include <cctype>
-#include <cstddef>
 #include <string>
+
+#include "symb/kernel/source_text.hpp"
 
 namespace symb::fuzz {
 
-inline bool located(const std::string& e) {
-  std::size_t i = 0;
-  auto digits = [&] {
-    const std::size_t s = i;
-    while (i < e.size() && std::isdigit(static_cast<unsigned char>(e[i]))) ++i;
-    return i > s;
-  };
-  if (!digits() || i >= e.size() || e[i++] != ':') return false;
-  if (!digits() || i + 1 >= e.size()) return false;
-  return e[i] == ':' && e[i + 1] == ' ';
-}
+inline bool located(const std::string& e) { return kernel::split_location(e).at.has_value(); }
 
 }  // namespace symb::fuzz

@@ -5,6 +5,7 @@
 #include "symb/control/mdl2e/parser.hpp"
 
 #include "mdl2e_test_support.hpp"
+#include "support/small_stack.hpp"
 
 namespace symb::control::mdl2e {
 namespace {
@@ -115,6 +116,64 @@ TEST(Mdl2eParser, DeepNestingIsBoundedNotACrash) {
   for (int i = 0; i < 20; ++i) wide += ")";
   wide += " }";
   EXPECT_NE(error_of(wide).find("stack slots"), std::string::npos) << error_of(wide);
+}
+
+// A chain of and/or is long, not deep: the parser keeps it flat and the compiler walks it with an
+// explicit stack, so a chain as long as the byte code holds compiles and runs, and a longer one is
+// a located error, never a stack overflow.
+TEST(Mdl2eParser, LongAndOrChainCompilesWithoutRecursion) {
+  constexpr int kTerms = 19000;  // 3 bytes each: just under the 60,000 bytes of expression code
+  std::string chain = "sensor ir[2]\ninterrupt a = ir[0] > 1\ninterrupt b = ir[1] > 1\nplan p { atom stop until a";
+  for (int i = 1; i < kTerms; ++i) chain += i % 2 ? " or b" : " and a";
+  chain += " }\n";
+  auto program = compile_source(chain);
+  ASSERT_TRUE(program.ok()) << program.error();
+  using testing::events;
+  using testing::ms;
+  Interpreter in(*program);
+  std::vector<double> sensors{0, 0};
+  (void)in.step(ms(0), {.sensors = sensors});
+  sensors[1] = 5;  // the last term is 'or b': the chain turns true
+  const Output out = in.step(ms(1), {.sensors = sensors});
+  EXPECT_EQ(events(out), "interrupted:stop completed:p plan_ended:p");
+
+  std::string longer = "interrupt a = external\nplan p { atom stop until a";
+  for (int i = 1; i < 150000; ++i) longer += " or a";
+  longer += " }\n";
+  EXPECT_NE(error_of(longer).find("interrupt expressions are too large in all"), std::string::npos) << error_of(longer);
+  EXPECT_EQ(error_of(longer).rfind("2:", 0), 0u) << error_of(longer);
+}
+
+// The deepest programs each bound lets through, and the longest chain, compile on a thread with
+// 1/32 of the executors' default stack: the bounds leave ample headroom, with ASan's frames too.
+TEST(Mdl2eParser, TheDeepestAcceptedProgramsFitASmallStack) {
+  std::string bodies = "plan p ";
+  for (int i = 0; i < kMaxDepth - 2; ++i) bodies += "{ behaviour ";
+  bodies += "{ atom stop }";
+  for (int i = 0; i < kMaxDepth - 2; ++i) bodies += " }";
+  std::string parens = "interrupt a = external\nplan p { atom stop until ";
+  for (int i = 0; i < kMaxExprNesting; ++i) parens += i % 2 ? "not " : "(";
+  parens += "a";
+  for (int i = 0; i < kMaxExprNesting; i += 2) parens += ")";
+  parens += " }";
+  std::string deep_parse = "plan p ";  // rejected by the compiler's depth, after the parser's deepest
+  for (int i = 0; i < kMaxParseNesting - 1; ++i) deep_parse += "{ behaviour ";
+  deep_parse += "{ atom stop }";
+  for (int i = 0; i < kMaxParseNesting - 1; ++i) deep_parse += " }";
+  std::string chain = "interrupt a = external\nplan p { atom stop until a";
+  for (int i = 1; i < 19000; ++i) chain += " or not a";
+  chain += " }";
+  std::string results[4];
+  ASSERT_TRUE(test_support::run_on_small_stack([&] {
+    results[0] = error_of(bodies);
+    results[1] = error_of(parens);
+    results[2] = error_of(deep_parse);
+    results[3] = error_of(chain);
+  }));
+  EXPECT_EQ(results[0], "<accepted>");
+  EXPECT_EQ(results[1], "<accepted>");
+  EXPECT_NE(results[2].find("nested deeper than 16 levels"), std::string::npos) << results[2];
+  EXPECT_NE(results[3].find("interrupt expressions are too large in all"), std::string::npos) << results[3];
 }
 
 }  // namespace

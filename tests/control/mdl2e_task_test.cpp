@@ -584,5 +584,43 @@ TEST(ControlTaskTypes, ShippedObstacleAvoidanceDrivesTheRobotThroughTheNode) {
   EXPECT_EQ(node.info(logger)->state, os::TaskState::kSuspended);
 }
 
+// A program with a long and/or chain, created at runtime beside a running controller (as a shell
+// `create mdl2e` does): one as long as the byte code holds is created, a longer one is refused
+// with its line and column, and the running controller drives on.
+TEST(ControlTaskTypes, ALongInterruptChainIsCreatedOrRefusedWhileTheRobotRuns) {
+  const auto chain = [](int terms) {
+    std::string s = "interrupt a = external\nplan p { atom wheels(100, 100) until a";
+    for (int i = 1; i < terms; ++i) s += " or a";
+    return s + " }\n";
+  };
+  os::TaskTypeRegistry registry;
+  ControlResources r;
+  r.read_program = [&](std::string_view ref) -> kernel::Result<std::string> {
+    if (ref == "long") return chain(19000);
+    if (ref == "longer") return chain(150000);
+    return std::string("plan p { atom wheels(300, 300) }\n");
+  };
+  ASSERT_TRUE(register_control_task_types(registry, r));
+  kernel::VirtualTimeExecutor ex;
+  os::Node node(ex, {.name = "bot", .types = &registry});
+  auto running = create(node, "running", "program=ok");
+  ASSERT_TRUE(running) << running.error();
+  auto rec_task = std::make_unique<Recorder>();
+  Recorder* rec = rec_task.get();
+  ASSERT_TRUE(node.hook(*running, *node.create("rec", std::move(rec_task))));
+  ex.run_for(30ms);
+  auto longer = create(node, "c2", "program=longer");
+  ASSERT_FALSE(longer);
+  EXPECT_NE(longer.error().find("program 'longer': 2:"), std::string::npos) << longer.error();
+  EXPECT_NE(longer.error().find("interrupt expressions are too large in all"), std::string::npos) << longer.error();
+  auto created = create(node, "c1", "program=long");
+  EXPECT_TRUE(created) << created.error();
+  const auto before = rec->size();
+  ex.run_for(30ms);
+  EXPECT_GT(rec->size(), before);
+  EXPECT_EQ(rec->last().left, 300);
+  EXPECT_EQ(node.task_count(), 3u);
+}
+
 }  // namespace
 }  // namespace symb::control

@@ -90,6 +90,23 @@ TEST(Tokenizer, LineLengthLimit) {
   EXPECT_EQ(t.error(), "column 4097: line is longer than 4096 bytes");
 }
 
+// The shell's line has no nesting: the longest line of the most tokens or quotes is one loop.
+TEST(Tokenizer, TheLongestLineOfTokensOrQuotesIsFlat) {
+  std::string words;
+  while (words.size() + 2 <= kMaxLineBytes) words += "a ";
+  auto t = tokenize(words);
+  ASSERT_TRUE(t) << t.error();
+  EXPECT_EQ(t->size(), kMaxLineBytes / 2);
+  std::string quotes;
+  while (quotes.size() + 4 <= kMaxLineBytes) quotes += "'(\"";  // each kind of quote holds the other
+  t = tokenize(quotes);
+  ASSERT_TRUE(t) << t.error();
+  EXPECT_EQ(t->size(), 1u);  // joined quotes are one word
+  t = tokenize(quotes + "'");
+  ASSERT_FALSE(t);
+  EXPECT_EQ(t.error(), "column " + std::to_string(quotes.size() + 1) + ": unterminated single quote");
+}
+
 TEST(Tokenizer, QuoteWordReadsBack) {
   for (std::string s : {"plain", "", "two words", "a\"b", "back\\slash", "tab\there", "#hash", "it's", "new\nline"}) {
     const std::string q = quote_word(s);

@@ -13,6 +13,8 @@
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 
+#include "support/small_stack.hpp"
+
 namespace symb::sim {
 namespace {
 
@@ -632,6 +634,63 @@ TEST(CheckScenario, ShippedScenariosAgainstTheRealTaskTypes) {
   auto st = check_scenario(*sc, empty);
   ASSERT_FALSE(st.ok());
   EXPECT_EQ(st.error().rfind(kDir + "/maze.yaml:26:15: unknown task type 'mdl2e'", 0), 0u) << st.error();
+}
+
+// yaml-cpp builds its events by recursion, one frame per level; the first pass stops it at
+// kMaxNesting, before the tree is built, so the deepest input a file can hold (a MiB of '[' or '{',
+// closed or not, or of '- ' and '? ') is a located error on a stack of 1/32 of a thread's default.
+TEST(ScenarioErrors, AMegabyteOfNestingStopsAtTheBoundOnASmallStack) {
+  const std::size_t n = kMaxScenarioBytes - 64;
+  const std::vector<std::string> inputs = {
+      "name: t\nworld: " + std::string(n / 2, '[') + std::string(n / 2, ']') + "\n",
+      "name: t\nworld: " + std::string(n, '[') + "\n",
+      "name: t\nworld: " + std::string(n, '{') + "\n",
+      "name: t\nworld: " +
+          [&] {
+            std::string s;
+            while (s.size() < n) s += "{a: ";
+            return s;
+          }(),
+      [&] {
+        std::string s;
+        while (s.size() < n) s += "- ";
+        return s + "x\n";
+      }(),
+      [&] {
+        std::string s;
+        while (s.size() < n) s += "? ";
+        return s + "x\n";
+      }(),
+  };
+  std::vector<std::string> errors(inputs.size());
+  ASSERT_TRUE(test_support::run_on_small_stack([&] {
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      auto sc = parse_scenario(inputs[i], "t.yaml");
+      errors[i] = sc.ok() ? "<accepted>" : sc.error();
+    }
+  }));
+  for (const std::string& e : errors) {
+    EXPECT_EQ(e.rfind("t.yaml:", 0), 0u) << e;
+    EXPECT_NE(e.find("nested more than 64 levels deep"), std::string::npos) << e;
+  }
+}
+
+// The byte pass that stops deep flow nesting before yaml-cpp reads it counts only brackets that
+// open collections: brackets in quotes, comments, block scalars and inside plain words pass.
+TEST(ScenarioErrors, BracketsThatOpenNoCollectionAreNotNesting) {
+  const std::string many(100, '[');
+  const std::string yaml = "name: t  # " + many + "\ndescription: |\n" +
+                           [&] {
+                             std::string lines;
+                             for (int i = 0; i < 100; ++i) lines += "  " + many + " {\n";
+                             return lines;
+                           }() +
+                           kHead.substr(8) + kRobot + "    tasks:\n      - {name: x, type: '" + many +
+                           "', program: \"" + many + "\\\"\"}\n";
+  auto sc = parse_scenario(yaml, "t.yaml");
+  const std::string e = sc.ok() ? std::string() : sc.error();
+  EXPECT_EQ(e.find("nested more than"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown key 'program'"), std::string::npos) << e;  // the YAML was read to its end
 }
 
 }  // namespace

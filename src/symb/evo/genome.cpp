@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "symb/control/ahhs/parser.hpp"
+#include "symb/kernel/source_text.hpp"
 
 namespace symb::evo {
 
@@ -19,53 +20,11 @@ namespace {
 // Text form: tokens of one line at a time, so that for ahhs and linda nothing after the `genome`
 // line is looked at by this parser (the embedded description is the controller parser's business).
 
-struct Token {
-  std::string_view text;
-  std::size_t line = 1, column = 1;
-};
-
-std::string where(std::size_t line, std::size_t column) {
-  return std::to_string(line) + ":" + std::to_string(column) + ": ";
-}
-Error at(const Token& t, const std::string& message) { return Error{where(t.line, t.column) + message}; }
-// Just after a token: where a missing argument should have been.
-Error after(const Token& t, const std::string& message) {
-  return Error{where(t.line, t.column + t.text.size()) + message};
-}
+using Token = kernel::TextToken;
+using kernel::location_prefix;
 
 // Shown in a message: a token cut short, so a huge token cannot make a huge error.
 std::string shown(std::string_view s) { return s.size() <= 32 ? std::string(s) : std::string(s.substr(0, 29)) + "..."; }
-
-std::string number_text(double v) {
-  char buf[64];
-  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  (void)ec;  // 64 characters hold any double
-  return std::string(buf, end);
-}
-
-// The tokens of one line (without its '\n'); a '#' ends the line.
-kernel::Result<std::vector<Token>> tokenize_line(std::string_view line, std::size_t line_number) {
-  std::vector<Token> out;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    const auto c = static_cast<unsigned char>(line[i]);
-    if (c == '#') break;
-    if (c == ' ' || c == '\t' || c == '\r') {
-      ++i;
-      continue;
-    }
-    if (c < 0x20 || c >= 0x7f)
-      return Error{where(line_number, i + 1) + "unexpected character (code " + std::to_string(c) + ")"};
-    const std::size_t start = i;
-    while (i < line.size()) {
-      const auto d = static_cast<unsigned char>(line[i]);
-      if (d <= ' ' || d >= 0x7f || d == '#') break;
-      ++i;
-    }
-    out.push_back({line.substr(start, i - start), line_number, start + 1});
-  }
-  return out;
-}
 
 bool looks_numeric(std::string_view s) {
   const char c = s.empty() ? ' ' : s[0];
@@ -78,36 +37,18 @@ kernel::Result<double> parse_number(const Token& t) {
   if (first != last && *first == '+') ++first;  // from_chars refuses a leading '+'
   double v = 0;
   auto [ptr, ec] = std::from_chars(first, last, v);
-  if (ec == std::errc::result_out_of_range) return at(t, "number '" + shown(t.text) + "' out of range");
-  if (ec != std::errc{} || ptr != last || first == last) return at(t, "'" + shown(t.text) + "' is not a number");
-  if (!std::isfinite(v)) return at(t, "number '" + shown(t.text) + "' is not finite");
+  if (ec == std::errc::result_out_of_range) return t.error("number '" + shown(t.text) + "' out of range");
+  if (ec != std::errc{} || ptr != last || first == last) return t.error("'" + shown(t.text) + "' is not a number");
+  if (!std::isfinite(v)) return t.error("number '" + shown(t.text) + "' is not finite");
   return v;
 }
 
 // "L:C: rest" with L moved down by `offset` lines; a message without a location gets the line
 // where the embedded text starts.
 std::string rebase(const std::string& message, std::size_t offset) {
-  std::size_t line = 0;
-  auto [p, ec] = std::from_chars(message.data(), message.data() + message.size(), line);
-  const std::size_t colon = static_cast<std::size_t>(p - message.data());
-  if (ec == std::errc{} && colon > 0 && colon < message.size() && message[colon] == ':')
-    return std::to_string(line + offset) + message.substr(colon);
-  return where(offset + 1, 1) + message;
-}
-
-// The message of "L:C: message" (all of it when it has no location).
-std::string without_location(const std::string& message) {
-  std::size_t i = 0, colons = 0;
-  while (i < message.size() && colons < 2) {
-    const char c = message[i];
-    if (c == ':')
-      ++colons;
-    else if (c < '0' || c > '9')
-      return message;
-    ++i;
-  }
-  if (colons < 2 || i >= message.size() || message[i] != ' ') return message;
-  return message.substr(i + 1);
+  const kernel::LocatedMessage m = kernel::split_location(message);
+  if (!m.at) return location_prefix(offset + 1, 1) + message;
+  return location_prefix(m.at->line + offset, m.at->column) + std::string(m.message);
 }
 
 class RealParser {
@@ -117,11 +58,11 @@ class RealParser {
     const Token& key = s[0];
     if (looks_numeric(key.text)) {
       if (!in_values_)
-        return at(key, "number '" + shown(key.text) + "' outside a list: a line starts with bounds, sigma or values");
+        return key.error("number '" + shown(key.text) + "' outside a list: a line starts with bounds, sigma or values");
       return numbers(s, 0);
     }
     in_values_ = false;
-    if (key.text == "genome") return at(key, "'genome' given twice (first at line " + std::to_string(header_) + ")");
+    if (key.text == "genome") return key.error("'genome' given twice (first at line " + std::to_string(header_) + ")");
     if (key.text == "bounds") return bounds(s);
     if (key.text == "sigma") return sigma(s);
     if (key.text == "values") {
@@ -130,27 +71,32 @@ class RealParser {
       in_values_ = true;
       return numbers(s, 1);
     }
-    return at(key, "unknown key '" + shown(key.text) + "' (bounds, sigma or values)");
+    return key.error("unknown key '" + shown(key.text) + "' (bounds, sigma or values)");
   }
 
   kernel::Result<RealGenome> finish(std::size_t end_line, std::size_t end_column) {
-    if (!values_at_) return Error{where(end_line, end_column) + "missing 'values' (the genes)"};
+    if (!values_at_) return Error{location_prefix(end_line, end_column) + "missing 'values' (the genes)"};
     if (!(g_.lo < g_.hi))
-      return at(*hi_at_, "bounds: lo " + number_text(g_.lo) + " must be below hi " + number_text(g_.hi));
+      return hi_at_->error("bounds: lo " + kernel::shortest_text<double>(g_.lo) + " must be below hi " +
+                           kernel::shortest_text<double>(g_.hi));
     const Token& sigma_at = sigma_value_at_ ? *sigma_value_at_ : *values_at_;
     if (!(g_.sigma_min > 0))
-      return at(min_at_ ? *min_at_ : sigma_at, "sigma min " + number_text(g_.sigma_min) + " must be above 0");
+      return (min_at_ ? *min_at_ : sigma_at)
+          .error("sigma min " + kernel::shortest_text<double>(g_.sigma_min) + " must be above 0");
     if (!(g_.sigma_min <= g_.sigma_max))
-      return at(max_at_ ? *max_at_ : sigma_at,
-                "sigma max " + number_text(g_.sigma_max) + " below min " + number_text(g_.sigma_min));
+      return (max_at_ ? *max_at_ : sigma_at)
+          .error("sigma max " + kernel::shortest_text<double>(g_.sigma_max) + " below min " +
+                 kernel::shortest_text<double>(g_.sigma_min));
     if (!(g_.sigma >= g_.sigma_min && g_.sigma <= g_.sigma_max))
-      return at(sigma_at, "sigma " + number_text(g_.sigma) + " outside [" + number_text(g_.sigma_min) + ", " +
-                              number_text(g_.sigma_max) + "] (its min and max)");
+      return sigma_at.error("sigma " + kernel::shortest_text<double>(g_.sigma) + " outside [" +
+                            kernel::shortest_text<double>(g_.sigma_min) + ", " +
+                            kernel::shortest_text<double>(g_.sigma_max) + "] (its min and max)");
     for (std::size_t i = 0; i < g_.values.size(); ++i)
       if (g_.values[i] < g_.lo || g_.values[i] > g_.hi)
-        return at(value_at_[i], "value " + std::to_string(i) + ": " + number_text(g_.values[i]) + " outside bounds [" +
-                                    number_text(g_.lo) + ", " + number_text(g_.hi) + "]");
-    if (auto st = check(g_); !st) return Error{where(header_, 1) + st.error()};  // unreachable: checked above
+        return value_at_[i].error("value " + std::to_string(i) + ": " + kernel::shortest_text<double>(g_.values[i]) +
+                                  " outside bounds [" + kernel::shortest_text<double>(g_.lo) + ", " +
+                                  kernel::shortest_text<double>(g_.hi) + "]");
+    if (auto st = check(g_); !st) return Error{location_prefix(header_, 1) + st.error()};  // unreachable: checked above
     return std::move(g_);
   }
 
@@ -158,12 +104,13 @@ class RealParser {
 
  private:
   static Error twice(const Token& key, const Token& first) {
-    return at(key, "'" + std::string(key.text) + "' given twice (first at line " + std::to_string(first.line) + ")");
+    return key.error("'" + std::string(key.text) + "' given twice (first at line " + std::to_string(first.line) + ")");
   }
 
   kernel::Status numbers(const std::vector<Token>& s, std::size_t from) {
     for (std::size_t i = from; i < s.size(); ++i) {
-      if (g_.values.size() >= kMaxRealGenes) return at(s[i], "more than " + std::to_string(kMaxRealGenes) + " values");
+      if (g_.values.size() >= kMaxRealGenes)
+        return s[i].error("more than " + std::to_string(kMaxRealGenes) + " values");
       auto v = parse_number(s[i]);
       if (!v) return Error{v.error()};
       g_.values.push_back(*v);
@@ -175,8 +122,8 @@ class RealParser {
   kernel::Status bounds(const std::vector<Token>& s) {
     if (bounds_at_) return twice(s[0], *bounds_at_);
     bounds_at_ = s[0];
-    if (s.size() < 3) return after(s.back(), "bounds needs two numbers: lo hi");
-    if (s.size() > 3) return at(s[3], "bounds takes two numbers: lo hi");
+    if (s.size() < 3) return s.back().error_after("bounds needs two numbers: lo hi");
+    if (s.size() > 3) return s[3].error("bounds takes two numbers: lo hi");
     auto lo = parse_number(s[1]);
     if (!lo) return Error{lo.error()};
     auto hi = parse_number(s[2]);
@@ -190,7 +137,7 @@ class RealParser {
   kernel::Status sigma(const std::vector<Token>& s) {
     if (sigma_at_) return twice(s[0], *sigma_at_);
     sigma_at_ = s[0];
-    if (s.size() < 2) return after(s[0], "sigma needs a value");
+    if (s.size() < 2) return s[0].error_after("sigma needs a value");
     auto v = parse_number(s[1]);
     if (!v) return Error{v.error()};
     g_.sigma = *v;
@@ -198,10 +145,10 @@ class RealParser {
     for (std::size_t i = 2; i < s.size(); i += 2) {
       const bool is_min = s[i].text == "min";
       if (!is_min && s[i].text != "max")
-        return at(s[i], "sigma takes 'min A' and 'max B' after its value, not '" + shown(s[i].text) + "'");
+        return s[i].error("sigma takes 'min A' and 'max B' after its value, not '" + shown(s[i].text) + "'");
       std::optional<Token>& seen = is_min ? min_at_ : max_at_;
-      if (seen) return at(s[i], "'" + std::string(s[i].text) + "' given twice");
-      if (i + 1 >= s.size()) return after(s[i], "'" + std::string(s[i].text) + "' needs a number");
+      if (seen) return s[i].error("'" + std::string(s[i].text) + "' given twice");
+      if (i + 1 >= s.size()) return s[i].error_after("'" + std::string(s[i].text) + "' needs a number");
       auto n = parse_number(s[i + 1]);
       if (!n) return Error{n.error()};
       seen = s[i + 1];
@@ -281,12 +228,14 @@ void line_diff(std::string_view a_text, std::string_view b_text, std::vector<std
 
 void real_diff(const RealGenome& a, const RealGenome& b, std::vector<std::string>& out, std::size_t& dropped) {
   auto changed = [&](const char* what, double x, double y) {
-    if (!(x == y)) add_line(out, dropped, std::string(what) + ": " + number_text(x) + " -> " + number_text(y));
+    if (!(x == y))
+      add_line(out, dropped,
+               std::string(what) + ": " + kernel::shortest_text<double>(x) + " -> " + kernel::shortest_text<double>(y));
   };
   if (!(a.lo == b.lo && a.hi == b.hi))
     add_line(out, dropped,
-             "bounds: [" + number_text(a.lo) + ", " + number_text(a.hi) + "] -> [" + number_text(b.lo) + ", " +
-                 number_text(b.hi) + "]");
+             "bounds: [" + kernel::shortest_text<double>(a.lo) + ", " + kernel::shortest_text<double>(a.hi) + "] -> [" +
+                 kernel::shortest_text<double>(b.lo) + ", " + kernel::shortest_text<double>(b.hi) + "]");
   changed("sigma", a.sigma, b.sigma);
   changed("sigma min", a.sigma_min, b.sigma_min);
   changed("sigma max", a.sigma_max, b.sigma_max);
@@ -296,7 +245,8 @@ void real_diff(const RealGenome& a, const RealGenome& b, std::vector<std::string
   for (std::size_t i = 0; i < common; ++i)
     if (!(a.values[i] == b.values[i]))
       add_line(out, dropped,
-               "value " + std::to_string(i) + ": " + number_text(a.values[i]) + " -> " + number_text(b.values[i]));
+               "value " + std::to_string(i) + ": " + kernel::shortest_text<double>(a.values[i]) + " -> " +
+                   kernel::shortest_text<double>(b.values[i]));
 }
 
 bool coin(kernel::RandomStream& random) { return random.uniform() < 0.5; }
@@ -352,7 +302,7 @@ kernel::Status check(const Genome& g) {
 
 kernel::Result<Genome> parse_genome_text(std::string_view text) {
   if (text.size() > kMaxGenomeTextBytes)
-    return Error{"1:1: genome text longer than " + std::to_string(kMaxGenomeTextBytes) + " bytes"};
+    return kernel::located_error({1, 1}, "genome text longer than " + std::to_string(kMaxGenomeTextBytes) + " bytes");
   RealParser real;
   std::optional<GenomeKind> kind;
   std::size_t line_number = 0, start = 0;
@@ -364,7 +314,7 @@ kernel::Result<Genome> parse_genome_text(std::string_view text) {
     ++line_number;
     last_line = line;
     start = end + 1;
-    auto tokens = tokenize_line(line, line_number);
+    auto tokens = kernel::split_words(line, line_number);
     if (!tokens) return Error{tokens.error()};
     const std::vector<Token>& t = *tokens;
     if (!t.empty()) {
@@ -372,8 +322,8 @@ kernel::Result<Genome> parse_genome_text(std::string_view text) {
         if (auto st = real.statement(t); !st) return Error{st.error()};
       } else {
         if (t[0].text != "genome")
-          return at(t[0], "expected 'genome real|ahhs|linda' first, not '" + shown(t[0].text) + "'");
-        if (t.size() < 2) return after(t[0], "'genome' needs a kind: real, ahhs or linda");
+          return t[0].error("expected 'genome real|ahhs|linda' first, not '" + shown(t[0].text) + "'");
+        if (t.size() < 2) return t[0].error_after("'genome' needs a kind: real, ahhs or linda");
         if (t[1].text == "real")
           kind = GenomeKind::kReal;
         else if (t[1].text == "ahhs")
@@ -381,8 +331,8 @@ kernel::Result<Genome> parse_genome_text(std::string_view text) {
         else if (t[1].text == "linda")
           kind = GenomeKind::kLinda;
         else
-          return at(t[1], "unknown genome kind '" + shown(t[1].text) + "' (real, ahhs or linda)");
-        if (t.size() > 2) return at(t[2], "nothing may follow 'genome " + std::string(t[1].text) + "' on its line");
+          return t[1].error("unknown genome kind '" + shown(t[1].text) + "' (real, ahhs or linda)");
+        if (t.size() > 2) return t[2].error("nothing may follow 'genome " + std::string(t[1].text) + "' on its line");
         real.header_ = line_number;
         if (*kind != GenomeKind::kReal) {
           // Everything after this line is the controller's own description.
@@ -391,7 +341,7 @@ kernel::Result<Genome> parse_genome_text(std::string_view text) {
           // to point at: they point just after the header.
           const bool ends_here = nl == std::string_view::npos;
           auto relocated = [&](const std::string& e) {
-            return ends_here ? after(t.back(), without_location(e)) : Error{rebase(e, line_number)};
+            return ends_here ? t.back().error_after(kernel::split_location(e).message) : Error{rebase(e, line_number)};
           };
           if (*kind == GenomeKind::kAhhs) {
             auto n = control::ahhs::parse_network(embedded);
@@ -406,7 +356,8 @@ kernel::Result<Genome> parse_genome_text(std::string_view text) {
     }
     if (nl == std::string_view::npos) break;
   }
-  if (!kind) return Error{where(line_number, last_line.size() + 1) + "empty text: expected 'genome real|ahhs|linda'"};
+  if (!kind)
+    return Error{location_prefix(line_number, last_line.size() + 1) + "empty text: expected 'genome real|ahhs|linda'"};
   auto r = real.finish(line_number, last_line.size() + 1);
   if (!r) return Error{r.error()};
   return Genome{std::move(r).value()};
@@ -417,13 +368,13 @@ std::string to_text(const Genome& g) {
   if (const auto* n = std::get_if<control::ahhs::Network>(&g)) return out + control::ahhs::to_text(*n);
   if (const auto* l = std::get_if<control::snn::Genome>(&g)) return out + control::snn::to_text(*l);
   const RealGenome& r = std::get<RealGenome>(g);
-  out += "bounds " + number_text(r.lo) + " " + number_text(r.hi) + "\n";
-  out +=
-      "sigma " + number_text(r.sigma) + " min " + number_text(r.sigma_min) + " max " + number_text(r.sigma_max) + "\n";
+  out += "bounds " + kernel::shortest_text<double>(r.lo) + " " + kernel::shortest_text<double>(r.hi) + "\n";
+  out += "sigma " + kernel::shortest_text<double>(r.sigma) + " min " + kernel::shortest_text<double>(r.sigma_min) +
+         " max " + kernel::shortest_text<double>(r.sigma_max) + "\n";
   out += "values";
   for (std::size_t i = 0; i < r.values.size(); ++i) {
     out += i > 0 && i % 8 == 0 ? "\n  " : " ";
-    out += number_text(r.values[i]);
+    out += kernel::shortest_text<double>(r.values[i]);
   }
   out += "\n";
   return out;

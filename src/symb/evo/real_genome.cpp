@@ -6,16 +6,11 @@
 #include <limits>
 #include <string>
 
+#include "symb/kernel/source_text.hpp"
+
 namespace symb::evo {
 
 namespace {
-
-std::string shortest(double v) {
-  char buf[64];
-  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  (void)ec;  // 64 characters hold any double
-  return std::string(buf, end);
-}
 
 double clamp_sigma(const RealGenome& g, double s) {
   // std::clamp would be undefined if a caller broke sigma_min <= sigma_max; check() reports that.
@@ -32,18 +27,20 @@ bool compatible(const RealGenome& a, const RealGenome& b) {
 
 kernel::Status check(const RealGenome& g) {
   if (!std::isfinite(g.lo) || !std::isfinite(g.hi) || !(g.lo < g.hi))
-    return kernel::Error{"bounds [" + shortest(g.lo) + ", " + shortest(g.hi) + "]: need finite lo < hi"};
+    return kernel::Error{"bounds [" + kernel::shortest_text<double>(g.lo) + ", " + kernel::shortest_text<double>(g.hi) +
+                         "]: need finite lo < hi"};
   for (std::size_t i = 0; i < g.values.size(); ++i) {
     const double v = g.values[i];
     if (!std::isfinite(v)) return kernel::Error{"value " + std::to_string(i) + ": not finite"};
     if (v < g.lo || v > g.hi)
-      return kernel::Error{"value " + std::to_string(i) + ": " + shortest(v) + " outside [" + shortest(g.lo) + ", " +
-                           shortest(g.hi) + "]"};
+      return kernel::Error{"value " + std::to_string(i) + ": " + kernel::shortest_text<double>(v) + " outside [" +
+                           kernel::shortest_text<double>(g.lo) + ", " + kernel::shortest_text<double>(g.hi) + "]"};
   }
   if (!std::isfinite(g.sigma_min) || !std::isfinite(g.sigma_max) || !std::isfinite(g.sigma) || !(g.sigma_min > 0) ||
       !(g.sigma_min <= g.sigma) || !(g.sigma <= g.sigma_max))
-    return kernel::Error{"sigma " + shortest(g.sigma) + " min " + shortest(g.sigma_min) + " max " +
-                         shortest(g.sigma_max) + ": need 0 < min <= sigma <= max, all finite"};
+    return kernel::Error{"sigma " + kernel::shortest_text<double>(g.sigma) + " min " +
+                         kernel::shortest_text<double>(g.sigma_min) + " max " +
+                         kernel::shortest_text<double>(g.sigma_max) + ": need 0 < min <= sigma <= max, all finite"};
   return {};
 }
 

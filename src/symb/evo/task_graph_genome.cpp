@@ -6,6 +6,8 @@
 #include <set>
 #include <utility>
 
+#include "symb/kernel/source_text.hpp"
+
 namespace symb::evo {
 
 namespace {
@@ -45,7 +47,7 @@ struct LineCursor {
     return line.substr(start, i - start);
   }
   std::string error(std::size_t col, const std::string& msg) const {
-    return std::to_string(number) + ":" + std::to_string(col) + ": " + msg;
+    return kernel::location_prefix(number, col) + msg;
   }
 };
 

@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <system_error>
 #include <tuple>
@@ -127,6 +128,93 @@ class Source {
   int lines_ = 1;
   int last_line_length_ = 0;
 };
+
+// Zeroth pass, over the bytes: flow collections ('[' and '{') nested deeper than kMaxNesting.
+// yaml-cpp's scanner reads a flow collection ahead before it hands over its first event (any '['
+// may start a simple key), about 2.5 us a byte: a MiB of '[' cost 2.5 s before the event pass
+// could stop it; this finds the first bracket past the bound in a millisecond. It counts only the
+// brackets that open a collection (any in flow context; in block context one that starts a value
+// or a line), skips quoted scalars, comments and block scalars ('|', '>'), and stops counting at
+// anything it cannot place (an unterminated quote), so it never rejects a file that nests less;
+// the event pass below stays the authority. Returns the 1-based line and column of the bracket.
+std::optional<std::pair<int, int>> flow_too_deep(std::string_view t) {
+  int depth = 0, line = 1;
+  std::size_t line_start = 0;
+  char prev = '\n';              // the last character that is not a blank on this line; '\n' at its start
+  bool blank_before = true;      // a blank (or the line start) comes right before i
+  int block_scalar_indent = -1;  // >= 0: inside a block scalar's lines, indented more than this
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    const char c = t[i];
+    if (c == '\n') {
+      ++line;
+      line_start = i + 1;
+      prev = '\n';
+      blank_before = true;
+      if (block_scalar_indent >= 0) {  // skip the scalar's lines: blank ones or indented deeper
+        std::size_t k = i + 1;
+        for (;;) {
+          std::size_t e = k;
+          while (e < t.size() && t[e] == ' ') ++e;
+          if (e < t.size() && t[e] != '\n' && t[e] != '\r' && static_cast<int>(e - k) <= block_scalar_indent) break;
+          const std::size_t nl = t.find('\n', e);
+          if (nl == std::string_view::npos) return std::nullopt;
+          ++line;
+          k = nl + 1;
+        }
+        line_start = k;
+        i = k - 1;
+        block_scalar_indent = -1;
+      }
+      continue;
+    }
+    if (c == ' ' || c == '\t' || c == '\r') {
+      blank_before = true;
+      continue;
+    }
+    const bool token_start = blank_before || prev == '[' || prev == '{' || prev == ',';
+    if (c == '#' && blank_before) {
+      const std::size_t nl = t.find('\n', i);
+      if (nl == std::string_view::npos) return std::nullopt;
+      i = nl - 1;
+      continue;
+    }
+    if ((c == '\'' || c == '"') && token_start) {
+      std::size_t k = i + 1;
+      for (;; ++k) {
+        if (k >= t.size()) return std::nullopt;
+        if (t[k] == '\n') {
+          ++line;
+          line_start = k + 1;
+        } else if (c == '"' && t[k] == '\\') {
+          ++k;
+        } else if (t[k] == c) {
+          if (c == '\'' && k + 1 < t.size() && t[k + 1] == '\'') {
+            ++k;
+            continue;
+          }
+          break;
+        }
+      }
+      i = k;
+      prev = c;
+      blank_before = false;
+      continue;
+    }
+    if ((c == '|' || c == '>') && depth == 0 && blank_before && prev == ':') {
+      std::size_t indent = 0;
+      while (line_start + indent < t.size() && t[line_start + indent] == ' ') ++indent;
+      block_scalar_indent = static_cast<int>(indent);
+    } else if ((c == '[' || c == '{') &&
+               (depth > 0 || (blank_before && (prev == '\n' || prev == ':' || prev == '-' || prev == '?')))) {
+      if (++depth > kMaxNesting) return std::pair{line, static_cast<int>(i - line_start) + 1};
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+    prev = c;
+    blank_before = false;
+  }
+  return std::nullopt;
+}
 
 // First pass over the events: nesting depth and document count, before any tree is built.
 // yaml-cpp recurses once per level (it stops itself at 2000); this stops at kMaxNesting.
@@ -802,6 +890,9 @@ kernel::Result<Scenario> parse_scenario(std::string_view yaml_text, std::string_
     if (yaml_text.size() > kMaxScenarioBytes)
       return Error{start.str() + ": the file has " + std::to_string(yaml_text.size()) +
                    " bytes; a scenario may have at most 1 MiB"};
+    if (const auto deep = flow_too_deep(yaml_text))
+      return Error{SourceLocation{src.file(), deep->first, deep->second}.str() + ": nested more than " +
+                   std::to_string(kMaxNesting) + " levels deep"};
     const std::string text(yaml_text);
     {
       std::istringstream in(text);

@@ -6,31 +6,15 @@
 #include <optional>
 #include <vector>
 
+#include "symb/kernel/source_text.hpp"
+
 namespace symb::control::ahhs {
 
 using kernel::Error;
 
 namespace {
 
-struct Token {
-  std::string_view text;
-  std::size_t line = 1, column = 1;
-};
-
-std::string where(std::size_t line, std::size_t column) {
-  return std::to_string(line) + ":" + std::to_string(column) + ": ";
-}
-
-Error located(const Token& t, const std::string& message) { return Error{where(t.line, t.column) + message}; }
-
-bool identifier(std::string_view s) {
-  if (s.empty() || s.size() > 64) return false;
-  auto alpha = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; };
-  if (!alpha(s[0])) return false;
-  for (char c : s)
-    if (!alpha(c) && !(c >= '0' && c <= '9')) return false;
-  return true;
-}
+using Token = kernel::TextToken;
 
 class Parser {
  public:
@@ -38,54 +22,26 @@ class Parser {
 
   kernel::Result<Network> run() {
     if (text_.size() > kMaxDescriptionBytes)
-      return Error{"1:1: description longer than " + std::to_string(kMaxDescriptionBytes) + " bytes"};
-    std::size_t line = 1, column = 1;
-    std::vector<Token> statement;
-    bool comment = false;
-    std::size_t i = 0;
-    auto finish = [&]() -> kernel::Status {
-      if (statement.empty()) return {};
-      auto st = parse_statement(statement);
-      statement.clear();
-      return st;
-    };
-    while (i < text_.size()) {
-      const char c = text_[i];
-      if (c == '\n') {
-        if (auto st = finish(); !st) return Error{st.error()};
-        comment = false;
-        ++line;
-        column = 1;
-        ++i;
-        continue;
+      return kernel::located_error({1, 1},
+                                   "description longer than " + std::to_string(kMaxDescriptionBytes) + " bytes");
+    // Statements end at a line's end or a ';'.
+    auto st = kernel::for_each_line(text_, [&](std::string_view line, std::size_t number) -> kernel::Status {
+      auto words = kernel::split_words(line, number, ";");
+      if (!words) return Error{words.error()};
+      std::size_t first = 0;
+      for (std::size_t k = 0; k <= words->size(); ++k) {
+        if (k < words->size() && (*words)[k].text != ";") continue;
+        if (k > first)
+          if (auto done = parse_statement({words->begin() + static_cast<std::ptrdiff_t>(first),
+                                           words->begin() + static_cast<std::ptrdiff_t>(k)});
+              !done)
+            return done;
+        first = k + 1;
       }
-      if (comment) {
-        ++i;
-        ++column;
-        continue;
-      }
-      if (c == '#') {
-        comment = true;
-      } else if (c == ';') {
-        if (auto st = finish(); !st) return Error{st.error()};
-      } else if (c == ' ' || c == '\t' || c == '\r') {
-      } else if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) {
-        return Error{where(line, column) + "unexpected character (code " +
-                     std::to_string(static_cast<unsigned char>(c)) + ")"};
-      } else {
-        const std::size_t start = i, start_column = column;
-        while (i < text_.size() && text_[i] > ' ' && text_[i] < 0x7f && text_[i] != '#' && text_[i] != ';') {
-          ++i;
-          ++column;
-        }
-        statement.push_back({text_.substr(start, i - start), line, start_column});
-        continue;
-      }
-      ++i;
-      ++column;
-    }
-    if (auto st = finish(); !st) return Error{st.error()};
-    end_ = {std::string_view(), line, column};
+      end_ = {std::string_view(), number, line.size() + 1};
+      return {};
+    });
+    if (!st) return Error{st.error()};
     return complete();
   }
 
@@ -93,22 +49,22 @@ class Parser {
   kernel::Status parse_statement(const std::vector<Token>& s) {
     const std::string_view kw = s[0].text;
     if (kw != "compartments" && !have_compartments_)
-      return located(s[0], "declare the compartments first (compartments N)");
+      return s[0].error("declare the compartments first (compartments N)");
     if (kw == "compartments") return compartments(s);
     if (kw == "link") return link(s);
     if (kw == "hormone") return hormone(s);
     if (kw == "sensor" || kw == "actuator") return placement(s);
     if (kw == "rule") return rule(s);
-    return located(
-        s[0], "unknown statement '" + std::string(kw) + "' (compartments, link, hormone, sensor, actuator or rule)");
+    return s[0].error("unknown statement '" + std::string(kw) +
+                      "' (compartments, link, hormone, sensor, actuator or rule)");
   }
 
   kernel::Result<std::uint64_t> integer(const Token& t, std::uint64_t max, const char* what) {
     std::uint64_t v = 0;
     auto [p, ec] = std::from_chars(t.text.data(), t.text.data() + t.text.size(), v);
     if (ec != std::errc() || p != t.text.data() + t.text.size())
-      return located(t, std::string(what) + " must be a whole number, got '" + std::string(t.text) + "'");
-    if (v > max) return located(t, std::string(what) + " must be at most " + std::to_string(max));
+      return t.error(std::string(what) + " must be a whole number, got '" + std::string(t.text) + "'");
+    if (v > max) return t.error(std::string(what) + " must be at most " + std::to_string(max));
     return v;
   }
 
@@ -116,7 +72,7 @@ class Parser {
     float v = 0;
     auto [p, ec] = std::from_chars(t.text.data(), t.text.data() + t.text.size(), v);
     if (ec != std::errc() || p != t.text.data() + t.text.size() || !std::isfinite(v))
-      return located(t, std::string(what) + " must be a finite number, got '" + std::string(t.text) + "'");
+      return t.error(std::string(what) + " must be a finite number, got '" + std::string(t.text) + "'");
     return v;
   }
 
@@ -128,25 +84,25 @@ class Parser {
 
   kernel::Result<std::uint32_t> hormone_ref(const Token& t) {
     auto it = hormone_ids_.find(std::string(t.text));
-    if (it == hormone_ids_.end()) return located(t, "no hormone named '" + std::string(t.text) + "' declared above");
+    if (it == hormone_ids_.end()) return t.error("no hormone named '" + std::string(t.text) + "' declared above");
     return it->second;
   }
 
   kernel::Status arity(const std::vector<Token>& s, std::size_t n, const char* shape) {
     if (s.size() < n) {
       const Token& last = s.back();
-      return Error{where(last.line, last.column + last.text.size()) + "incomplete: " + shape};
+      return last.error_after(std::string("incomplete: ") + shape);
     }
-    if (s.size() > n) return located(s[n], std::string("unexpected '") + std::string(s[n].text) + "': " + shape);
+    if (s.size() > n) return s[n].error(std::string("unexpected '") + std::string(s[n].text) + "': " + shape);
     return {};
   }
 
   kernel::Status compartments(const std::vector<Token>& s) {
-    if (have_compartments_) return located(s[0], "compartments declared twice");
+    if (have_compartments_) return s[0].error("compartments declared twice");
     if (auto st = arity(s, 2, "compartments N"); !st) return st;
     auto n = integer(s[1], kMaxCompartments, "the number of compartments");
     if (!n) return Error{n.error()};
-    if (*n == 0) return located(s[1], "a network has at least one compartment");
+    if (*n == 0) return s[1].error("a network has at least one compartment");
     net_.compartments = static_cast<std::uint32_t>(*n);
     have_compartments_ = true;
     degree_.assign(net_.compartments, 0);
@@ -159,10 +115,10 @@ class Parser {
     if (!a) return Error{a.error()};
     auto b = compartment(s[2]);
     if (!b) return Error{b.error()};
-    if (*a == *b) return located(s[2], "a compartment cannot be its own neighbour");
-    if (net_.links.size() >= kMaxLinks) return located(s[0], "more than " + std::to_string(kMaxLinks) + " links");
+    if (*a == *b) return s[2].error("a compartment cannot be its own neighbour");
+    if (net_.links.size() >= kMaxLinks) return s[0].error("more than " + std::to_string(kMaxLinks) + " links");
     const auto key = std::make_pair(std::min(*a, *b), std::max(*a, *b));
-    if (!links_.emplace(key, s[0]).second) return located(s[0], "this link is given twice");
+    if (!links_.emplace(key, s[0]).second) return s[0].error("this link is given twice");
     net_.links.push_back({*a, *b});
     ++degree_[*a];
     ++degree_[*b];
@@ -181,10 +137,9 @@ class Parser {
         known = known || key == a;
         list += (list.empty() ? "" : ", ") + std::string(a);
       }
-      if (!known) return located(s[k], "unknown key '" + key + "' (expected " + list + ")");
-      if (out.count(key) != 0) return located(s[k], "'" + key + "' given twice");
-      if (k + 1 >= s.size())
-        return Error{where(s[k].line, s[k].column + s[k].text.size()) + "'" + key + "' needs a value"};
+      if (!known) return s[k].error("unknown key '" + key + "' (expected " + list + ")");
+      if (out.count(key) != 0) return s[k].error("'" + key + "' given twice");
+      if (k + 1 >= s.size()) return s[k].error_after("'" + key + "' needs a value");
       if (key == "in") {
         auto c = compartment(s[k + 1]);
         if (!c) return Error{c.error()};
@@ -200,12 +155,13 @@ class Parser {
 
   kernel::Status hormone(const std::vector<Token>& s) {
     if (s.size() < 2) return arity(s, 2, "hormone NAME base X decay X diffusion X");
-    if (!identifier(s[1].text)) return located(s[1], "a hormone name is a letter or '_', then letters, digits or '_'");
+    if (!kernel::is_identifier(s[1].text, 64))
+      return s[1].error("a hormone name is a letter or '_', then letters, digits or '_'");
     if (hormone_ids_.count(std::string(s[1].text)) != 0)
-      return located(s[1], "hormone '" + std::string(s[1].text) + "' declared twice");
+      return s[1].error("hormone '" + std::string(s[1].text) + "' declared twice");
     if (net_.hormones.size() >= kMaxHormones)
-      return located(
-          s[0], "at most " + std::to_string(kMaxHormones) + " hormones (one message carries a compartment's levels)");
+      return s[0].error("at most " + std::to_string(kMaxHormones) +
+                        " hormones (one message carries a compartment's levels)");
     auto kv = pairs(s, 2, {"base", "decay", "diffusion", "min", "max", "start"});
     if (!kv) return Error{kv.error()};
     Hormone h;
@@ -221,10 +177,10 @@ class Parser {
     h.start = h.min;
     get("start", h.start);
     auto at = [&](const char* k) { return kv->count(k) ? kv->at(k).second : s[1]; };
-    if (h.decay < 0 || h.decay > 1) return located(at("decay"), "decay must be 0 to 1");
-    if (h.diffusion < 0 || h.diffusion > 1) return located(at("diffusion"), "diffusion must be 0 to 1");
-    if (!(h.min < h.max)) return located(at("max"), "max must be above min");
-    if (h.start < h.min || h.start > h.max) return located(at("start"), "start must lie within [min, max]");
+    if (h.decay < 0 || h.decay > 1) return at("decay").error("decay must be 0 to 1");
+    if (h.diffusion < 0 || h.diffusion > 1) return at("diffusion").error("diffusion must be 0 to 1");
+    if (!(h.min < h.max)) return at("max").error("max must be above min");
+    if (h.start < h.min || h.start > h.max) return at("start").error("start must lie within [min, max]");
     hormone_ids_[h.name] = static_cast<std::uint32_t>(net_.hormones.size());
     hormone_at_.push_back(at("diffusion"));
     net_.hormones.push_back(std::move(h));
@@ -237,13 +193,13 @@ class Parser {
     auto index =
         integer(s[1], (sensor ? kMaxSensorIndex : kMaxActuators) - 1, sensor ? "a sensor index" : "an actuator index");
     if (!index) return Error{index.error()};
-    if (s[2].text != "in") return located(s[2], "expected 'in'");
+    if (s[2].text != "in") return s[2].error("expected 'in'");
     auto c = compartment(s[3]);
     if (!c) return Error{c.error()};
     auto& list = sensor ? net_.sensors : net_.actuators;
     for (const Placement& p : list)
       if (p.index == *index)
-        return located(s[1], std::string(sensor ? "sensor " : "actuator ") + std::string(s[1].text) + " placed twice");
+        return s[1].error(std::string(sensor ? "sensor " : "actuator ") + std::string(s[1].text) + " placed twice");
     list.push_back({static_cast<std::uint32_t>(*index), *c});
     if (!sensor) actuator_at_.push_back(s[1]);
     return {};
@@ -263,15 +219,14 @@ class Parser {
     else if (kind == "actuator")
       r.kind = RuleKind::kActuator;
     else
-      return located(s[1], "unknown rule kind '" + std::string(kind) + "' (sensor, hormone, nonlinear or actuator)");
-    if (s[3].text != "->") return located(s[3], "expected '->'");
+      return s[1].error("unknown rule kind '" + std::string(kind) + "' (sensor, hormone, nonlinear or actuator)");
+    if (s[3].text != "->") return s[3].error("expected '->'");
     if (r.kind == RuleKind::kSensor) {
       auto i = integer(s[2], kMaxSensorIndex - 1, "a sensor index");
       if (!i) return Error{i.error()};
       bool placed = false;
       for (const Placement& p : net_.sensors) placed = placed || p.index == *i;
-      if (!placed)
-        return located(s[2], "sensor " + std::string(s[2].text) + " is not placed (sensor INDEX in C) above");
+      if (!placed) return s[2].error("sensor " + std::string(s[2].text) + " is not placed (sensor INDEX in C) above");
       r.source = static_cast<std::uint32_t>(*i);
     } else {
       auto h = hormone_ref(s[2]);
@@ -284,7 +239,7 @@ class Parser {
       bool placed = false;
       for (const Placement& p : net_.actuators) placed = placed || p.index == *i;
       if (!placed)
-        return located(s[4], "actuator " + std::string(s[4].text) + " is not placed (actuator INDEX in C) above");
+        return s[4].error("actuator " + std::string(s[4].text) + " is not placed (actuator INDEX in C) above");
       r.target = static_cast<std::uint32_t>(*i);
     } else {
       auto h = hormone_ref(s[4]);
@@ -295,34 +250,34 @@ class Parser {
     auto kv = placed_rule ? pairs(s, 5, {"centre", "width", "fixed", "dependent"})
                           : pairs(s, 5, {"centre", "width", "fixed", "dependent", "in"});
     if (!kv) return Error{kv.error()};
-    if (!kv->count("centre")) return located(s[0], "the rule needs 'centre X'");
-    if (!kv->count("width")) return located(s[0], "the rule needs 'width X'");
+    if (!kv->count("centre")) return s[0].error("the rule needs 'centre X'");
+    if (!kv->count("width")) return s[0].error("the rule needs 'width X'");
     r.centre = kv->at("centre").first;
     r.width = kv->at("width").first;
     if (!(r.width > 0))
-      return located(kv->at("width").second, "width must be above 0 (a window of width 0 never fires)");
+      return (kv->at("width").second).error("width must be above 0 (a window of width 0 never fires)");
     if (kv->count("fixed")) r.fixed = kv->at("fixed").first;
     if (kv->count("dependent")) r.dependent = kv->at("dependent").first;
     if (kv->count("in")) r.compartment = static_cast<std::int32_t>(kv->at("in").first);
-    if (net_.rules.size() >= kMaxRules) return located(s[0], "more than " + std::to_string(kMaxRules) + " rules");
+    if (net_.rules.size() >= kMaxRules) return s[0].error("more than " + std::to_string(kMaxRules) + " rules");
     net_.rules.push_back(r);
     return {};
   }
 
   kernel::Result<Network> complete() {
-    if (!have_compartments_) return located(end_, "empty description: declare compartments, hormones and rules");
-    if (net_.hormones.empty()) return located(end_, "declare at least one hormone");
+    if (!have_compartments_) return end_.error("empty description: declare compartments, hormones and rules");
+    if (net_.hormones.empty()) return end_.error("declare at least one hormone");
     std::uint32_t max_degree = 0;
     for (std::uint32_t d : degree_) max_degree = std::max(max_degree, d);
     for (std::size_t h = 0; h < net_.hormones.size(); ++h)
       if (static_cast<double>(net_.hormones[h].diffusion) * max_degree > 1.0)
-        return located(hormone_at_[h], "diffusion times the largest number of neighbours (" +
-                                           std::to_string(max_degree) + ") exceeds 1");
+        return hormone_at_[h].error("diffusion times the largest number of neighbours (" + std::to_string(max_degree) +
+                                    ") exceeds 1");
     for (std::size_t k = 0; k < net_.actuators.size(); ++k)
       if (net_.actuators[k].index >= net_.actuators.size())
-        return located(actuator_at_[k],
-                       "actuators are numbered 0 to " + std::to_string(net_.actuators.size() - 1) + " without gaps");
-    if (auto st = validate(net_); !st) return located(end_, st.error());
+        return actuator_at_[k].error("actuators are numbered 0 to " + std::to_string(net_.actuators.size() - 1) +
+                                     " without gaps");
+    if (auto st = validate(net_); !st) return end_.error(st.error());
     return std::move(net_);
   }
 
@@ -337,12 +292,6 @@ class Parser {
   Token end_;
 };
 
-std::string number(float v) {
-  char buf[64];
-  auto [p, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  return ec == std::errc() ? std::string(buf, p) : std::string("0");
-}
-
 }  // namespace
 
 kernel::Result<Network> parse_network(std::string_view text) { return Parser(text).run(); }
@@ -353,8 +302,10 @@ std::string to_text(const Network& n) {
   for (std::size_t h = 0; h < n.hormones.size(); ++h) {
     const Hormone& x = n.hormones[h];
     const std::string name = x.name.empty() ? "h" + std::to_string(h) : x.name;
-    out += "hormone " + name + " base " + number(x.base) + " decay " + number(x.decay) + " diffusion " +
-           number(x.diffusion) + " min " + number(x.min) + " max " + number(x.max) + " start " + number(x.start) + "\n";
+    out += "hormone " + name + " base " + kernel::shortest_text<float>(x.base) + " decay " +
+           kernel::shortest_text<float>(x.decay) + " diffusion " + kernel::shortest_text<float>(x.diffusion) + " min " +
+           kernel::shortest_text<float>(x.min) + " max " + kernel::shortest_text<float>(x.max) + " start " +
+           kernel::shortest_text<float>(x.start) + "\n";
   }
   for (const Placement& s : n.sensors)
     out += "sensor " + std::to_string(s.index) + " in " + std::to_string(s.compartment) + "\n";
@@ -368,8 +319,9 @@ std::string to_text(const Network& n) {
     out += r.kind == RuleKind::kSensor ? std::to_string(r.source) : hname(r.source);
     out += " -> ";
     out += r.kind == RuleKind::kActuator ? std::to_string(r.target) : hname(r.target);
-    out += " centre " + number(r.centre) + " width " + number(r.width) + " fixed " + number(r.fixed) + " dependent " +
-           number(r.dependent);
+    out += " centre " + kernel::shortest_text<float>(r.centre) + " width " + kernel::shortest_text<float>(r.width) +
+           " fixed " + kernel::shortest_text<float>(r.fixed) + " dependent " +
+           kernel::shortest_text<float>(r.dependent);
     if (r.compartment != kEveryCompartment) out += " in " + std::to_string(r.compartment);
     out += "\n";
   }

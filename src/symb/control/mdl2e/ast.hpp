@@ -9,21 +9,20 @@
 #include <string>
 #include <vector>
 
+#include "symb/kernel/source_text.hpp"
+
 namespace symb::control::mdl2e::ast {
 
 // A position in the source: both 1-based.
-struct Loc {
-  std::uint32_t line = 1;
-  std::uint32_t column = 1;
-};
+using Loc = kernel::TextLocation;
 
 // An interrupt expression over named basic interrupts: AND, OR, NOT, TRUE, FALSE, parentheses.
 struct Expr {
   enum class Kind : std::uint8_t { kRef, kTrue, kFalse, kNot, kAnd, kOr };
   Kind kind = Kind::kTrue;
   std::string name;            // kRef: the basic interrupt's name
-  Loc loc;                     // where the operator or name starts
-  std::vector<Expr> operands;  // kNot: 1; kAnd, kOr: 2
+  Loc loc;                     // where the (first) operator or name starts
+  std::vector<Expr> operands;  // kNot: 1; kAnd, kOr: 2 or more, a chain's terms in order
 };
 
 // `until EXPR`, `for DURATION`, `loop [N]` after an atom, behaviour, call or plan.

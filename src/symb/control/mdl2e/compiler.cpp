@@ -10,7 +10,7 @@
 namespace symb::control::mdl2e {
 namespace {
 
-std::string at(ast::Loc loc) { return std::to_string(loc.line) + ":" + std::to_string(loc.column) + ": "; }
+std::string at(ast::Loc loc) { return kernel::location_prefix(loc); }
 
 std::string hint(std::string_view name, const std::vector<std::string_view>& candidates) {
   const std::string c = os::closest_name(name, candidates);
@@ -110,42 +110,60 @@ class Compiler {
     return {};
   }
 
-  // Emits the RPN for `e`; `depth` tracks the operand stack.
-  kernel::Status expr(const ast::Expr& e, int depth, int& max_depth) {
+  // Emits the RPN for `root` with an explicit stack, so a chain of any length (one node with an
+  // operand per term) or a hand-built tree of any depth uses no native stack. A chain's first
+  // operand sits at the chain's own operand depth, each next one a slot higher until its operator
+  // folds it in: an and/or chain needs two slots however long it is.
+  kernel::Status expr(const ast::Expr& root) {
     using K = ast::Expr::Kind;
-    switch (e.kind) {
-      case K::kRef: {
-        const int k = find_interrupt(e.name);
-        if (k < 0) {
-          std::vector<std::string_view> names;
-          for (const auto& d : a_.interrupts) names.push_back(d.name);
-          return kernel::Error{at(e.loc) + "unknown interrupt '" + e.name + "'" + hint(e.name, names)};
+    struct Frame {
+      const ast::Expr* e;
+      int depth;  // operand stack slots in use below this subexpression's value
+      std::size_t next = 0;
+    };
+    std::vector<Frame> stack{{&root, 0}};
+    const auto emit = [&](ExprOp op, const ast::Expr& at_node) -> kernel::Status {
+      p_.code.push_back(static_cast<std::uint8_t>(op));
+      if (p_.code.size() >= 60000) return kernel::Error{at(at_node.loc) + "interrupt expressions are too large in all"};
+      return {};
+    };
+    while (!stack.empty()) {
+      Frame& f = stack.back();
+      const ast::Expr& e = *f.e;
+      if (e.kind == K::kRef || e.kind == K::kTrue || e.kind == K::kFalse) {
+        if (f.depth + 1 > kMaxExprStack)
+          return kernel::Error{at(e.loc) + "interrupt expression needs more than " + std::to_string(kMaxExprStack) +
+                               " stack slots (use fewer nested parentheses)"};
+        if (e.kind == K::kRef) {
+          const int k = find_interrupt(e.name);
+          if (k < 0) {
+            std::vector<std::string_view> names;
+            for (const auto& d : a_.interrupts) names.push_back(d.name);
+            return kernel::Error{at(e.loc) + "unknown interrupt '" + e.name + "'" + hint(e.name, names)};
+          }
+          if (auto s = emit(ExprOp::kBasic, e); !s) return s;
+          p_.code.push_back(static_cast<std::uint8_t>(k));
+        } else if (auto s = emit(e.kind == K::kTrue ? ExprOp::kTrue : ExprOp::kFalse, e); !s) {
+          return s;
         }
-        p_.code.push_back(static_cast<std::uint8_t>(ExprOp::kBasic));
-        p_.code.push_back(static_cast<std::uint8_t>(k));
-        max_depth = std::max(max_depth, depth + 1);
-        break;
+        stack.pop_back();
+        continue;
       }
-      case K::kTrue:
-      case K::kFalse:
-        p_.code.push_back(static_cast<std::uint8_t>(e.kind == K::kTrue ? ExprOp::kTrue : ExprOp::kFalse));
-        max_depth = std::max(max_depth, depth + 1);
-        break;
-      case K::kNot:
-        if (auto s = expr(e.operands[0], depth, max_depth); !s) return s;
-        p_.code.push_back(static_cast<std::uint8_t>(ExprOp::kNot));
-        break;
-      case K::kAnd:
-      case K::kOr:
-        if (auto s = expr(e.operands[0], depth, max_depth); !s) return s;
-        if (auto s = expr(e.operands[1], depth + 1, max_depth); !s) return s;
-        p_.code.push_back(static_cast<std::uint8_t>(e.kind == K::kAnd ? ExprOp::kAnd : ExprOp::kOr));
-        break;
+      const bool chain = e.kind == K::kAnd || e.kind == K::kOr;
+      if ((chain && e.operands.size() < 2) || (!chain && e.operands.size() != 1))
+        return kernel::Error{at(e.loc) + "internal error: bad interrupt expression"};
+      if (chain && f.next >= 2)
+        if (auto s = emit(e.kind == K::kAnd ? ExprOp::kAnd : ExprOp::kOr, e); !s) return s;
+      if (f.next < e.operands.size()) {
+        const std::size_t i = f.next++;
+        const int depth = f.depth + (i == 0 ? 0 : 1);
+        stack.push_back({&e.operands[i], depth});  // invalidates f
+        continue;
+      }
+      if (e.kind == K::kNot)
+        if (auto s = emit(ExprOp::kNot, e); !s) return s;
+      stack.pop_back();
     }
-    if (max_depth > kMaxExprStack)
-      return kernel::Error{at(e.loc) + "interrupt expression needs more than " + std::to_string(kMaxExprStack) +
-                           " stack slots (use fewer nested parentheses)"};
-    if (p_.code.size() >= 60000) return kernel::Error{at(e.loc) + "interrupt expressions are too large in all"};
     return {};
   }
 
@@ -157,8 +175,7 @@ class Compiler {
     }
     if (m.until) {
       const std::size_t offset = p_.code.size();
-      int max_depth = 0;
-      if (auto s = expr(*m.until, 0, max_depth); !s) return s;
+      if (auto s = expr(*m.until); !s) return s;
       p_.code.push_back(static_cast<std::uint8_t>(ExprOp::kEnd));
       d.expr = static_cast<std::uint16_t>(offset);
     }

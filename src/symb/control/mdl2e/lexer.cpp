@@ -9,10 +9,6 @@ namespace {
 bool is_alpha(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; }
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
 
-std::string located(ast::Loc loc, const std::string& message) {
-  return std::to_string(loc.line) + ":" + std::to_string(loc.column) + ": " + message;
-}
-
 }  // namespace
 
 std::string_view token_kind_name(TokenKind kind) {
@@ -41,7 +37,7 @@ kernel::Result<std::vector<Token>> lex(std::string_view source) {
   std::vector<Token> out;
   ast::Loc loc{1, 1};
   if (source.size() > kMaxSourceBytes)
-    return kernel::Error{located(loc, "program is longer than " + std::to_string(kMaxSourceBytes) + " bytes")};
+    return kernel::located_error(loc, "program is longer than " + std::to_string(kMaxSourceBytes) + " bytes");
   std::size_t i = 0;
   auto advance = [&](std::size_t n) {
     for (std::size_t k = 0; k < n; ++k, ++i) {
@@ -69,7 +65,7 @@ kernel::Result<std::vector<Token>> lex(std::string_view source) {
     if (is_alpha(c)) {
       std::size_t j = i;
       while (j < source.size() && (is_alpha(source[j]) || is_digit(source[j]))) ++j;
-      if (j - i > 63) return kernel::Error{located(loc, "name is longer than 63 characters")};
+      if (j - i > 63) return kernel::located_error(loc, "name is longer than 63 characters");
       t.kind = TokenKind::kIdent;
       t.text = source.substr(i, j - i);
       advance(j - i);
@@ -83,14 +79,14 @@ kernel::Result<std::vector<Token>> lex(std::string_view source) {
         ++j;
         if (j >= source.size() || !is_digit(source[j])) {
           ast::Loc at = loc;
-          at.column += static_cast<std::uint32_t>(j - i);
-          return kernel::Error{located(at, "expected a digit after the decimal point")};
+          at.column += j - i;
+          return kernel::located_error(at, "expected a digit after the decimal point");
         }
         while (j < source.size() && is_digit(source[j])) ++j;
       }
       std::size_t k = j;
       while (k < source.size() && (is_alpha(source[k]) || is_digit(source[k]))) ++k;
-      if (k - i > 40) return kernel::Error{located(loc, "number is too long")};
+      if (k - i > 40) return kernel::located_error(loc, "number is too long");
       t.kind = TokenKind::kNumber;
       t.text = source.substr(i, j - i);
       t.suffix = source.substr(j, k - j);
@@ -123,7 +119,7 @@ kernel::Result<std::vector<Token>> lex(std::string_view source) {
           std::snprintf(buf, sizeof buf, "unexpected character '%c'", c);
         else
           std::snprintf(buf, sizeof buf, "unexpected byte 0x%02x", u);
-        return kernel::Error{located(loc, buf)};
+        return kernel::located_error(loc, buf);
       }
     }
     t.text = source.substr(start, len);

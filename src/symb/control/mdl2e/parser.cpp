@@ -72,7 +72,7 @@ class Parser {
         b.loc = k.loc;
         if (!name(b.name, "a behaviour name")) return err();
         if (!modifiers(b.mods)) return err();
-        if (!body(b.children, 1)) return err();
+        if (!body(b.children)) return err();
         p.behaviours.push_back(std::move(b));
       } else if (is_word("plan")) {
         if (p.plan)
@@ -83,7 +83,7 @@ class Parser {
         b.loc = k.loc;
         if (!name(b.name, "a plan name")) return err();
         if (!modifiers(b.mods)) return err();
-        if (!body(b.children, 1)) return err();
+        if (!body(b.children)) return err();
         p.plan = std::move(b);
       } else {
         return fail(k.loc, "expected 'sensor', 'interrupt', 'behaviour' or 'plan', got " + describe(k));
@@ -114,7 +114,7 @@ class Parser {
 
   kernel::Error err() const { return kernel::Error{error_}; }
   kernel::Error fail(ast::Loc loc, const std::string& message) {
-    error_ = std::to_string(loc.line) + ":" + std::to_string(loc.column) + ": " + message;
+    error_ = kernel::location_prefix(loc) + message;
     return kernel::Error{error_};
   }
   bool failed(ast::Loc loc, const std::string& message) {
@@ -214,7 +214,7 @@ class Parser {
         have_until = true;
         next();
         ast::Expr e;
-        if (!expr_or(e, 0)) return false;
+        if (!expr_or(e)) return false;
         m.until = std::move(e);
       } else if (is_word("for")) {
         if (have_for) return failed(t.loc, "'for' given twice");
@@ -237,13 +237,14 @@ class Parser {
     }
   }
 
-  bool body(std::vector<ast::Item>& items, int depth) {
-    if (depth > kMaxParseNesting) return failed(peek().loc, "behaviours nested too deeply");
+  bool body(std::vector<ast::Item>& items) {
+    const auto level = body_nesting_.enter();
+    if (!level) return failed(peek().loc, "behaviours nested too deeply");
     if (!expect(TokenKind::kLBrace, "to open the body")) return false;
     while (!at(TokenKind::kRBrace)) {
       if (at(TokenKind::kEnd)) return failed(peek().loc, "expected '}' to close the body, got the end of the program");
       ast::Item it;
-      if (!item(it, depth)) return false;
+      if (!item(it)) return false;
       items.push_back(std::move(it));
     }
     if (items.empty()) return failed(peek().loc, "a body needs at least one atom, behaviour, 'do' or 'task'");
@@ -251,7 +252,7 @@ class Parser {
     return true;
   }
 
-  bool item(ast::Item& it, int depth) {
+  bool item(ast::Item& it) {
     const Token& k = peek();
     it.loc = k.loc;
     if (is_word("atom")) {
@@ -285,7 +286,7 @@ class Parser {
       it.name_loc = peek().loc;
       if (at(TokenKind::kIdent) && !is_keyword(peek().text)) it.name = std::string(next().text);
       if (!modifiers(it.mods)) return false;
-      return body(it.children, depth + 1);
+      return body(it.children);
     }
     if (is_word("do")) {
       next();
@@ -315,51 +316,52 @@ class Parser {
     return failed(k.loc, "expected 'atom', 'behaviour', 'do', 'task' or '}', got " + describe(k));
   }
 
-  bool expr_or(ast::Expr& out, int depth) {
-    if (!expr_and(out, depth)) return false;
-    while (is_word("or")) {
-      ast::Expr e;
-      e.kind = ast::Expr::Kind::kOr;
-      e.loc = next().loc;
+  // A chain `a or b or c ...` is one flat node with an operand per term, however long; only
+  // parentheses and 'not' nest, and those are bounded by kMaxExprNesting.
+  bool expr_or(ast::Expr& out) { return chain(out, "or", ast::Expr::Kind::kOr); }
+  bool expr_and(ast::Expr& out) { return chain(out, "and", ast::Expr::Kind::kAnd); }
+
+  bool chain(ast::Expr& out, std::string_view op, ast::Expr::Kind kind) {
+    ast::Expr first;
+    if (!term(first, kind)) return false;
+    if (!is_word(op)) {
+      out = std::move(first);
+      return true;
+    }
+    out = ast::Expr{};
+    out.kind = kind;
+    out.loc = peek().loc;
+    out.operands.push_back(std::move(first));
+    while (is_word(op)) {
+      next();
       ast::Expr rhs;
-      if (!expr_and(rhs, depth)) return false;
-      e.operands.push_back(std::move(out));
-      e.operands.push_back(std::move(rhs));
-      out = std::move(e);
+      if (!term(rhs, kind)) return false;
+      out.operands.push_back(std::move(rhs));
     }
     return true;
   }
-
-  bool expr_and(ast::Expr& out, int depth) {
-    if (!expr_not(out, depth)) return false;
-    while (is_word("and")) {
-      ast::Expr e;
-      e.kind = ast::Expr::Kind::kAnd;
-      e.loc = next().loc;
-      ast::Expr rhs;
-      if (!expr_not(rhs, depth)) return false;
-      e.operands.push_back(std::move(out));
-      e.operands.push_back(std::move(rhs));
-      out = std::move(e);
-    }
-    return true;
+  bool term(ast::Expr& out, ast::Expr::Kind kind) {
+    return kind == ast::Expr::Kind::kOr ? expr_and(out) : expr_not(out);
   }
 
-  bool expr_not(ast::Expr& out, int depth) {
+  bool expr_not(ast::Expr& out) {
     const Token& t = peek();
-    if (depth > kMaxExprNesting) return failed(t.loc, "interrupt expression nested too deeply");
     if (is_word("not")) {
+      const auto level = expr_nesting_.enter();
+      if (!level) return failed(t.loc, "interrupt expression nested too deeply");
       next();
       out.kind = ast::Expr::Kind::kNot;
       out.loc = t.loc;
       ast::Expr inner;
-      if (!expr_not(inner, depth + 1)) return false;
+      if (!expr_not(inner)) return false;
       out.operands.push_back(std::move(inner));
       return true;
     }
     if (at(TokenKind::kLParen)) {
+      const auto level = expr_nesting_.enter();
+      if (!level) return failed(t.loc, "interrupt expression nested too deeply");
       next();
-      if (!expr_or(out, depth + 1)) return false;
+      if (!expr_or(out)) return false;
       return expect(TokenKind::kRParen, "to close the interrupt expression");
     }
     if (is_word("true") || is_word("false")) {
@@ -376,6 +378,9 @@ class Parser {
   std::vector<Token> t_;
   std::size_t pos_ = 0;
   std::string error_;
+  // Only bodies and parenthesised or negated interrupt expressions recurse; and/or chains loop.
+  kernel::NestingBound body_nesting_{kMaxParseNesting};
+  kernel::NestingBound expr_nesting_{kMaxExprNesting};
 };
 
 }  // namespace

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <string>
 
+#include "symb/kernel/source_text.hpp"
+
 namespace symb::control::network {
 
 using kernel::Error;
@@ -19,7 +21,7 @@ struct Token {
   bool first_on_line = false;
 };
 
-std::string where(const Token& t) { return std::to_string(t.line) + ":" + std::to_string(t.column) + ": "; }
+std::string where(const Token& t) { return kernel::location_prefix(t.line, t.column); }
 
 std::string shown(std::string_view s) {
   return s.size() <= kShown ? std::string(s) : std::string(s.substr(0, kShown)) + "...";

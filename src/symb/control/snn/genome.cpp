@@ -10,6 +10,7 @@
 
 #include "symb/control/snn/development.hpp"
 #include "symb/control/snn/spiking_network.hpp"
+#include "symb/kernel/source_text.hpp"
 
 namespace symb::control::snn {
 
@@ -23,34 +24,10 @@ constexpr std::size_t kMaxNameLength = 32;
 constexpr float kMaxDiffusion = 0.25f;                  // the explicit 5-point scheme is stable up to 1/4
 constexpr std::int64_t kMaxSiteCoordinate = 1'000'000;  // beyond: "out of range" rather than "outside"
 
-struct Token {
-  std::string_view text;
-  std::size_t line = 1, column = 1;
-};
-
-std::string where(std::size_t line, std::size_t column) {
-  return std::to_string(line) + ":" + std::to_string(column) + ": ";
-}
-
-Error located(const Token& t, const std::string& message) { return Error{where(t.line, t.column) + message}; }
+using Token = kernel::TextToken;
+using kernel::location_prefix;
 
 std::string quoted(std::string_view s) { return "'" + std::string(s) + "'"; }
-
-bool identifier(std::string_view s) {
-  if (s.empty()) return false;
-  auto alpha = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; };
-  if (!alpha(s[0])) return false;
-  for (char c : s)
-    if (!alpha(c) && !(c >= '0' && c <= '9')) return false;
-  return true;
-}
-
-std::string number_text(float v) {
-  char buf[64];
-  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  if (ec != std::errc()) return "0";
-  return std::string(buf, end);
-}
 
 const char* direction_name(Direction d) {
   switch (d) {
@@ -86,30 +63,16 @@ class Parser {
   kernel::Result<Genome> run() {
     std::size_t line = 1;
     std::size_t pos = 0;
-    std::vector<Token> tokens;
     while (pos <= text_.size()) {
       std::size_t end = text_.find('\n', pos);
       if (end == std::string_view::npos) end = text_.size();
       const std::string_view row = text_.substr(pos, end - pos);
       if (row.size() > kMaxGenomeLineLength)
-        return Error{where(line, kMaxGenomeLineLength + 1) + "line longer than " +
+        return Error{location_prefix(line, kMaxGenomeLineLength + 1) + "line longer than " +
                      std::to_string(kMaxGenomeLineLength) + " characters"};
-      tokens.clear();
-      std::size_t i = 0;
-      while (i < row.size()) {
-        const char c = row[i];
-        if (c == '#') break;
-        if (c == ' ' || c == '\t' || c == '\r') {
-          ++i;
-          continue;
-        }
-        if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f)
-          return Error{where(line, i + 1) + "unexpected character (code " +
-                       std::to_string(static_cast<unsigned char>(c)) + ")"};
-        const std::size_t start = i;
-        while (i < row.size() && row[i] > ' ' && row[i] < 0x7f && row[i] != '#') ++i;
-        tokens.push_back({row.substr(start, i - start), line, start + 1});
-      }
+      auto words = kernel::split_words(row, line);
+      if (!words) return Error{words.error()};
+      const std::vector<Token>& tokens = *words;
       if (!tokens.empty()) {
         if (auto st = statement(tokens); !st) return Error{st.error()};
       }
@@ -137,27 +100,27 @@ class Parser {
     if (kw == "seed") return seed(s);
     if (kw == "input" || kw == "output") return channel(s);
     if (kw == "gene") return gene(s);
-    return located(s[0], "unknown statement " + quoted(kw) +
-                             " (grid, ticks, warmup, noise, integration, reach, morphogen, source, seed, input, "
-                             "output or gene)");
+    return s[0].error("unknown statement " + quoted(kw) +
+                      " (grid, ticks, warmup, noise, integration, reach, morphogen, source, seed, input, "
+                      "output or gene)");
   }
 
   // The token at index i, or an error right after the statement's last token.
   kernel::Result<Token> at(const Tokens& s, std::size_t i, const char* shape) {
     if (i < s.size()) return s[i];
     const Token& last = s.back();
-    return Error{where(last.line, last.column + last.text.size()) + "incomplete: " + shape};
+    return last.error_after(std::string("incomplete: ") + shape);
   }
 
   kernel::Status no_more(const Tokens& s, std::size_t n, const char* shape) {
-    if (s.size() > n) return located(s[n], "unexpected " + quoted(s[n].text) + " after the statement: " + shape);
+    if (s.size() > n) return s[n].error("unexpected " + quoted(s[n].text) + " after the statement: " + shape);
     return {};
   }
 
   kernel::Status keyword(const Tokens& s, std::size_t i, std::string_view word, const char* shape) {
     auto t = at(s, i, shape);
     if (!t) return Error{t.error()};
-    if (t->text != word) return located(*t, "expected " + quoted(word) + ", got " + quoted(t->text) + ": " + shape);
+    if (t->text != word) return t->error("expected " + quoted(word) + ", got " + quoted(t->text) + ": " + shape);
     return {};
   }
 
@@ -170,12 +133,12 @@ class Parser {
     const char* last = first + t->text.size();
     auto [p, ec] = std::from_chars(first, last, v);
     if (ec == std::errc::result_out_of_range && p == last)
-      return located(*t, std::string(what) + " out of range " + std::to_string(lo) + ".." + std::to_string(hi));
+      return t->error(std::string(what) + " out of range " + std::to_string(lo) + ".." + std::to_string(hi));
     if (ec != std::errc() || p != last)
-      return located(*t, std::string(what) + " must be a whole number, got " + quoted(t->text));
+      return t->error(std::string(what) + " must be a whole number, got " + quoted(t->text));
     if (v < lo || v > hi)
-      return located(*t, std::string(what) + " " + std::string(t->text) + " out of range " + std::to_string(lo) + ".." +
-                             std::to_string(hi));
+      return t->error(std::string(what) + " " + std::string(t->text) + " out of range " + std::to_string(lo) + ".." +
+                      std::to_string(hi));
     return static_cast<int>(v);
   }
 
@@ -185,13 +148,13 @@ class Parser {
     const char* last = first + text.size();
     auto [p, ec] = std::from_chars(first, last, v);
     if (ec == std::errc::result_out_of_range && p == last)
-      return located(
-          t, std::string(what) + " " + quoted(text) + " out of range " + number_text(lo) + ".." + number_text(hi));
+      return t.error(std::string(what) + " " + quoted(text) + " out of range " + kernel::shortest_text<float>(lo) +
+                     ".." + kernel::shortest_text<float>(hi));
     if (ec != std::errc() || p != last || !std::isfinite(v))
-      return located(t, std::string(what) + " must be a decimal number, got " + quoted(text));
+      return t.error(std::string(what) + " must be a decimal number, got " + quoted(text));
     if (v < lo || v > hi)
-      return located(
-          t, std::string(what) + " " + std::string(text) + " out of range " + number_text(lo) + ".." + number_text(hi));
+      return t.error(std::string(what) + " " + std::string(text) + " out of range " + kernel::shortest_text<float>(lo) +
+                     ".." + kernel::shortest_text<float>(hi));
     return v;
   }
 
@@ -204,7 +167,7 @@ class Parser {
   kernel::Result<int> morphogen_ref(const Token& t, std::string_view name) {
     for (std::size_t m = 0; m < genome_.morphogens.size(); ++m)
       if (genome_.morphogens[m].name == name) return static_cast<int>(m);
-    return located(t, "no morphogen named " + quoted(name) + " declared above");
+    return t.error("no morphogen named " + quoted(name) + " declared above");
   }
 
   kernel::Result<int> morphogen_at(const Tokens& s, std::size_t i, const char* shape) {
@@ -217,7 +180,7 @@ class Parser {
     auto t = at(s, i, shape);
     if (!t) return Error{t.error()};
     auto c = parse_neuron_class(t->text);
-    if (!c) return located(*t, "unknown neuron class " + quoted(t->text) + " (RS, IB, CH, FS, LTS, TC or RZ)");
+    if (!c) return t->error("unknown neuron class " + quoted(t->text) + " (RS, IB, CH, FS, LTS, TC or RZ)");
     return *c;
   }
 
@@ -226,25 +189,25 @@ class Parser {
     if (!have_grid_) {
       auto t = at(s, i, shape);
       if (!t) return Error{t.error()};
-      return located(*t, "a site before the grid: write 'grid W H' first");
+      return t->error("a site before the grid: write 'grid W H' first");
     }
     auto vx = whole(s, i, -kMaxSiteCoordinate, kMaxSiteCoordinate, "x", shape);
     if (!vx) return Error{vx.error()};
     if (*vx < 0 || *vx >= genome_.width)
-      return located(s[i],
-                     "x " + std::to_string(*vx) + " outside the grid (0.." + std::to_string(genome_.width - 1) + ")");
+      return s[i].error("x " + std::to_string(*vx) + " outside the grid (0.." + std::to_string(genome_.width - 1) +
+                        ")");
     auto vy = whole(s, i + 1, -kMaxSiteCoordinate, kMaxSiteCoordinate, "y", shape);
     if (!vy) return Error{vy.error()};
     if (*vy < 0 || *vy >= genome_.height)
-      return located(s[i + 1],
-                     "y " + std::to_string(*vy) + " outside the grid (0.." + std::to_string(genome_.height - 1) + ")");
+      return (s[i + 1]).error("y " + std::to_string(*vy) + " outside the grid (0.." +
+                              std::to_string(genome_.height - 1) + ")");
     x = *vx;
     y = *vy;
     return {};
   }
 
   kernel::Status duplicate(const Token& t, bool& seen) {
-    if (seen) return located(t, "duplicate " + quoted(t.text) + " statement");
+    if (seen) return t.error("duplicate " + quoted(t.text) + " statement");
     seen = true;
     return {};
   }
@@ -283,7 +246,7 @@ class Parser {
     auto t = at(s, 1, shape);
     if (!t) return Error{t.error()};
     auto i = parse_integration(t->text);
-    if (!i) return located(*t, "unknown integration " + quoted(t->text) + " (published or euler)");
+    if (!i) return t->error("unknown integration " + quoted(t->text) + " (published or euler)");
     genome_.integration = *i;
     return no_more(s, 2, shape);
   }
@@ -293,13 +256,13 @@ class Parser {
     auto name = at(s, 1, shape);
     if (!name) return Error{name.error()};
     if (name->text.size() > kMaxNameLength)
-      return located(*name, "name longer than " + std::to_string(kMaxNameLength) + " characters");
-    if (!identifier(name->text))
-      return located(*name, "a morphogen name is [A-Za-z_][A-Za-z0-9_]*, got " + quoted(name->text));
+      return name->error("name longer than " + std::to_string(kMaxNameLength) + " characters");
+    if (!kernel::is_identifier(name->text))
+      return name->error("a morphogen name is [A-Za-z_][A-Za-z0-9_]*, got " + quoted(name->text));
     for (const auto& m : genome_.morphogens)
-      if (m.name == name->text) return located(*name, "duplicate morphogen " + quoted(name->text));
+      if (m.name == name->text) return name->error("duplicate morphogen " + quoted(name->text));
     if (genome_.morphogens.size() >= kMaxMorphogens)
-      return located(s[0], "too many morphogens (at most " + std::to_string(kMaxMorphogens) + ")");
+      return s[0].error("too many morphogens (at most " + std::to_string(kMaxMorphogens) + ")");
     Morphogen m;
     m.name = std::string(name->text);
     if (auto st = keyword(s, 2, "diffusion", shape); !st) return st;
@@ -318,7 +281,7 @@ class Parser {
   kernel::Status source(const Tokens& s) {
     const char* shape = "source NAME at X Y rate R";
     if (genome_.sources.size() >= kMaxSites)
-      return located(s[0], "too many sources (at most " + std::to_string(kMaxSites) + ")");
+      return s[0].error("too many sources (at most " + std::to_string(kMaxSites) + ")");
     Source src;
     auto m = morphogen_at(s, 1, shape);
     if (!m) return Error{m.error()};
@@ -337,13 +300,13 @@ class Parser {
   kernel::Status seed(const Tokens& s) {
     const char* shape = "seed at X Y class C [bias B]";
     if (genome_.seeds.size() >= kMaxSites)
-      return located(s[0], "too many seeds (at most " + std::to_string(kMaxSites) + ")");
+      return s[0].error("too many seeds (at most " + std::to_string(kMaxSites) + ")");
     SeedCell c;
     if (auto st = keyword(s, 1, "at", shape); !st) return st;
     if (auto st = site(s, 2, c.x, c.y, shape); !st) return st;
     for (const auto& other : genome_.seeds)
       if (other.x == c.x && other.y == c.y)
-        return located(s[2], "duplicate seed site (" + std::to_string(c.x) + ", " + std::to_string(c.y) + ")");
+        return s[2].error("duplicate seed site (" + std::to_string(c.x) + ", " + std::to_string(c.y) + ")");
     if (auto st = keyword(s, 4, "class", shape); !st) return st;
     auto cls = neuron_class(s, 5, shape);
     if (!cls) return Error{cls.error()};
@@ -365,8 +328,8 @@ class Parser {
     const char* shape = input ? "input K at X Y" : "output K at X Y";
     auto& list = input ? genome_.inputs : genome_.outputs;
     if (list.size() >= kMaxSites)
-      return located(s[0], std::string("too many ") + (input ? "inputs" : "outputs") + " (at most " +
-                               std::to_string(kMaxSites) + ")");
+      return s[0].error(std::string("too many ") + (input ? "inputs" : "outputs") + " (at most " +
+                        std::to_string(kMaxSites) + ")");
     ChannelSite c;
     auto k = whole(s, 1, 0, kMaxChannels - 1, "channel", shape);
     if (!k) return Error{k.error()};
@@ -381,7 +344,7 @@ class Parser {
   kernel::Status gene(const Tokens& s) {
     const char* shape = "gene [once] [class C] when B [W*NAME ...] do ACTION";
     if (genome_.genes.size() >= kMaxGenes)
-      return located(s[0], "too many genes (at most " + std::to_string(kMaxGenes) + ")");
+      return s[0].error("too many genes (at most " + std::to_string(kMaxGenes) + ")");
     Gene g;
     std::size_t i = 1;
     if (i < s.size() && s[i].text == "once") {
@@ -403,9 +366,9 @@ class Parser {
       const Token& t = s[i];
       const std::size_t star = t.text.find('*');
       if (star == std::string_view::npos)
-        return located(t, "expected a term W*NAME or 'do', got " + quoted(t.text) + ": " + shape);
+        return t.error("expected a term W*NAME or 'do', got " + quoted(t.text) + ": " + shape);
       if (g.terms.size() >= kMaxTerms)
-        return located(t, "too many terms (at most " + std::to_string(kMaxTerms) + " a gene)");
+        return t.error("too many terms (at most " + std::to_string(kMaxTerms) + " a gene)");
       auto w = real_of(t, t.text.substr(0, star), -kMaxGenomeNumber, kMaxGenomeNumber, "a term's weight");
       if (!w) return Error{w.error()};
       Token name_token{t.text.substr(star + 1), t.line, t.column + star + 1};
@@ -438,7 +401,7 @@ class Parser {
       g.morphogen = *m;
       return i + 2;
     } else {
-      return located(*t, "unknown direction " + quoted(d) + " (north, south, east, west, up NAME or down NAME)");
+      return t->error("unknown direction " + quoted(d) + " (north, south, east, west, up NAME or down NAME)");
     }
     return i + 1;
   }
@@ -483,7 +446,7 @@ class Parser {
       auto d = at(s, i + 1, shape);
       if (!d) return Error{d.error()};
       if (d->text != "up" && d->text != "down")
-        return located(*d, "expected 'up' or 'down', got " + quoted(d->text) + ": " + shape);
+        return d->error("expected 'up' or 'down', got " + quoted(d->text) + ": " + shape);
       g.direction = d->text == "up" ? Direction::kUp : Direction::kDown;
       auto m = morphogen_at(s, i + 2, shape);
       if (!m) return Error{m.error()};
@@ -522,8 +485,8 @@ class Parser {
       g.cls = *c;
       n = i + 2;
     } else {
-      return located(
-          *t, "unknown action " + quoted(a) + " (secrete, move, divide, die, grow, prune, weight, bias or class)");
+      return t->error("unknown action " + quoted(a) +
+                      " (secrete, move, divide, die, grow, prune, weight, bias or class)");
     }
     if (auto st = no_more(s, n, shape); !st) return st;
     genome_.genes.push_back(std::move(g));
@@ -531,9 +494,9 @@ class Parser {
   }
 
   kernel::Result<Genome> finish() {
-    if (!have_grid_) return located(end_, "missing 'grid W H'");
-    if (genome_.seeds.empty()) return located(end_, "missing a seed cell ('seed at X Y class C')");
-    if (auto st = check_genome(genome_); !st) return located(end_, st.error());
+    if (!have_grid_) return end_.error("missing 'grid W H'");
+    if (genome_.seeds.empty()) return end_.error("missing a seed cell ('seed at X Y class C')");
+    if (auto st = check_genome(genome_); !st) return end_.error(st.error());
     return std::move(genome_);
   }
 
@@ -561,17 +524,18 @@ std::string to_text(const Genome& g) {
   out += "grid " + std::to_string(g.width) + " " + std::to_string(g.height) + "\n";
   out += "ticks " + std::to_string(g.ticks) + "\n";
   out += "warmup " + std::to_string(g.warmup) + "\n";
-  out += "noise " + number_text(g.noise) + "\n";
+  out += "noise " + kernel::shortest_text<float>(g.noise) + "\n";
   out += std::string("integration ") + to_string(g.integration) + "\n";
-  out += "reach " + number_text(g.reach) + "\n";
+  out += "reach " + kernel::shortest_text<float>(g.reach) + "\n";
   for (const auto& m : g.morphogens)
-    out += "morphogen " + m.name + " diffusion " + number_text(m.diffusion) + " decay " + number_text(m.decay) + "\n";
+    out += "morphogen " + m.name + " diffusion " + kernel::shortest_text<float>(m.diffusion) + " decay " +
+           kernel::shortest_text<float>(m.decay) + "\n";
   for (const auto& s : g.sources)
     out += "source " + name(s.morphogen) + " at " + std::to_string(s.x) + " " + std::to_string(s.y) + " rate " +
-           number_text(s.rate) + "\n";
+           kernel::shortest_text<float>(s.rate) + "\n";
   for (const auto& c : g.seeds)
     out += "seed at " + std::to_string(c.x) + " " + std::to_string(c.y) + " class " + to_string(c.cls) + " bias " +
-           number_text(c.bias) + "\n";
+           kernel::shortest_text<float>(c.bias) + "\n";
   for (const auto& c : g.inputs)
     out += "input " + std::to_string(c.channel) + " at " + std::to_string(c.x) + " " + std::to_string(c.y) + "\n";
   for (const auto& c : g.outputs)
@@ -580,15 +544,17 @@ std::string to_text(const Genome& g) {
     out += "gene ";
     if (gene.once) out += "once ";
     if (gene.only) out += std::string("class ") + to_string(*gene.only) + " ";
-    out += "when " + number_text(gene.bias);
-    for (const auto& t : gene.terms) out += " " + number_text(t.weight) + "*" + name(t.morphogen);
+    out += "when " + kernel::shortest_text<float>(gene.bias);
+    for (const auto& t : gene.terms) out += " " + kernel::shortest_text<float>(t.weight) + "*" + name(t.morphogen);
     out += std::string(" do ") + action_name(gene.action);
     auto dir = [&] {
       out += std::string(" ") + direction_name(gene.direction);
       if (gene.direction == Direction::kUp || gene.direction == Direction::kDown) out += " " + name(gene.morphogen);
     };
     switch (gene.action) {
-      case ActionKind::kSecrete: out += " " + name(gene.morphogen) + " " + number_text(gene.amount); break;
+      case ActionKind::kSecrete:
+        out += " " + name(gene.morphogen) + " " + kernel::shortest_text<float>(gene.amount);
+        break;
       case ActionKind::kMove: dir(); break;
       case ActionKind::kDivide:
         dir();
@@ -598,10 +564,10 @@ std::string to_text(const Genome& g) {
       case ActionKind::kPrune: break;
       case ActionKind::kGrow:
         out += std::string(" ") + direction_name(gene.direction) + " " + name(gene.morphogen) + " weight " +
-               number_text(gene.amount) + " delay " + std::to_string(gene.delay);
+               kernel::shortest_text<float>(gene.amount) + " delay " + std::to_string(gene.delay);
         break;
       case ActionKind::kWeight:
-      case ActionKind::kBias: out += " " + number_text(gene.amount); break;
+      case ActionKind::kBias: out += " " + kernel::shortest_text<float>(gene.amount); break;
       case ActionKind::kClass: out += std::string(" ") + to_string(gene.cls); break;
     }
     out += "\n";
@@ -623,7 +589,8 @@ kernel::Status check_genome(const Genome& g) {
   if (g.morphogens.size() > kMaxMorphogens) return Error{"more than " + std::to_string(kMaxMorphogens) + " morphogens"};
   for (std::size_t i = 0; i < g.morphogens.size(); ++i) {
     const auto& m = g.morphogens[i];
-    if (m.name.size() > kMaxNameLength || !identifier(m.name)) return Error{item("morphogen", i) + "bad name"};
+    if (m.name.size() > kMaxNameLength || !kernel::is_identifier(m.name))
+      return Error{item("morphogen", i) + "bad name"};
     for (std::size_t j = 0; j < i; ++j)
       if (g.morphogens[j].name == m.name) return Error{item("morphogen", i) + "duplicate name " + quoted(m.name)};
     if (!within(m.diffusion, 0, kMaxDiffusion)) return Error{item("morphogen", i) + "diffusion out of range"};
