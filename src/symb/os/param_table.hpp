@@ -196,9 +196,14 @@ class ParamTable {
   // Declares a parameter that sets a member of a member: add("goal_x", &Options::goal, &Point::x).
   template <class T, class Part, class Owner>
   requires std::is_base_of_v<Owner, Config> Decl add(std::string name, Part Owner::*part, T Part::*field) {
-    ParamCodec<T> c = plain_codec<T>();
+    return add(std::move(name), part, field, plain_codec<T>());
+  }
+
+  template <class T, class Part, class Owner>
+  requires std::is_base_of_v<Owner, Config> Decl add(std::string name, Part Owner::*part, T Part::*field,
+                                                     ParamCodec<T> codec) {
     return add_at<Owner, T>(
-        std::move(name), [part, field](Owner& o) -> T& { return (o.*part).*field; }, std::move(c));
+        std::move(name), [part, field](Owner& o) -> T& { return (o.*part).*field; }, std::move(codec));
   }
 
   // The schema, in declaration order.
