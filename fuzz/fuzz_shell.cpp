@@ -25,7 +25,6 @@ namespace {
 class Ticker : public os::Task {
  protected:
   void on_tick() override { send(0, {1.0f, 2.0f}); }
-  kernel::Status on_parameter(std::string_view, const os::ParamValue&) override { return {}; }
 };
 
 class Knob final : public io::Device {
@@ -59,11 +58,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                 {"name", os::ParamType::kString, std::string("x"), std::nullopt, 16.0, ""},
                 {"every", os::ParamType::kDuration, kernel::Duration{1000000}, 0.001, 1.0, ""}};
     t.defaults.period = kernel::Duration{10'000'000};
-    t.make = [](const os::ParamSet&) { return std::make_unique<Ticker>(); };
+    t.make = [](const os::ParamSet&) { return std::unique_ptr<os::Task>(std::make_unique<Ticker>()); };
     (void)r->add(t);
     os::TaskType s;
     s.name = "sink";
-    s.make = [](const os::ParamSet&) { return std::make_unique<Ticker>(); };
+    s.make = [](const os::ParamSet&) { return std::unique_ptr<os::Task>(std::make_unique<Ticker>()); };
     (void)r->add(s);
     (void)shell::register_shell_types(*r);
     return r;

@@ -221,7 +221,9 @@ TEST(ArbiterTask, TypeIsRegisteredWithItsSchema) {
   EXPECT_FALSE(registry.resolve(*t, bad_margin).ok());
   auto p = registry.resolve(*t, {});
   ASSERT_TRUE(p.ok());
-  EXPECT_NE(t->make(*p), nullptr);
+  auto made = t->make(*p);
+  ASSERT_TRUE(made) << made.error();
+  EXPECT_NE(made.value(), nullptr);
 }
 
 }  // namespace

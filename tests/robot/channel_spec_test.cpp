@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "symb/os/warning_limiter.hpp"
 #include "symb/robot/drive_goal.hpp"
-#include "symb/robot/warning_limiter.hpp"
 
 namespace symb::robot {
 namespace {
@@ -90,7 +90,7 @@ TEST(ChannelSpec, RangeOverrideErrorsGiveTheColumn) {
 }
 
 TEST(WarningLimiter, LetsTheFirstThroughThenOnePerIntervalWithCounts) {
-  WarningLimiter w(1s);
+  os::WarningLimiter w(1s);
   EXPECT_TRUE(w.note(kernel::Time{0}));
   EXPECT_EQ(w.count(), 1u);
   EXPECT_FALSE(w.note(kernel::Time{500ms}));

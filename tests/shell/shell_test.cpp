@@ -149,6 +149,20 @@ TEST_F(ShellTest, CreateAndTasks) {
   EXPECT_EQ(node_->task_count(), 2u);
 }
 
+// A constructor that throws, or an absurd size, is an error reply; the shell and the node go on.
+TEST_F(ShellTest, CreateOfATypeWhoseConstructorFailsIsAnError) {
+  testing::add_fragile_type(types_);
+  EXPECT_NE(error("create fragile a kind=0").find("task type 'fragile' could not make a task: fragile by request"),
+            std::string::npos);
+  EXPECT_NE(error("create fragile b kind=1").find("task type 'fragile'"), std::string::npos);
+  EXPECT_NE(error("create fragile c size=100000000000000000").find("task type 'fragile'"), std::string::npos);
+  EXPECT_FALSE(node_->find("a") || node_->find("b") || node_->find("c"));
+  ok("create fragile d size=16");
+  ok("create emitter e value=2");
+  ex_.run_for(50ms);
+  EXPECT_TRUE(node_->find("e"));
+}
+
 TEST_F(ShellTest, SuspendResumeDelete) {
   ok("create emitter e1");
   ok("create sink s1 --suspended");

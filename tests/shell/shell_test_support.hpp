@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -21,39 +22,68 @@
 
 namespace symb::shell::testing {
 
+struct EmitterParams {
+  double value = 1.0;
+  std::string label = "none";
+  bool loud = false;
+};
+
 class Emitter : public os::Task {
  public:
-  explicit Emitter(double value) : value_(value) {}
+  explicit Emitter(const EmitterParams& p) : params_(p) { bind_parameters(params_); }
 
  protected:
-  void on_tick() override { send(0, {static_cast<float>(value_)}); }
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& v) override {
-    if (name == "value") value_ = std::get<double>(v);
-    return {};
-  }
+  void on_tick() override { send(0, {static_cast<float>(params_.value)}); }
 
  private:
-  double value_;
+  EmitterParams params_;
 };
 
 class Sink : public os::Task {};
 
+struct SinkParams {
+  std::int64_t gain = 1;
+};
+
+// A type whose constructor throws (kind=0: a std::exception, kind=1: an int) or allocates `size`
+// numbers: creating one must be an error reply, never the end of the process.
+struct FragileParams {
+  std::int64_t kind = -1;
+  std::int64_t size = 0;
+};
+class Fragile : public os::Task {
+ public:
+  explicit Fragile(const FragileParams& p) : data_(static_cast<std::size_t>(p.size)) {
+    if (p.kind == 0) throw std::runtime_error("fragile by request");
+    if (p.kind == 1) throw 1;
+  }
+
+ private:
+  std::vector<double> data_;
+};
+
+inline void add_fragile_type(os::TaskTypeRegistry& r) {
+  os::ParamTable<FragileParams> f;
+  f.add("kind", &FragileParams::kind).range(-1, 1).doc("what the constructor throws (-1: nothing)");
+  f.add("size", &FragileParams::size).range(0, 9e18).doc("numbers it allocates");
+  (void)r.add(os::declare_task_type("fragile", "throws on request", std::move(f),
+                                    [](const FragileParams& p) { return std::make_unique<Fragile>(p); }));
+}
+
 inline void add_test_types(os::TaskTypeRegistry& r) {
-  os::TaskType emitter;
-  emitter.name = "emitter";
-  emitter.doc = "sends its value every tick";
-  emitter.params = {{"value", os::ParamType::kReal, 1.0, -1e6, 1e6, "the number sent"},
-                    {"label", os::ParamType::kString, std::string("none"), std::nullopt, 32.0, "a free label"},
-                    {"loud", os::ParamType::kBool, false, std::nullopt, std::nullopt, "unused flag"}};
+  os::ParamTable<EmitterParams> e;
+  e.add("value", &EmitterParams::value).range(-1e6, 1e6).doc("the number sent").live();
+  e.add("label", &EmitterParams::label).doc("a free label").at_most(32).live();
+  e.add("loud", &EmitterParams::loud).doc("unused flag").live();
+  os::TaskType emitter = os::declare_task_type("emitter", "sends its value every tick", std::move(e),
+                                               [](const EmitterParams& p) { return std::make_unique<Emitter>(p); });
   emitter.defaults.period = std::chrono::milliseconds(10);
-  emitter.make = [](const os::ParamSet& p) { return std::make_unique<Emitter>(p.real("value")); };
   (void)r.add(std::move(emitter));
-  os::TaskType sink;
-  sink.name = "sink";
-  sink.doc = "takes whatever it is sent";
-  sink.params = {{"gain", os::ParamType::kInt, std::int64_t{1}, 0.0, 100.0, "unused"}};
+  os::ParamTable<SinkParams> k;
+  k.add("gain", &SinkParams::gain).range(0, 100).doc("unused").live();
+  os::TaskType sink = os::declare_task_type("sink", "takes whatever it is sent", std::move(k),
+                                            [](const SinkParams&) { return std::make_unique<Sink>(); });
   sink.defaults.queue_capacity = 64;
-  sink.make = [](const os::ParamSet&) { return std::make_unique<Sink>(); };
   (void)r.add(std::move(sink));
 }
 

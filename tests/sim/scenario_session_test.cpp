@@ -78,6 +78,26 @@ TEST(MazeDemo, EveryShippedMazeTenMinutesMovingWithoutTouchingAWall) {
   }
 }
 
+// A scenario hook between two task types whose ports disagree is refused when the session builds
+// the robot, naming both ends and both layouts.
+TEST(MazeDemo, AHookBetweenIncompatibleLayoutsIsAnError) {
+  Scenario s = load("maze.yaml");
+  ASSERT_FALSE(s.robots.empty());
+  TaskSpec layer;
+  layer.name = "layer";
+  layer.type = "avoid";
+  s.robots[0].tasks.push_back(layer);
+  HookSpec hook;
+  hook.from = "controller";
+  hook.to = "layer";
+  s.robots[0].hooks.push_back(hook);
+  kernel::VirtualTimeExecutor executor;
+  auto session = ScenarioSession::create(s, executor);
+  ASSERT_FALSE(session);
+  for (const char* part : {"'controller' (mdl2e)", "'layer' (avoid)", "wheel-command", "sensor-vector"})
+    EXPECT_NE(session.error().find(part), std::string::npos) << part << " in " << session.error();
+}
+
 TEST(MazeDemo, SameSeedSameRunDifferentSeedDifferentRun) {
   Scenario sc = load("maze.yaml");
   const Outcome a = run(sc, 60s), b = run(sc, 60s);

@@ -21,6 +21,7 @@ kernel::Result<std::unique_ptr<AhhsCompartmentTask>> AhhsCompartmentTask::create
 
 AhhsCompartmentTask::AhhsCompartmentTask(ahhs::Model model, std::uint32_t compartment, AhhsTaskOptions options)
     : model_(std::move(model)), compartment_(compartment), options_(options) {
+  bind_parameters(options_);
   neighbours_ = model_.neighbours(compartment_);
   held_.resize(neighbours_.size());
   const auto start = model_.levels(compartment_);
@@ -47,7 +48,7 @@ void AhhsCompartmentTask::ignore(const std::string& why) {
     ++stats_.ignored;
   }
   if (warning_.note(now(), options_.warn_interval)) {
-    const std::uint64_t n = warning_.take_held();
+    const std::uint64_t n = warning_.count();
     log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
   }
 }
@@ -153,21 +154,6 @@ void AhhsCompartmentTask::finish_step(bool forced) {
   probe("hormones/c" + std::to_string(compartment_), row_);
 }
 
-kernel::Status AhhsCompartmentTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  AhhsTaskOptions o = options_;
-  if (name == "sensor_range")
-    o.sensor_range = std::get<double>(value);
-  else if (name == "warn_interval")
-    o.warn_interval = std::get<kernel::Duration>(value);
-  else if (name == "network" || name == "description" || name == "compartment")
-    return Error{"a running compartment keeps its network and place: delete the task and create a new one"};
-  else
-    return os::Task::on_parameter(name, value);
-  if (auto st = check(o); !st) return st;
-  options_ = o;
-  return {};
-}
-
 // --- mixer ---------------------------------------------------------------------------------------
 
 kernel::Result<std::unique_ptr<AhhsMixerTask>> AhhsMixerTask::create(std::size_t actuators, AhhsTaskOptions options) {
@@ -178,7 +164,9 @@ kernel::Result<std::unique_ptr<AhhsMixerTask>> AhhsMixerTask::create(std::size_t
 }
 
 AhhsMixerTask::AhhsMixerTask(std::size_t actuators, AhhsTaskOptions options)
-    : options_(options), values_(actuators, 0.0f), have_(actuators, false), last_(actuators, 0.0f) {}
+    : options_(options), values_(actuators, 0.0f), have_(actuators, false), last_(actuators, 0.0f) {
+  bind_parameters(options_);
+}
 
 std::vector<float> AhhsMixerTask::last() const {
   std::lock_guard lock(mu_);
@@ -215,7 +203,7 @@ void AhhsMixerTask::on_message(const os::Message& m) {
     ok = v[k] >= 0 && v[k] < static_cast<float>(values_.size()) && v[k] == std::floor(v[k]) && std::isfinite(v[k + 1]);
   if (!ok) {
     if (warning_.note(now(), options_.warn_interval)) {
-      const std::uint64_t n = warning_.take_held();
+      const std::uint64_t n = warning_.count();
       log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest on port " +
                                    std::to_string(m.port) + " (expected [actuator index, value, ...] on port 2)");
     }
@@ -229,21 +217,6 @@ void AhhsMixerTask::on_message(const os::Message& m) {
     ++have_count_;
   }
   if (have_count_ == values_.size()) flush();
-}
-
-kernel::Status AhhsMixerTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  AhhsTaskOptions o = options_;
-  if (name == "actuator_scale")
-    o.actuator_scale = std::get<double>(value);
-  else if (name == "warn_interval")
-    o.warn_interval = std::get<kernel::Duration>(value);
-  else if (name == "actuators")
-    return Error{"a running mixer keeps its number of actuators: delete the task and create a new one"};
-  else
-    return os::Task::on_parameter(name, value);
-  if (auto st = check(o); !st) return st;
-  options_ = o;
-  return {};
 }
 
 }  // namespace symb::control

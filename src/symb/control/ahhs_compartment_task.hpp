@@ -50,7 +50,6 @@ class AhhsCompartmentTask : public os::Task {
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
   AhhsCompartmentTask(ahhs::Model model, std::uint32_t compartment, AhhsTaskOptions options);
@@ -66,7 +65,7 @@ class AhhsCompartmentTask : public os::Task {
   std::vector<float> row_, local_, sensors_, actuators_, message_;
   std::vector<const float*> rows_;
   bool awaiting_ = false;
-  WarningLimiter warning_;
+  os::WarningLimiter warning_;
   mutable std::mutex mu_;  // shown_ and stats_
   std::vector<float> shown_;
   AhhsCompartmentStats stats_;
@@ -84,7 +83,6 @@ class AhhsMixerTask : public os::Task {
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
   AhhsMixerTask(std::size_t actuators, AhhsTaskOptions options);
@@ -95,7 +93,7 @@ class AhhsMixerTask : public os::Task {
   std::vector<bool> have_;
   std::size_t have_count_ = 0;
   std::vector<float> out_;
-  WarningLimiter warning_;
+  os::WarningLimiter warning_;
   mutable std::mutex mu_;
   std::vector<float> last_;
   std::uint64_t sent_ = 0, flushed_ = 0;

@@ -15,14 +15,6 @@ kernel::Status check(const AhhsTaskOptions& o) {
   return {};
 }
 
-bool WarningLimiter::note(kernel::Time now, kernel::Duration interval) {
-  ++held_;
-  if (written_ && now - last_ < interval) return false;
-  written_ = true;
-  last_ = now;
-  return true;
-}
-
 bool normalise_sensors(std::span<const float> raw, std::size_t needed, double range, std::vector<float>& out,
                        std::string& why) {
   if (raw.size() < needed) {
@@ -47,7 +39,9 @@ kernel::Result<std::unique_ptr<AhhsTask>> AhhsTask::create(ahhs::Network network
   return std::unique_ptr<AhhsTask>(new AhhsTask(std::move(model).value(), options));
 }
 
-AhhsTask::AhhsTask(ahhs::Model model, AhhsTaskOptions options) : options_(options), model_(std::move(model)) {}
+AhhsTask::AhhsTask(ahhs::Model model, AhhsTaskOptions options) : options_(options), model_(std::move(model)) {
+  bind_parameters(options_);
+}
 
 std::vector<float> AhhsTask::levels(std::uint32_t compartment) const {
   std::lock_guard lock(mu_);
@@ -73,7 +67,7 @@ void AhhsTask::ignore(const std::string& why) {
     ++stats_.ignored;
   }
   if (warning_.note(now(), options_.warn_interval)) {
-    const std::uint64_t n = warning_.take_held();
+    const std::uint64_t n = warning_.count();
     log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
   }
 }
@@ -102,23 +96,6 @@ void AhhsTask::on_message(const os::Message& m) {
     for (std::uint32_t c = 0; c < shown; ++c) probe("hormones/c" + std::to_string(c), model_.levels(c));
     probe("actuators", model_.actuators());
   }
-}
-
-kernel::Status AhhsTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  AhhsTaskOptions o = options_;
-  if (name == "sensor_range")
-    o.sensor_range = std::get<double>(value);
-  else if (name == "actuator_scale")
-    o.actuator_scale = std::get<double>(value);
-  else if (name == "warn_interval")
-    o.warn_interval = std::get<kernel::Duration>(value);
-  else if (name == "network" || name == "description")
-    return Error{"a running hormone controller keeps its network: delete the task and create a new one"};
-  else
-    return os::Task::on_parameter(name, value);
-  if (auto st = check(o); !st) return st;
-  options_ = o;
-  return {};
 }
 
 }  // namespace symb::control

@@ -23,6 +23,7 @@
 #include "symb/control/ahhs/model.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 
 namespace symb::control {
 
@@ -36,19 +37,6 @@ struct AhhsTaskOptions {
   kernel::Duration warn_interval = std::chrono::seconds(1);
 };
 kernel::Status check(const AhhsTaskOptions& o);
-
-// A warning written at most once per interval, saying how many occurrences it stands for.
-class WarningLimiter {
- public:
-  // True when a warning should be written now; take_held() then says how many it stands for.
-  bool note(kernel::Time now, kernel::Duration interval);
-  std::uint64_t take_held() { return std::exchange(held_, 0); }
-
- private:
-  kernel::Time last_{0};
-  bool written_ = false;
-  std::uint64_t held_ = 0;
-};
 
 struct AhhsStats {
   std::uint64_t steps = 0;
@@ -66,7 +54,6 @@ class AhhsTask : public os::Task {
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
   AhhsTask(ahhs::Model model, AhhsTaskOptions options);
@@ -75,7 +62,7 @@ class AhhsTask : public os::Task {
   AhhsTaskOptions options_;
   std::vector<float> sensors_;
   std::vector<float> out_;
-  WarningLimiter warning_;
+  os::WarningLimiter warning_;
   mutable std::mutex mu_;  // model_ and stats_, for readers on other threads
   ahhs::Model model_;
   AhhsStats stats_;

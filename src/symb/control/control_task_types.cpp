@@ -1,7 +1,6 @@
 #include "symb/control/control_task_types.hpp"
 
 #include <memory>
-#include <stdexcept>
 
 #include "symb/control/ahhs_task_types.hpp"
 #include "symb/control/behaviour_task_types.hpp"
@@ -9,14 +8,13 @@
 #include "symb/control/mdl2e_task.hpp"
 #include "symb/control/network_task_types.hpp"
 #include "symb/control/snn_task_types.hpp"
+#include "symb/robot/ports.hpp"
 
 namespace symb::control {
 
 namespace {
 
 using namespace std::chrono_literals;
-using os::ParamSpec;
-using os::ParamType;
 
 // Reference texts are echoed in errors; a reference longer than this is cut there.
 constexpr std::size_t kShownReference = 120;
@@ -30,39 +28,35 @@ std::string shown(const std::string& reference) {
 
 kernel::Status register_control_task_types(os::TaskTypeRegistry& registry, ControlResources resources) {
   auto shared = std::make_shared<const ControlResources>(std::move(resources));
-  const Mdl2eTaskOptions d;
 
-  os::TaskType mdl2e_type;
-  mdl2e_type.name = "mdl2e";
-  mdl2e_type.doc =
+  os::ParamTable<Mdl2eParams> p;
+  p.add("program", &Mdl2eParams::program).range(0, 1024).doc("the program to run (a reference the node resolves)");
+  p.add("speed_limit", &Mdl2eParams::speed_limit).range(0.001, 1e6).doc("wheel speeds are clamped to +-this").live();
+  p.add("warn_interval", &Mdl2eParams::warn_interval)
+      .range(0.0, 3600.0)
+      .doc("at most one warning of a kind per interval (counts say how many it stands for)")
+      .live();
+  auto mdl2e_type = os::declare_task_type(
+      "mdl2e",
       "runs an MDL2e program: sensor vectors in on port 0, external interrupt bits on port 1, [left, right] "
-      "wheel speeds out on port 0 at every step";
-  mdl2e_type.params = {
-      {"program", ParamType::kString, std::string(), 0.0, 1024.0, "the program to run (a reference the node resolves)"},
-      {"speed_limit", ParamType::kReal, d.speed_limit, 0.001, 1e6, "wheel speeds are clamped to +-this"},
-      {"warn_interval", ParamType::kDuration, d.warn_interval, 0.0, 3600.0,
-       "at most one warning of a kind per interval (counts say how many it stands for)"},
-  };
+      "wheel speeds out on port 0 at every step",
+      std::move(p), [shared](const Mdl2eParams& o) -> kernel::Result<std::unique_ptr<Mdl2eTask>> {
+        if (o.program.empty()) return kernel::Error{"name the program to run: program=REFERENCE"};
+        if (!shared->read_program) return kernel::Error{"this node cannot read programs (no read_program)"};
+        auto text = shared->read_program(o.program);
+        if (!text) return kernel::Error{"program '" + shown(o.program) + "': " + text.error()};
+        auto compiled = mdl2e::compile_source(*text);
+        if (!compiled) return kernel::Error{"program '" + shown(o.program) + "': " + compiled.error()};
+        auto task = Mdl2eTask::create(std::make_shared<const mdl2e::Program>(std::move(compiled).value()), o);
+        if (!task) return kernel::Error{"program '" + shown(o.program) + "': " + task.error()};
+        return task;
+      });
   mdl2e_type.defaults.priority = 2;
   mdl2e_type.defaults.period = 30ms;
   mdl2e_type.defaults.queue_capacity = 4;
-  // TaskType::make's only way to explain a failure is an exception; the node turns it into the
-  // creation error, naming the type.
-  mdl2e_type.make = [shared](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    const std::string& reference = p.string("program");
-    if (reference.empty()) throw std::invalid_argument("name the program to run: program=REFERENCE");
-    if (!shared->read_program) throw std::invalid_argument("this node cannot read programs (no read_program)");
-    auto text = shared->read_program(reference);
-    if (!text) throw std::invalid_argument("program '" + shown(reference) + "': " + text.error());
-    auto compiled = mdl2e::compile_source(*text);
-    if (!compiled) throw std::invalid_argument("program '" + shown(reference) + "': " + compiled.error());
-    Mdl2eTaskOptions o;
-    o.speed_limit = p.real("speed_limit");
-    o.warn_interval = p.duration("warn_interval");
-    auto task = Mdl2eTask::create(std::make_shared<const mdl2e::Program>(std::move(compiled).value()), o);
-    if (!task) throw std::invalid_argument("program '" + shown(reference) + "': " + task.error());
-    return std::move(task).value();
-  };
+  mdl2e_type.inputs = {{kSensorPort, "sensors", robot::layout::kSensorVector},
+                       {kExternalPort, "external", robot::layout::kExternalBit}};
+  mdl2e_type.outputs = {{kWheelPort, "wheels", robot::layout::kWheelCommand}};
 
   if (auto st = registry.add(std::move(mdl2e_type)); !st) return st;
   if (auto st = register_ahhs_task_types(registry, *shared); !st) return st;

@@ -33,14 +33,6 @@ float condition_speed(double v, double limit, std::uint64_t& clamped) {
 
 }  // namespace
 
-bool Mdl2eTask::Limiter::note(kernel::Time t, kernel::Duration interval) {
-  ++held;
-  if (written && t - last < interval) return false;
-  written = true;
-  last = t;
-  return true;
-}
-
 kernel::Result<std::unique_ptr<Mdl2eTask>> Mdl2eTask::create(std::shared_ptr<const mdl2e::Program> program,
                                                              Mdl2eTaskOptions options) {
   if (!program) return Error{"mdl2e controller: no program"};
@@ -59,7 +51,9 @@ Mdl2eTask::Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOpt
       options_(options),
       interpreter_(*program_),
       sensors_(program_->sensor_count, 0.0),
-      have_input_(program_->sensor_count == 0) {}
+      have_input_(program_->sensor_count == 0) {
+  bind_parameters(options_);
+}
 
 Mdl2eStats Mdl2eTask::stats() const {
   std::lock_guard lock(mu_);
@@ -89,8 +83,7 @@ void Mdl2eTask::ignore(std::uint64_t Mdl2eStats::*counter, const std::string& wh
     ++(stats_.*counter);
   }
   if (ignored_warning_.note(now(), options_.warn_interval)) {
-    log(os::LogLevel::kWarn, count_text(ignored_warning_.held, "message") + " ignored, latest: " + why);
-    ignored_warning_.held = 0;
+    log(os::LogLevel::kWarn, count_text(ignored_warning_.count(), "message") + " ignored, latest: " + why);
   }
   // A tick of this instant left its step to this message; it must not be lost to bad input.
   if (deferred_tick_ && deferred_at_ == now() && !(stepped_ && last_step_ == now())) step(true);
@@ -179,9 +172,8 @@ void Mdl2eTask::step(bool at_tick) {
       log(os::LogLevel::kInfo,
           "plan '" + std::string(program_->string(program_->nodes[program_->root].name)) + "' ended; wheels stopped");
     } else if (e.kind == EventKind::kTransitionLimit && limit_warning_.note(t, options_.warn_interval)) {
-      log(os::LogLevel::kWarn,
-          count_text(limit_warning_.held, "step") + " hit the transition limit; the program goes on at the next step");
-      limit_warning_.held = 0;
+      log(os::LogLevel::kWarn, count_text(limit_warning_.count(), "step") +
+                                   " hit the transition limit; the program goes on at the next step");
     }
   }
   std::uint64_t clamped = 0;
@@ -227,28 +219,11 @@ void Mdl2eTask::carry_out(const mdl2e::Event& e) {
     ++(st ? stats_.task_actions : stats_.task_action_failures);
   }
   if (!st && action_warning_.note(now(), options_.warn_interval)) {
-    log(os::LogLevel::kWarn,
-        "task " + std::string(action) + " " + std::string(e.name) + " not done: " + st.error() +
-            (action_warning_.held > 1 ? " (" + count_text(action_warning_.held, "failure") + " since the last warning)"
-                                      : std::string()));
-    action_warning_.held = 0;
+    log(os::LogLevel::kWarn, "task " + std::string(action) + " " + std::string(e.name) + " not done: " + st.error() +
+                                 (action_warning_.count() > 1 ? " (" + count_text(action_warning_.count(), "failure") +
+                                                                    " since the last warning)"
+                                                              : std::string()));
   }
-}
-
-kernel::Status Mdl2eTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "speed_limit") {
-    const double v = std::get<double>(value);
-    if (!std::isfinite(v) || v <= 0) return Error{"speed_limit must be a positive number"};
-    options_.speed_limit = v;
-    return {};
-  }
-  if (name == "warn_interval") {
-    options_.warn_interval = std::get<kernel::Duration>(value);
-    return {};
-  }
-  if (name == "program")
-    return Error{"a running controller keeps its program: delete the task and create a new one to change it"};
-  return os::Task::on_parameter(name, value);
 }
 
 }  // namespace symb::control

@@ -47,6 +47,7 @@
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 
 namespace symb::control {
 
@@ -57,6 +58,11 @@ inline constexpr os::Port kWheelPort = 0;
 struct Mdl2eTaskOptions {
   double speed_limit = 500;  // > 0
   kernel::Duration warn_interval = std::chrono::seconds(1);
+};
+
+// The mdl2e task type's parameters: the task's options and the program to read.
+struct Mdl2eParams : Mdl2eTaskOptions {
+  std::string program;  // a reference the node resolves (ControlResources::read_program)
 };
 
 struct Mdl2eStats {
@@ -103,18 +109,8 @@ class Mdl2eTask : public os::Task {
  protected:
   void on_message(const os::Message& m) override;
   void on_tick() override;
-  // speed_limit and warn_interval change at runtime; the program does not (create a new task).
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
-  // A warning written at most once per interval, saying how many occurrences it stands for.
-  struct Limiter {
-    kernel::Time last{0};
-    bool written = false;
-    std::uint64_t held = 0;
-    bool note(kernel::Time now, kernel::Duration interval);
-  };
-
   Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOptions options);
   void step(bool at_tick);
   void carry_out(const mdl2e::Event& e);
@@ -130,9 +126,9 @@ class Mdl2eTask : public os::Task {
   bool deferred_tick_ = false;  // a tick left its step to a message waiting at deferred_at_
   kernel::Time deferred_at_{0};
   bool plan_end_logged_ = false;
-  Limiter ignored_warning_;
-  Limiter action_warning_;
-  Limiter limit_warning_;
+  os::WarningLimiter ignored_warning_;
+  os::WarningLimiter action_warning_;
+  os::WarningLimiter limit_warning_;
 
   mutable std::mutex mu_;  // what state() reads: the fields below and stats_
   Mdl2eStats stats_;

@@ -80,6 +80,8 @@ NetworkTask::NetworkTask(network::Network net, NetworkTaskOptions options,
       scaled_(net_.input_count(), 0.0f),
       genome_copy_(net_.genome().begin(), net_.genome().end()),
       outputs_copy_(net_.outputs().begin(), net_.outputs().end()) {
+  bind_parameters(options_);
+  bind_parameters(model_params_);
   for (std::size_t l = 0; l < net_.layer_count(); ++l) channels_.push_back("activations/" + net_.layer_name(l));
 }
 
@@ -103,13 +105,9 @@ void NetworkTask::ignore(const std::string& why) {
     std::lock_guard lock(mu_);
     ++stats_.ignored;
   }
-  ++held_warnings_;
-  if (warned_ && now() - last_warning_ < options_.warn_interval) return;
-  warned_ = true;
-  last_warning_ = now();
-  log(os::LogLevel::kWarn,
-      std::to_string(held_warnings_) + " message" + (held_warnings_ == 1 ? "" : "s") + " ignored, latest: " + why);
-  held_warnings_ = 0;
+  if (!warning_.note(now(), options_.warn_interval)) return;
+  const std::uint64_t n = warning_.count();
+  log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
 }
 
 float NetworkTask::wheel(float raw, std::uint64_t& clamped) const {
@@ -172,10 +170,9 @@ void NetworkTask::on_message(const os::Message& m) {
   if (options_.output == NetworkOutput::kBoth) send(kRawOutputPort, out);
 }
 
-kernel::Status NetworkTask::on_parameter(std::string_view name, const os::ParamValue& value) {
+kernel::Status NetworkTask::on_parameter_changed(std::string_view name) {
   if (name == "weights") {
-    const std::string& text = std::get<std::string>(value);
-    auto weights = read_weights(text, resources_ ? *resources_ : ControlResources{});
+    auto weights = read_weights(model_params_.weights, resources_ ? *resources_ : ControlResources{});
     if (!weights) return Error{"weights: " + weights.error()};
     if (weights->empty()) weights.value().assign(genome_size_, 0.0f);
     if (auto st = net_.set_genome(*weights); !st) return Error{"weights: " + st.error()};
@@ -184,37 +181,18 @@ kernel::Status NetworkTask::on_parameter(std::string_view name, const os::ParamV
     ++stats_.genomes;
     return {};
   }
-  if (name == "input_scale") {
-    auto scale = network::parse_numbers(std::get<std::string>(value), network::kMaxInputs);
-    if (!scale) return Error{"input_scale: " + scale.error()};
-    if (auto st = check_scale(*scale, net_.input_count()); !st) return st;
-    options_.input_scale = std::move(scale).value();
-    return {};
-  }
-  if (name == "output_scale" || name == "speed_limit") {
-    const double v = std::get<double>(value);
-    if (!std::isfinite(v) || v <= 0) return Error{std::string(name) + " must be a positive number"};
-    (name == "output_scale" ? options_.output_scale : options_.speed_limit) = v;
-    return {};
-  }
+  if (name == "input_scale") return check_scale(options_.input_scale, net_.input_count());
   if (name == "tau") {
     if (net_.topology().kind != network::Kind::kCtrnn) return Error{"tau is for ctrnn networks only"};
-    auto tau = network::parse_numbers(std::get<std::string>(value), network::kMaxLayerSize);
+    auto tau = network::parse_numbers(model_params_.tau, network::kMaxLayerSize);
     if (!tau) return Error{"tau: " + tau.error()};
     return net_.set_time_constants(*tau);
   }
   if (name == "dt") {
     if (net_.topology().kind != network::Kind::kCtrnn) return Error{"dt is for ctrnn networks only"};
-    return net_.set_step(std::chrono::duration<double>(std::get<kernel::Duration>(value)).count());
+    return net_.set_step(std::chrono::duration<double>(model_params_.dt).count());
   }
-  if (name == "warn_interval") {
-    options_.warn_interval = std::get<kernel::Duration>(value);
-    return {};
-  }
-  if (name == "inputs" || name == "layers" || name == "activation" || name == "description" || name == "input_port" ||
-      name == "output")
-    return Error{"a running network keeps its " + std::string(name) + ": create a new task (and rehook) to change it"};
-  return os::Task::on_parameter(name, value);
+  return {};
 }
 
 }  // namespace symb::control

@@ -36,6 +36,7 @@
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 
 namespace symb::control {
 
@@ -54,6 +55,14 @@ struct NetworkTaskOptions {
   double speed_limit = 500;                       // > 0
   os::Port input_port = 0;
   kernel::Duration warn_interval = std::chrono::seconds(1);
+};
+
+// What a running network task takes at runtime besides its options: new weights (numbers or a
+// weight file reference, as read_weights reads them) and, for a ctrnn, time constants and step.
+struct NetworkModelParams {
+  std::string weights;
+  std::string tau = "0.1";
+  kernel::Duration dt = std::chrono::milliseconds(30);
 };
 
 struct NetworkStats {
@@ -84,7 +93,8 @@ class NetworkTask : public os::Task {
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  // weights, input_scale, tau and dt are checked against the network and written into it.
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   NetworkTask(network::Network net, NetworkTaskOptions options, std::shared_ptr<const ControlResources> resources);
@@ -93,14 +103,13 @@ class NetworkTask : public os::Task {
 
   network::Network net_;
   NetworkTaskOptions options_;
+  NetworkModelParams model_params_;
   std::shared_ptr<const ControlResources> resources_;
   std::size_t genome_size_;
   bool centred_;  // outputs in (0, 1): centre them for the wheels
   std::vector<float> scaled_;
   std::vector<std::string> channels_;  // "activations/<layer>", made once
-  kernel::Time last_warning_{0};
-  bool warned_ = false;
-  std::uint64_t held_warnings_ = 0;
+  os::WarningLimiter warning_;
 
   mutable std::mutex mu_;  // what the thread-safe getters read
   NetworkStats stats_;

@@ -20,10 +20,6 @@ bool all_finite(std::span<const float> v) {
   return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
 }
 
-kernel::Error unknown_parameter(std::string_view name) {
-  return kernel::Error{"parameter '" + std::string(name) + "' cannot change at runtime"};
-}
-
 std::optional<Pose2> read_pose(const os::Message& m) {
   if (m.payload.blob || m.port != kSchemaInputPort) return std::nullopt;
   const auto v = m.numbers();
@@ -72,17 +68,6 @@ void MotorSchema::evaluate() {
   send(kSchemaVectorPort, {x, y});
   probe("vector", {x, y});
   probe("active", {active ? 1.0f : 0.0f});
-}
-
-kernel::Status MotorSchema::on_parameter(std::string_view name, const os::ParamValue& value) {
-  // The gain is shared: the base keeps it for gain(), a schema with its own copy updates that too.
-  if (name == "gain") gain_ = std::get<double>(value);
-  return on_schema_parameter(name, value);
-}
-
-kernel::Status MotorSchema::on_schema_parameter(std::string_view name, const os::ParamValue& /*value*/) {
-  if (name == "gain") return {};
-  return unknown_parameter(name);
 }
 
 // --- avoid obstacle --------------------------------------------------------------------------------
@@ -134,24 +119,10 @@ std::optional<Vec2> AvoidObstacleSchema::compute() {
   return vector_for(ir_, o_);
 }
 
-kernel::Status AvoidObstacleSchema::on_schema_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "gain") {
-    o_.gain = std::get<double>(value);
-  } else if (name == "sphere" || name == "safety") {
-    const double v = std::get<double>(value);
-    const double sphere = name == "sphere" ? v : o_.sphere, safety = name == "safety" ? v : o_.safety;
-    if (!(safety < sphere)) return kernel::Error{"safety (R) must be less than sphere (S)"};
-    o_.sphere = sphere;
-    o_.safety = safety;
-  } else if (name == "near_gain") {
-    o_.near_gain = std::get<double>(value);
-  } else if (name == "combine") {
-    const auto& c = std::get<std::string>(value);
-    if (c != "max" && c != "sum") return kernel::Error{"combine must be 'max' or 'sum', got '" + c + "'"};
-    o_.use_max = c == "max";
-  } else {
-    return MotorSchema::on_schema_parameter(name, value);
-  }
+kernel::Status AvoidObstacleSchema::on_parameter_changed(std::string_view name) {
+  if (name == "gain") set_gain(o_.gain);
+  if ((name == "sphere" || name == "safety") && !(o_.safety < o_.sphere))
+    return kernel::Error{"safety (R) must be less than sphere (S)"};
   return {};
 }
 
@@ -176,25 +147,9 @@ std::optional<Vec2> MoveToGoalSchema::compute() {
   return scaled_toward(dx, dy, o_.gain, p.heading);
 }
 
-kernel::Status MoveToGoalSchema::on_schema_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "gain") {
-    o_.gain = std::get<double>(value);
-  } else if (name == "goal_x") {
-    o_.goal.x = std::get<double>(value);
-  } else if (name == "goal_y") {
-    o_.goal.y = std::get<double>(value);
-  } else if (name == "via") {
-    auto w = behaviour::parse_waypoints(std::get<std::string>(value));
-    if (!w) return kernel::Error{"via: " + w.error()};
-    o_.via = std::move(w).value();
-    target_.store(0, std::memory_order_relaxed);
-  } else if (name == "reach") {
-    o_.reach = std::get<double>(value);
-  } else if (name == "arrive") {
-    o_.arrive = std::get<double>(value);
-  } else {
-    return MotorSchema::on_schema_parameter(name, value);
-  }
+kernel::Status MoveToGoalSchema::on_parameter_changed(std::string_view name) {
+  if (name == "gain") set_gain(o_.gain);
+  if (name == "via") target_.store(0, std::memory_order_relaxed);
   return {};
 }
 
@@ -244,19 +199,9 @@ std::optional<Vec2> StayOnPathSchema::compute() {
   return scaled_toward(q.x - p.x, q.y - p.y, m, pose_->heading);
 }
 
-kernel::Status StayOnPathSchema::on_schema_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "gain") return {};
-  if (name == "width") {
-    o_.width = std::get<double>(value);
-  } else if (name == "path") {
-    auto w = behaviour::parse_waypoints(std::get<std::string>(value));
-    if (!w) return kernel::Error{"path: " + w.error()};
-    if (w->size() < 2) return kernel::Error{"path: needs at least 2 waypoints"};
-    o_.path = std::move(w).value();
-    segment_.reset();
-  } else {
-    return MotorSchema::on_schema_parameter(name, value);
-  }
+kernel::Status StayOnPathSchema::on_parameter_changed(std::string_view name) {
+  if (name == "gain") set_gain(o_.gain);
+  if (name == "path") segment_.reset();
   return {};
 }
 
@@ -273,14 +218,10 @@ std::optional<Vec2> NoiseSchema::compute() {
   return Vec2{gain() * std::cos(angle_), gain() * std::sin(angle_)};
 }
 
-kernel::Status NoiseSchema::on_schema_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "gain") return {};
-  if (name == "persistence") {
-    o_.persistence = std::get<kernel::Duration>(value);
-    next_.reset();
-    return {};
-  }
-  return MotorSchema::on_schema_parameter(name, value);
+kernel::Status NoiseSchema::on_parameter_changed(std::string_view name) {
+  if (name == "gain") set_gain(o_.gain);
+  if (name == "persistence") next_.reset();
+  return {};
 }
 
 // --- the sum ---------------------------------------------------------------------------------------
@@ -323,23 +264,6 @@ void SchemaSum::on_tick() {
   send(kSumWheelPort, {left, right});
   probe("sum", {static_cast<float>(sum.x), static_cast<float>(sum.y)});
   probe("wheels", {left, right});
-}
-
-kernel::Status SchemaSum::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "speed") {
-    o_.speed = std::get<double>(value);
-  } else if (name == "turn_speed") {
-    o_.turn_speed = std::get<double>(value);
-  } else if (name == "max_age") {
-    o_.max_age = std::get<kernel::Duration>(value);
-  } else if (name == "min_magnitude") {
-    o_.min_magnitude = std::get<double>(value);
-  } else if (name == "speed_limit") {
-    o_.speed_limit = std::get<double>(value);
-  } else {
-    return unknown_parameter(name);
-  }
-  return {};
 }
 
 }  // namespace symb::control

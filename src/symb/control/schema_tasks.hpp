@@ -60,14 +60,14 @@ class MotorSchema : public os::Task {
   void on_start() override;
   void on_message(const os::Message& m) override;
   void on_tick() override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
   // Takes an input message; false when it is not one this schema reads (ignored).
   virtual bool take(const os::Message& m) = 0;
   // The schema's vector, or nothing when it has no input yet (nothing is sent then).
   virtual std::optional<Vec2> compute() = 0;
-  virtual kernel::Status on_schema_parameter(std::string_view name, const os::ParamValue& value);
   double gain() const { return gain_; }
+  // A schema whose options' gain changed at runtime passes it on.
+  void set_gain(double g) { gain_ = g; }
 
  private:
   void evaluate();
@@ -87,14 +87,14 @@ struct AvoidObstacleOptions {
 };
 class AvoidObstacleSchema : public MotorSchema {
  public:
-  explicit AvoidObstacleSchema(AvoidObstacleOptions o) : MotorSchema(o.gain), o_(o) {}
+  explicit AvoidObstacleSchema(AvoidObstacleOptions o) : MotorSchema(o.gain), o_(o) { bind_parameters(o_); }
   // The vector for one IR vector (7 readings), without a task: for tests and other controllers.
   static Vec2 vector_for(std::span<const float> ir, const AvoidObstacleOptions& o);
 
  protected:
   bool take(const os::Message& m) override;
   std::optional<Vec2> compute() override;
-  kernel::Status on_schema_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   AvoidObstacleOptions o_;
@@ -115,13 +115,13 @@ struct MoveToGoalOptions {
 };
 class MoveToGoalSchema : public MotorSchema {
  public:
-  explicit MoveToGoalSchema(MoveToGoalOptions o) : MotorSchema(o.gain), o_(std::move(o)) {}
+  explicit MoveToGoalSchema(MoveToGoalOptions o) : MotorSchema(o.gain), o_(std::move(o)) { bind_parameters(o_); }
   std::size_t target_index() const { return target_.load(std::memory_order_relaxed); }
 
  protected:
   bool take(const os::Message& m) override;
   std::optional<Vec2> compute() override;
-  kernel::Status on_schema_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   MoveToGoalOptions o_;
@@ -136,12 +136,12 @@ struct StayOnPathOptions {
 };
 class StayOnPathSchema : public MotorSchema {
  public:
-  explicit StayOnPathSchema(StayOnPathOptions o) : MotorSchema(o.gain), o_(std::move(o)) {}
+  explicit StayOnPathSchema(StayOnPathOptions o) : MotorSchema(o.gain), o_(std::move(o)) { bind_parameters(o_); }
 
  protected:
   bool take(const os::Message& m) override;
   std::optional<Vec2> compute() override;
-  kernel::Status on_schema_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   StayOnPathOptions o_;
@@ -155,12 +155,12 @@ struct NoiseOptions {
 };
 class NoiseSchema : public MotorSchema {
  public:
-  explicit NoiseSchema(NoiseOptions o) : MotorSchema(o.gain), o_(o) {}
+  explicit NoiseSchema(NoiseOptions o) : MotorSchema(o.gain), o_(o) { bind_parameters(o_); }
 
  protected:
   bool take(const os::Message& m) override;
   std::optional<Vec2> compute() override;
-  kernel::Status on_schema_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   NoiseOptions o_;
@@ -184,7 +184,7 @@ struct SchemaSumOptions {
 class SchemaSum : public os::Task {
  public:
   static constexpr std::size_t kMaxSchemas = 32;
-  explicit SchemaSum(SchemaSumOptions o) : o_(o) {}
+  explicit SchemaSum(SchemaSumOptions o) : o_(o) { bind_parameters(o_); }
   // The wheel speeds for a summed vector.
   static std::pair<float, float> wheels_for(Vec2 sum, const SchemaSumOptions& o);
   std::uint64_t ticks() const { return ticks_.load(std::memory_order_relaxed); }
@@ -192,7 +192,6 @@ class SchemaSum : public os::Task {
  protected:
   void on_message(const os::Message& m) override;
   void on_tick() override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
   struct Entry {

@@ -21,14 +21,12 @@ std::int64_t unwrap_us(std::uint32_t timestamp, std::int64_t now_us) {
 }
 
 // One rate-limited warning per interval, counting the ones it stands for.
-void warn(os::LogLevel level, kernel::Time now, kernel::Duration interval, bool& warned, kernel::Time& last,
-          std::uint64_t& held, const std::string& why, const std::function<void(os::LogLevel, std::string_view)>& log) {
-  ++held;
-  if (warned && now - last < interval) return;
-  warned = true;
-  last = now;
-  log(level, std::to_string(held) + " message" + (held == 1 ? "" : "s") + " ignored, latest: " + why);
-  held = 0;
+// "N messages ignored, latest: why", at most once per interval.
+void warn_ignored(os::WarningLimiter& limiter, kernel::Time now, kernel::Duration interval, const std::string& why,
+                  const std::function<void(os::LogLevel, std::string_view)>& log) {
+  if (!limiter.note(now, interval)) return;
+  const std::uint64_t n = limiter.count();
+  log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
 }
 
 }  // namespace
@@ -61,8 +59,7 @@ void SpikeEncoderTask::ignore(const std::string& why) {
     std::lock_guard lock(mu_);
     ++stats_.ignored;
   }
-  warn(os::LogLevel::kWarn, now(), options_.warn_interval, warned_, last_warning_, held_warnings_, why,
-       [this](os::LogLevel l, std::string_view t) { log(l, t); });
+  warn_ignored(warning_, now(), options_.warn_interval, why, [this](os::LogLevel l, std::string_view t) { log(l, t); });
 }
 
 void SpikeEncoderTask::on_message(const os::Message& m) {
@@ -112,27 +109,9 @@ void SpikeEncoderTask::on_message(const os::Message& m) {
   stats_.events += events;
 }
 
-kernel::Status SpikeEncoderTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  SpikeEncoderOptions o = options_;
-  if (name == "coding") {
-    auto c = parse_spike_coding(std::get<std::string>(value));
-    if (!c) return Error{c.error()};
-    o.coding = *c;
-  } else if (name == "input_scale" || name == "gain" || name == "max_rate") {
-    const auto v = static_cast<float>(std::get<double>(value));
-    (name == "input_scale" ? o.input_scale : name == "gain" ? o.gain : o.max_rate) = v;
-  } else if (name == "window") {
-    o.window = std::get<kernel::Duration>(value);
-  } else if (name == "warn_interval") {
-    o.warn_interval = std::get<kernel::Duration>(value);
-  } else if (name == "module") {
-    o.module = static_cast<std::uint32_t>(std::get<std::int64_t>(value));
-  } else {
-    return os::Task::on_parameter(name, value);
-  }
-  auto checked = create(o);
+kernel::Status SpikeEncoderTask::on_parameter_changed(std::string_view /*name*/) {
+  auto checked = create(options_);
   if (!checked) return Error{checked.error()};
-  options_ = o;
   return {};
 }
 
@@ -165,8 +144,7 @@ void SpikeDecoderTask::ignore(const std::string& why) {
     std::lock_guard lock(mu_);
     ++stats_.ignored;
   }
-  warn(os::LogLevel::kWarn, now(), options_.warn_interval, warned_, last_warning_, held_warnings_, why,
-       [this](os::LogLevel l, std::string_view t) { log(l, t); });
+  warn_ignored(warning_, now(), options_.warn_interval, why, [this](os::LogLevel l, std::string_view t) { log(l, t); });
 }
 
 void SpikeDecoderTask::on_message(const os::Message& m) {
@@ -220,22 +198,9 @@ void SpikeDecoderTask::on_tick() {
   rates_ = std::move(rates);
 }
 
-kernel::Status SpikeDecoderTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  SpikeDecoderOptions o = options_;
-  if (name == "gain" || name == "offset" || name == "speed_limit") {
-    (name == "gain" ? o.gain : name == "offset" ? o.offset : o.speed_limit) = std::get<double>(value);
-  } else if (name == "window") {
-    o.window = std::get<kernel::Duration>(value);
-  } else if (name == "warn_interval") {
-    o.warn_interval = std::get<kernel::Duration>(value);
-  } else if (name == "channels") {
-    return Error{"a running decoder keeps its channels: create a new task to change them"};
-  } else {
-    return os::Task::on_parameter(name, value);
-  }
-  auto checked = create(o);
+kernel::Status SpikeDecoderTask::on_parameter_changed(std::string_view /*name*/) {
+  auto checked = create(options_);
   if (!checked) return Error{checked.error()};
-  options_ = o;
   return {};
 }
 
@@ -253,8 +218,7 @@ void AerCodecTask::ignore(const std::string& why) {
     std::lock_guard lock(mu_);
     ++stats_.ignored;
   }
-  warn(os::LogLevel::kWarn, now(), warn_interval_, warned_, last_warning_, held_warnings_, why,
-       [this](os::LogLevel l, std::string_view t) { log(l, t); });
+  warn_ignored(warning_, now(), warn_interval_, why, [this](os::LogLevel l, std::string_view t) { log(l, t); });
 }
 
 void AerCodecTask::on_message(const os::Message& m) {

@@ -29,6 +29,7 @@
 #include "symb/control/snn/aer.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 
 namespace symb::control {
 
@@ -60,16 +61,14 @@ class SpikeEncoderTask : public os::Task {
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
-  explicit SpikeEncoderTask(SpikeEncoderOptions options) : options_(options) {}
+  explicit SpikeEncoderTask(SpikeEncoderOptions options) : options_(options) { bind_parameters(options_); }
   void ignore(const std::string& why);
 
   SpikeEncoderOptions options_;
-  kernel::Time last_warning_{0};
-  bool warned_ = false;
-  std::uint64_t held_warnings_ = 0;
+  os::WarningLimiter warning_;
   mutable std::mutex mu_;
   SpikeCodingStats stats_;
 };
@@ -96,10 +95,10 @@ class SpikeDecoderTask : public os::Task {
  protected:
   void on_message(const os::Message& m) override;
   void on_tick() override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
-  explicit SpikeDecoderTask(SpikeDecoderOptions options) : options_(options) {}
+  explicit SpikeDecoderTask(SpikeDecoderOptions options) : options_(options) { bind_parameters(options_); }
   void ignore(const std::string& why);
 
   struct Counted {
@@ -108,9 +107,7 @@ class SpikeDecoderTask : public os::Task {
   };
   SpikeDecoderOptions options_;
   std::deque<Counted> recent_;
-  kernel::Time last_warning_{0};
-  bool warned_ = false;
-  std::uint64_t held_warnings_ = 0;
+  os::WarningLimiter warning_;
   mutable std::mutex mu_;
   SpikeCodingStats stats_;
   std::vector<float> rates_;
@@ -139,9 +136,7 @@ class AerCodecTask : public os::Task {
   void ignore(const std::string& why);
 
   kernel::Duration warn_interval_ = std::chrono::seconds(1);
-  kernel::Time last_warning_{0};
-  bool warned_ = false;
-  std::uint64_t held_warnings_ = 0;
+  os::WarningLimiter warning_;
   mutable std::mutex mu_;
   SpikeCodingStats stats_;
 };

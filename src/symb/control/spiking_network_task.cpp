@@ -63,6 +63,7 @@ kernel::Result<std::unique_ptr<SpikingNetworkTask>> SpikingNetworkTask::create(s
 
 SpikingNetworkTask::SpikingNetworkTask(Running running, SpikingNetworkTaskOptions options)
     : run_(std::move(running)), options_(std::move(options)), neurons_(run_.net.size()) {
+  bind_parameters(options_);
   currents_.assign(snn::kMaxChannels, 0.0f);
 }
 
@@ -81,13 +82,9 @@ void SpikingNetworkTask::ignore(const std::string& why) {
     std::lock_guard lock(mu_);
     ++stats_.ignored;
   }
-  ++held_warnings_;
-  if (warned_ && now() - last_warning_ < options_.warn_interval) return;
-  warned_ = true;
-  last_warning_ = now();
-  log(os::LogLevel::kWarn,
-      std::to_string(held_warnings_) + " message" + (held_warnings_ == 1 ? "" : "s") + " ignored, latest: " + why);
-  held_warnings_ = 0;
+  if (!warning_.note(now(), options_.warn_interval)) return;
+  const std::uint64_t n = warning_.count();
+  log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
 }
 
 void SpikingNetworkTask::on_start() {
@@ -217,36 +214,16 @@ kernel::Status SpikingNetworkTask::replace(snn::GrownNetwork network) {
   return {};
 }
 
-kernel::Status SpikingNetworkTask::on_parameter(std::string_view name, const os::ParamValue& value) {
+kernel::Status SpikingNetworkTask::on_parameter_changed(std::string_view name) {
   if (name == "genome" || name == "seed") {
     if (!options_.grow) return Error{"this network was not grown from a genome"};
-    std::string genome = options_.genome;
-    std::int64_t seed = options_.seed;
-    if (name == "genome")
-      genome = std::get<std::string>(value);
-    else
-      seed = std::get<std::int64_t>(value);
-    auto grown = options_.grow(genome, seed);
+    auto grown = options_.grow(options_.genome, options_.seed);
     if (!grown) return Error{std::string(name) + ": " + grown.error()};
     if (auto st = replace(std::move(grown).value()); !st) return Error{std::string(name) + ": " + st.error()};
-    options_.genome = std::move(genome);
-    options_.seed = seed;
-    return {};
   }
-  if (name == "pulse") {
-    const double v = std::get<double>(value);
-    if (!std::isfinite(v) || std::fabs(v) > snn::kMaxAbsWeight) return Error{"pulse out of range"};
-    options_.pulse = static_cast<float>(v);
-    return {};
-  }
-  if (name == "warn_interval") {
-    options_.warn_interval = std::get<kernel::Duration>(value);
-    return {};
-  }
-  if (name == "module" || name == "example" || name == "excitatory" || name == "inhibitory" || name == "integration" ||
-      name == "thalamic")
-    return Error{"a running network keeps its " + std::string(name) + ": create a new task (and rehook) to change it"};
-  return os::Task::on_parameter(name, value);
+  if (name == "pulse" && (!std::isfinite(options_.pulse) || std::fabs(options_.pulse) > snn::kMaxAbsWeight))
+    return Error{"pulse out of range"};
+  return {};
 }
 
 }  // namespace symb::control

@@ -38,6 +38,7 @@
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 
 namespace symb::control {
 
@@ -91,7 +92,7 @@ class SpikingNetworkTask : public os::Task {
   void on_start() override;
   void on_tick() override;
   void on_message(const os::Message& m) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   // Replaces the running network (checked first; on error the old one keeps running).
@@ -122,9 +123,7 @@ class SpikingNetworkTask : public os::Task {
   std::vector<float> currents_;     // per input channel, held
   std::vector<QueuedEvent> queue_;  // a min-heap by step
   std::vector<float> spike_probe_;
-  kernel::Time last_warning_{0};
-  bool warned_ = false;
-  std::uint64_t held_warnings_ = 0;
+  os::WarningLimiter warning_;
 
   mutable std::mutex mu_;
   SpikingNetworkStats stats_;

@@ -20,10 +20,6 @@ bool all_finite(std::span<const float> v) {
   return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
 }
 
-kernel::Error unknown_parameter(std::string_view name) {
-  return kernel::Error{"parameter '" + std::string(name) + "' cannot change at runtime"};
-}
-
 }  // namespace
 
 void SubsumptionLayer::act(double left, double right) {
@@ -47,26 +43,6 @@ void SubsumptionLayer::rest() {
   probe("output", {0.0f, 0.0f});
 }
 
-kernel::Status SubsumptionLayer::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "inhibit") {
-    options_.inhibit = std::get<std::string>(value);
-    return {};
-  }
-  if (name == "inhibit_for") {
-    options_.inhibit_for = std::get<kernel::Duration>(value);
-    return {};
-  }
-  if (name == "speed_limit") {
-    options_.speed_limit = std::get<double>(value);
-    return {};
-  }
-  return on_layer_parameter(name, value);
-}
-
-kernel::Status SubsumptionLayer::on_layer_parameter(std::string_view name, const os::ParamValue& /*value*/) {
-  return unknown_parameter(name);
-}
-
 // --- wander ------------------------------------------------------------------------------------------
 
 void WanderLayer::on_tick() {
@@ -80,18 +56,9 @@ void WanderLayer::on_tick() {
   act(o_.speed - turn_, o_.speed + turn_);
 }
 
-kernel::Status WanderLayer::on_layer_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "speed") {
-    o_.speed = std::get<double>(value);
-  } else if (name == "turn_max") {
-    o_.turn_max = std::get<double>(value);
-    turn_ = std::clamp(turn_, -o_.turn_max, o_.turn_max);
-  } else if (name == "change_every") {
-    o_.change_every = std::get<kernel::Duration>(value);
-    next_change_.reset();
-  } else {
-    return SubsumptionLayer::on_layer_parameter(name, value);
-  }
+kernel::Status WanderLayer::on_parameter_changed(std::string_view name) {
+  if (name == "turn_max") turn_ = std::clamp(turn_, -o_.turn_max, o_.turn_max);
+  if (name == "change_every") next_change_.reset();
   return {};
 }
 
@@ -123,21 +90,6 @@ void AvoidLayer::on_message(const os::Message& m) {
   act(o_.forward - direction_ * o_.turn, o_.forward + direction_ * o_.turn);
 }
 
-kernel::Status AvoidLayer::on_layer_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "threshold") {
-    o_.threshold = std::get<double>(value);
-  } else if (name == "turn") {
-    o_.turn = std::get<double>(value);
-  } else if (name == "forward") {
-    o_.forward = std::get<double>(value);
-  } else if (name == "hold") {
-    o_.hold = std::get<kernel::Duration>(value);
-  } else {
-    return SubsumptionLayer::on_layer_parameter(name, value);
-  }
-  return {};
-}
-
 // --- stop in zone ------------------------------------------------------------------------------------
 
 void StopInZoneLayer::on_message(const os::Message& m) {
@@ -160,19 +112,8 @@ void StopInZoneLayer::on_message(const os::Message& m) {
   }
 }
 
-kernel::Status StopInZoneLayer::on_layer_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "zone_min") {
-    o_.zone_min = std::get<double>(value);
-  } else if (name == "zone_max") {
-    o_.zone_max = std::get<double>(value);
-  } else if (name == "after") {
-    o_.after = std::get<kernel::Duration>(value);
-  } else if (name == "latch") {
-    o_.latch = std::get<bool>(value);
-    if (!o_.latch) latched_ = false;
-  } else {
-    return SubsumptionLayer::on_layer_parameter(name, value);
-  }
+kernel::Status StopInZoneLayer::on_parameter_changed(std::string_view name) {
+  if (name == "latch" && !o_.latch) latched_ = false;
   return {};
 }
 

@@ -35,7 +35,7 @@ struct LayerOptions {
 // What every layer shares: sending a command (clamped, never NaN), inhibiting, probing.
 class SubsumptionLayer : public os::Task {
  public:
-  explicit SubsumptionLayer(LayerOptions options) : options_(std::move(options)) {}
+  explicit SubsumptionLayer(LayerOptions options) : options_(std::move(options)) { bind_parameters(options_); }
   // Safe from any thread.
   bool active() const { return active_.load(std::memory_order_relaxed); }
   std::uint64_t commands() const { return commands_.load(std::memory_order_relaxed); }
@@ -45,9 +45,6 @@ class SubsumptionLayer : public os::Task {
   void act(double left, double right);
   // Marks the step inactive (nothing is sent).
   void rest();
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
-  // A layer's own parameters; the base handles inhibit, inhibit_for and speed_limit.
-  virtual kernel::Status on_layer_parameter(std::string_view name, const os::ParamValue& value);
 
  private:
   LayerOptions options_;
@@ -66,11 +63,13 @@ struct WanderOptions {
 };
 class WanderLayer : public SubsumptionLayer {
  public:
-  WanderLayer(WanderOptions options, LayerOptions layer) : SubsumptionLayer(std::move(layer)), o_(options) {}
+  WanderLayer(WanderOptions options, LayerOptions layer) : SubsumptionLayer(std::move(layer)), o_(options) {
+    bind_parameters(o_);
+  }
 
  protected:
   void on_tick() override;
-  kernel::Status on_layer_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   WanderOptions o_;
@@ -92,11 +91,12 @@ struct AvoidOptions {
 };
 class AvoidLayer : public SubsumptionLayer {
  public:
-  AvoidLayer(AvoidOptions options, LayerOptions layer) : SubsumptionLayer(std::move(layer)), o_(options) {}
+  AvoidLayer(AvoidOptions options, LayerOptions layer) : SubsumptionLayer(std::move(layer)), o_(options) {
+    bind_parameters(o_);
+  }
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_layer_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
   AvoidOptions o_;
@@ -118,11 +118,13 @@ struct StopInZoneOptions {
 };
 class StopInZoneLayer : public SubsumptionLayer {
  public:
-  StopInZoneLayer(StopInZoneOptions options, LayerOptions layer) : SubsumptionLayer(std::move(layer)), o_(options) {}
+  StopInZoneLayer(StopInZoneOptions options, LayerOptions layer) : SubsumptionLayer(std::move(layer)), o_(options) {
+    bind_parameters(o_);
+  }
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_layer_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   StopInZoneOptions o_;

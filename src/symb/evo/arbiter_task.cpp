@@ -5,6 +5,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "symb/robot/ports.hpp"
+
 namespace symb::evo {
 
 namespace {
@@ -44,7 +46,7 @@ double predicted_step_fitness(std::span<const float> ir, double left, double rig
   return std::clamp((1 - d) * speed_term + d * (away - forward), -1.0, 1.0);
 }
 
-ArbiterTask::ArbiterTask(ArbiterOptions options) : options_(options) {}
+ArbiterTask::ArbiterTask(ArbiterOptions options) : options_(options) { bind_parameters(options_); }
 
 ArbiterStats ArbiterTask::stats() const {
   std::lock_guard lock(mu_);
@@ -158,55 +160,28 @@ void ArbiterTask::on_command(os::TaskId source, float left, float right) {
   }
 }
 
-kernel::Status ArbiterTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "margin")
-    options_.margin = std::get<double>(value);
-  else if (name == "open_weight")
-    options_.open_weight = std::get<double>(value);
-  else if (name == "window")
-    options_.window = std::get<kernel::Duration>(value);
-  else if (name == "dwell")
-    options_.dwell = std::get<kernel::Duration>(value);
-  else if (name == "stale")
-    options_.stale = std::get<kernel::Duration>(value);
-  else
-    return kernel::Error{"arbiter: '" + std::string(name) + "' cannot change at runtime"};
-  return {};
-}
-
 os::TaskType arbiter_task_type() {
-  os::TaskType t;
-  t.name = "arbiter";
-  t.doc =
+  using P = ArbiterOptions;
+  os::ParamTable<P> p;
+  p.add("ir_max", &P::ir_max).range(1.0, 1e6).doc("an IR value that means touching");
+  p.add("speed_max", &P::speed_max).range(1e-3, 1e6).doc("full wheel speed; commands are clamped to it");
+  p.add("window", &P::window).range(0.001, 3600.0).doc("time constant of each variant's average score").live();
+  p.add("margin", &P::margin).range(0.0, 2.0).doc("how much a challenger must beat the driver by").live();
+  p.add("dwell", &P::dwell).range(0.0, 3600.0).doc("shortest time between two switches").live();
+  p.add("stale", &P::stale).range(0.001, 3600.0).doc("a variant silent this long is forgotten").live();
+  p.add("open_weight", &P::open_weight)
+      .range(0.0, 100.0)
+      .doc("weight of a step in open space in the average (a step touching a wall weighs open_weight + 1)")
+      .live();
+  p.add("min_samples", &P::min_samples).range(1.0, 1e6).doc("scored commands before a variant may challenge");
+  auto t = os::declare_task_type(
+      "arbiter",
       "runs several controller variants side by side: IR readings and each variant's [left, right] in on port 0, "
-      "the best-scoring variant's commands out on port 0 (docs/evolution.md, multiple controllers)";
-  const ArbiterOptions d;
-  t.params = {
-      {"ir_max", os::ParamType::kReal, d.ir_max, 1.0, 1e6, "an IR value that means touching"},
-      {"speed_max", os::ParamType::kReal, d.speed_max, 1e-3, 1e6, "full wheel speed; commands are clamped to it"},
-      {"window", os::ParamType::kDuration, d.window, 0.001, 3600.0, "time constant of each variant's average score"},
-      {"margin", os::ParamType::kReal, d.margin, 0.0, 2.0, "how much a challenger must beat the driver by"},
-      {"dwell", os::ParamType::kDuration, d.dwell, 0.0, 3600.0, "shortest time between two switches"},
-      {"stale", os::ParamType::kDuration, d.stale, 0.001, 3600.0, "a variant silent this long is forgotten"},
-      {"open_weight", os::ParamType::kReal, d.open_weight, 0.0, 100.0,
-       "weight of a step in open space in the average (a step touching a wall weighs open_weight + 1)"},
-      {"min_samples", os::ParamType::kInt, std::int64_t{d.min_samples}, 1.0, 1e6,
-       "scored commands before a variant may challenge"},
-  };
+      "the best-scoring variant's commands out on port 0 (docs/evolution.md, multiple controllers)",
+      std::move(p), [](const P& o) { return std::make_unique<ArbiterTask>(o); });
   t.defaults.priority = 1;
   t.defaults.queue_capacity = 32;
-  t.make = [](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    ArbiterOptions o;
-    o.ir_max = p.real("ir_max");
-    o.speed_max = p.real("speed_max");
-    o.window = p.duration("window");
-    o.margin = p.real("margin");
-    o.dwell = p.duration("dwell");
-    o.stale = p.duration("stale");
-    o.min_samples = static_cast<std::uint32_t>(p.integer("min_samples"));
-    o.open_weight = p.real("open_weight");
-    return std::make_unique<ArbiterTask>(o);
-  };
+  t.outputs = {{0, "wheels", robot::layout::kWheelCommand}};
   return t;
 }
 

@@ -88,7 +88,6 @@ class ArbiterTask final : public os::Task {
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
   void on_reading(std::span<const float> ir);

@@ -88,10 +88,15 @@ kernel::Status check_development(const TaskGraphGenome& genome, const os::Node& 
     if (!params) return Error{where + params.error()};
     // The factory has the last word on parameters (a program that does not parse, weights of the
     // wrong count): ask it now, on a task that is thrown away, so creation cannot fail later.
+    // A constructor that throws anyway is refused like a factory's error (as Node::create does).
     try {
-      if (!type->make || !type->make(*params)) return Error{where + "the type's factory made no task"};
+      auto made = type->make(*params);
+      if (!made) return Error{where + made.error()};
+      if (!made.value()) return Error{where + "the type's factory made no task"};
     } catch (const std::exception& e) {
       return Error{where + e.what()};
+    } catch (...) {
+      return Error{where + "the type's factory threw"};
     }
   }
 

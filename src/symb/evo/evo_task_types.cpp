@@ -1,7 +1,6 @@
 #include "symb/evo/evo_task_types.hpp"
 
 #include <memory>
-#include <stdexcept>
 #include <string>
 
 #include "symb/control/network/network.hpp"
@@ -17,106 +16,98 @@ namespace symb::evo {
 namespace {
 
 using namespace std::chrono_literals;
-using os::ParamSpec;
-using os::ParamType;
 
-[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument(what); }
+using kernel::Error;
+using kernel::Result;
 
 os::TaskType fitness_type() {
-  os::TaskType t;
-  t.name = "fitness";
-  t.doc =
-      "on-line fitness: IR readings (>= 3 numbers) and wheel commands (2 numbers) in on port 0, "
-      "[sum, steps, step] out on port 0 after every reading (every N-th: see every)";
-  const FitnessTaskOptions d;
-  t.params = {
-      {"formula", ParamType::kString, std::string(to_string(d.formula)), 1.0, 32.0,
-       "floreano_mondada, one_plus_one (Nolfi's) or liolib (docs/evolution.md)"},
-      {"reset", ParamType::kBool, false, std::nullopt, std::nullopt, "true: zero the sum and the step count"},
-      {"command_timeout", ParamType::kDuration, d.command_timeout, 0.0, 3600.0,
-       "a wheel command older than this counts as stopped wheels"},
-      {"every", ParamType::kInt, static_cast<std::int64_t>(d.every), 1.0, 1000.0,
-       "report after every N-th step: [sum, steps, step] at 1, [sum, steps, window sum, N] above"},
+  using P = FitnessTaskOptions;
+  os::ParamCodec<FitnessFormula> formula;
+  formula.type = os::ParamType::kString;
+  formula.parse = [](const os::ParamValue& v) -> Result<FitnessFormula> {
+    const auto& text = std::get<std::string>(v);
+    const auto f = parse_fitness_formula(text);
+    if (!f) return Error{"formula: '" + text + "' is none of floreano_mondada, one_plus_one, liolib"};
+    return *f;
   };
+  formula.format = [](FitnessFormula f) -> os::ParamValue { return std::string(to_string(f)); };
+  os::ParamTable<P> p;
+  p.add("formula", &P::formula, std::move(formula))
+      .range(1.0, 32.0)
+      .doc("floreano_mondada, one_plus_one (Nolfi's) or liolib (docs/evolution.md)")
+      .live();
+  p.add("reset", &P::reset).doc("true: zero the sum and the step count").live();
+  p.add("command_timeout", &P::command_timeout)
+      .range(0.0, 3600.0)
+      .doc("a wheel command older than this counts as stopped wheels")
+      .live();
+  p.add("every", &P::every)
+      .range(1.0, 1000.0)
+      .doc("report after every N-th step: [sum, steps, step] at 1, [sum, steps, window sum, N] above")
+      .live();
+  auto t =
+      os::declare_task_type("fitness",
+                            "on-line fitness: IR readings (>= 3 numbers) and wheel commands (2 numbers) in on port 0, "
+                            "[sum, steps, step] out on port 0 after every reading (every N-th: see every)",
+                            std::move(p), [](const P& o) { return std::make_unique<FitnessTask>(o); });
   t.defaults.priority = 1;
   t.defaults.queue_capacity = 8;
-  t.make = [](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    FitnessTaskOptions o;
-    const auto f = parse_fitness_formula(p.string("formula"));
-    if (!f) fail("formula: '" + p.string("formula") + "' is none of floreano_mondada, one_plus_one, liolib");
-    o.formula = *f;
-    o.command_timeout = p.duration("command_timeout");
-    o.every = static_cast<std::uint32_t>(p.integer("every"));
-    return std::make_unique<FitnessTask>(o);
-  };
   return t;
 }
 
-std::size_t mlp_genome_size(const os::ParamSet& p) {
-  auto n = evo::mlp_genome_size(p.integer("inputs"), p.string("layers"), p.string("activation"));
-  if (!n) fail(n.error());
-  return *n;
-}
+// The one_plus_one type's parameters: the task's options and the candidate mlp's shape.
+struct OnePlusOneParams : OnePlusOneTaskOptions {
+  std::int64_t inputs = 7;
+  std::string layers = "2";
+  std::string activation = "tanh";
+};
 
 os::TaskType one_plus_one_type() {
-  os::TaskType t;
-  t.name = "one_plus_one";
-  t.doc =
+  using P = OnePlusOneParams;
+  using A = OnePlusOneOptions;
+  os::ParamTable<P> p;
+  p.add("evaluation", &P::evaluation).range(0.001, 86400.0).doc("counted time per candidate");
+  p.add("recovery", &P::recovery).range(0.0, 3600.0).doc("uncounted time before it, after a swap");
+  p.add("genes", &P::algorithm, &A::genes)
+      .range(1.0, 20000.0)
+      .doc("genome length: must be the mlp's genome size ((inputs + 1) x outputs for a perceptron)");
+  p.add("inputs", &P::inputs)
+      .range(1.0, static_cast<double>(control::network::kMaxInputs))
+      .doc("the candidate mlp's input count");
+  p.add("layers", &P::layers).range(1.0, 200.0).doc("the candidate mlp's hidden then output sizes");
+  p.add("activation", &P::activation).range(1.0, 16.0).doc("the candidate mlp's activation");
+  p.add("lo", &P::algorithm, &A::lo).range(-1e6, 1e6).doc("lowest gene value");
+  p.add("hi", &P::algorithm, &A::hi).range(-1e6, 1e6).doc("highest gene value");
+  p.add("sigma", &P::algorithm, &A::sigma).range(1e-12, 1e6).doc("initial mutation step size");
+  p.add("sigma_min", &P::algorithm, &A::sigma_min).range(1e-12, 1e6).doc("step size after a success");
+  p.add("sigma_max", &P::algorithm, &A::sigma_max).range(1e-12, 1e6).doc("step size ceiling (doubled after a failure)");
+  p.add("reevaluation", &P::algorithm, &A::reevaluation)
+      .range(0.0, 1.0)
+      .doc("probability of re-running the champion after a failed challenger");
+  p.add("controller", &P::controller).range(1.0, 63.0).doc("the name of the controller task it replaces");
+  p.add("sensor", &P::sensor).range(1.0, 63.0).doc("the task hooked into each candidate");
+  p.add("actuator", &P::actuator).range(1.0, 63.0).doc("the task each candidate drives");
+  p.add("fitness", &P::fitness).range(1.0, 63.0).doc("the fitness task it reads");
+  auto t = os::declare_task_type(
+      "one_plus_one",
       "(1+1)-ONLINE evolution: replaces the controller task by a new mlp per candidate, reads the "
-      "fitness task's [sum, steps, step]";
-  const OnePlusOneTaskOptions d;
-  const OnePlusOneOptions& a = d.algorithm;
-  t.params = {
-      {"evaluation", ParamType::kDuration, d.evaluation, 0.001, 86400.0, "counted time per candidate"},
-      {"recovery", ParamType::kDuration, d.recovery, 0.0, 3600.0, "uncounted time before it, after a swap"},
-      {"genes", ParamType::kInt, static_cast<std::int64_t>(a.genes), 1.0, 20000.0,
-       "genome length: must be the mlp's genome size ((inputs + 1) x outputs for a perceptron)"},
-      {"inputs", ParamType::kInt, std::int64_t{7}, 1.0, static_cast<double>(control::network::kMaxInputs),
-       "the candidate mlp's input count"},
-      {"layers", ParamType::kString, std::string("2"), 1.0, 200.0, "the candidate mlp's hidden then output sizes"},
-      {"activation", ParamType::kString, std::string("tanh"), 1.0, 16.0, "the candidate mlp's activation"},
-      {"lo", ParamType::kReal, a.lo, -1e6, 1e6, "lowest gene value"},
-      {"hi", ParamType::kReal, a.hi, -1e6, 1e6, "highest gene value"},
-      {"sigma", ParamType::kReal, a.sigma, 1e-12, 1e6, "initial mutation step size"},
-      {"sigma_min", ParamType::kReal, a.sigma_min, 1e-12, 1e6, "step size after a success"},
-      {"sigma_max", ParamType::kReal, a.sigma_max, 1e-12, 1e6, "step size ceiling (doubled after a failure)"},
-      {"reevaluation", ParamType::kReal, a.reevaluation, 0.0, 1.0,
-       "probability of re-running the champion after a failed challenger"},
-      {"controller", ParamType::kString, d.controller, 1.0, 63.0, "the name of the controller task it replaces"},
-      {"sensor", ParamType::kString, d.sensor, 1.0, 63.0, "the task hooked into each candidate"},
-      {"actuator", ParamType::kString, d.actuator, 1.0, 63.0, "the task each candidate drives"},
-      {"fitness", ParamType::kString, d.fitness, 1.0, 63.0, "the fitness task it reads"},
-  };
+      "fitness task's [sum, steps, step]",
+      std::move(p), [](const P& c) -> Result<std::unique_ptr<OnePlusOneTask>> {
+        auto needed = evo::mlp_genome_size(c.inputs, c.layers, c.activation);
+        if (!needed) return Error{needed.error()};
+        if (c.algorithm.genes != *needed)
+          return Error{"genes: " + std::to_string(c.algorithm.genes) +
+                       " genes, but the mlp (inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers +
+                       "\") has " + std::to_string(*needed) + " weights and biases"};
+        OnePlusOneTaskOptions o = c;
+        o.controller_type = "mlp";
+        o.controller_params =
+            "inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers + "\" activation=" + c.activation;
+        return OnePlusOneTask::create(std::move(o));
+      });
   t.defaults.priority = 1;
   t.defaults.period = 1s;
   t.defaults.queue_capacity = 8;
-  t.make = [](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    OnePlusOneTaskOptions o;
-    o.evaluation = p.duration("evaluation");
-    o.recovery = p.duration("recovery");
-    o.algorithm.genes = static_cast<std::size_t>(p.integer("genes"));
-    const std::size_t needed = mlp_genome_size(p);
-    if (o.algorithm.genes != needed)
-      fail("genes: " + std::to_string(o.algorithm.genes) +
-           " genes, but the mlp (inputs=" + std::to_string(p.integer("inputs")) + " layers=\"" + p.string("layers") +
-           "\") has " + std::to_string(needed) + " weights and biases");
-    o.algorithm.lo = p.real("lo");
-    o.algorithm.hi = p.real("hi");
-    o.algorithm.sigma = p.real("sigma");
-    o.algorithm.sigma_min = p.real("sigma_min");
-    o.algorithm.sigma_max = p.real("sigma_max");
-    o.algorithm.reevaluation = p.real("reevaluation");
-    o.controller_type = "mlp";
-    o.controller_params = "inputs=" + std::to_string(p.integer("inputs")) + " layers=\"" + p.string("layers") +
-                          "\" activation=" + p.string("activation");
-    o.controller = p.string("controller");
-    o.sensor = p.string("sensor");
-    o.actuator = p.string("actuator");
-    o.fitness = p.string("fitness");
-    auto task = OnePlusOneTask::create(std::move(o));
-    if (!task) fail(task.error());
-    return std::move(task).value();
-  };
   return t;
 }
 

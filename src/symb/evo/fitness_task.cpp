@@ -54,37 +54,15 @@ void FitnessTask::on_message(const os::Message& m) {
   send(0, std::span<const float>(out, n));
 }
 
-kernel::Status FitnessTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "formula") {
-    const auto* text = std::get_if<std::string>(&value);
-    const auto f = text ? parse_fitness_formula(*text) : std::nullopt;
-    if (!f) return kernel::Error{"formula: floreano_mondada, one_plus_one or liolib"};
-    options_.formula = *f;
-    return {};
+kernel::Status FitnessTask::on_parameter_changed(std::string_view name) {
+  if (name == "reset" && options_.reset) {
+    sum_.store(0, std::memory_order_relaxed);
+    steps_.store(0, std::memory_order_relaxed);
+    window_sum_ = 0;
+    window_steps_ = 0;
+    options_.reset = false;
   }
-  if (name == "reset") {
-    if (const auto* b = std::get_if<bool>(&value); b && *b) {
-      sum_.store(0, std::memory_order_relaxed);
-      steps_.store(0, std::memory_order_relaxed);
-      window_sum_ = 0;
-      window_steps_ = 0;
-    }
-    return {};
-  }
-  if (name == "every") {
-    if (const auto* n = std::get_if<std::int64_t>(&value); n && *n >= 1 && *n <= 1000) {
-      options_.every = static_cast<std::uint32_t>(*n);
-      return {};
-    }
-    return kernel::Error{"every: a whole number 1..1000"};
-  }
-  if (name == "command_timeout") {
-    if (const auto* d = std::get_if<kernel::Duration>(&value)) {
-      options_.command_timeout = *d;
-      return {};
-    }
-  }
-  return kernel::Error{"fitness: no runtime parameter '" + std::string(name) + "'"};
+  return {};
 }
 
 }  // namespace symb::evo

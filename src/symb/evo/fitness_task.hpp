@@ -38,6 +38,8 @@ struct FitnessTaskOptions {
   FitnessFormula formula = FitnessFormula::kOnePlusOne;
   kernel::Duration command_timeout = std::chrono::milliseconds(100);
   std::uint32_t every = 1;  // report after every N-th step (1..1000)
+  // Set true at runtime: zeroes the sum and the step count (then reads false again).
+  bool reset = false;
 };
 
 struct FitnessStats {
@@ -49,7 +51,7 @@ struct FitnessStats {
 
 class FitnessTask : public os::Task {
  public:
-  explicit FitnessTask(FitnessTaskOptions options) : options_(options) {}
+  explicit FitnessTask(FitnessTaskOptions options) : options_(options) { bind_parameters(options_); }
 
   // Safe from any thread.
   FitnessStats stats() const;
@@ -58,7 +60,7 @@ class FitnessTask : public os::Task {
 
  protected:
   void on_message(const os::Message& m) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   FitnessTaskOptions options_;

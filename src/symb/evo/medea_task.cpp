@@ -1,7 +1,6 @@
 #include "symb/evo/medea_task.hpp"
 
 #include <cmath>
-#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -198,68 +197,53 @@ void MedeaTask::on_message(const os::Message& m) {
 
 namespace {
 
-using os::ParamSpec;
-using os::ParamType;
-
-[[noreturn]] void fail_make(const std::string& what) { throw std::invalid_argument(what); }
-
-std::size_t mlp_genome_size(const os::ParamSet& p) {
-  auto n = evo::mlp_genome_size(p.integer("inputs"), p.string("layers"), p.string("activation"));
-  if (!n) fail_make(n.error());
-  return *n;
-}
+// The medea type's parameters: the task's options and the mlp's shape.
+struct MedeaParams : MedeaTaskOptions {
+  std::int64_t inputs = 7;
+  std::string layers = "2";
+  std::string activation = "tanh";
+};
 
 os::TaskType medea_type() {
   using namespace std::chrono_literals;
-  os::TaskType t;
-  t.name = "medea";
-  t.doc =
-      "mEDEA swarm evolution: broadcasts its genome over the `radio` task every period, runs one "
-      "mlp per lifetime, the next picked among the genomes heard (docs/evolution.md)";
-  const MedeaTaskOptions d;
-  const MedeaOptions& a = d.algorithm;
-  t.params = {
-      {"lifetime", ParamType::kDuration, d.lifetime, 0.001, 86400.0, "how long each genome runs"},
-      {"inputs", ParamType::kInt, std::int64_t{7}, 1.0, static_cast<double>(control::network::kMaxInputs),
-       "the mlp's input count"},
-      {"layers", ParamType::kString, std::string("2"), 1.0, 200.0, "the mlp's hidden then output sizes"},
-      {"activation", ParamType::kString, std::string("tanh"), 1.0, 16.0, "the mlp's activation"},
-      {"lo", ParamType::kReal, a.lo, -1e6, 1e6, "lowest gene value"},
-      {"hi", ParamType::kReal, a.hi, -1e6, 1e6, "highest gene value"},
-      {"sigma", ParamType::kReal, a.sigma, 1e-12, 1e6, "initial mutation step size (sigma_ref)"},
-      {"sigma_min", ParamType::kReal, a.sigma_min, 1e-12, 1e6, "lowest step size"},
-      {"sigma_max", ParamType::kReal, a.sigma_max, 1e-12, 1e6, "highest step size"},
-      {"sigma_probability", ParamType::kReal, a.sigma_probability, 0.0, 1.0,
-       "probability of changing sigma (x1.35 or x0.65) before each mutation"},
-      {"controller", ParamType::kString, d.controller, 1.0, 63.0, "the name of the controller task it replaces"},
-      {"sensor", ParamType::kString, d.sensor, 1.0, 63.0, "the task hooked into each controller"},
-      {"actuator", ParamType::kString, d.actuator, 1.0, 63.0, "the task each controller drives"},
-      {"radio", ParamType::kString, d.radio, 1.0, 63.0, "the radio task it broadcasts and listens through"},
-  };
+  using P = MedeaParams;
+  using A = MedeaOptions;
+  os::ParamTable<P> p;
+  p.add("lifetime", &P::lifetime).range(0.001, 86400.0).doc("how long each genome runs");
+  p.add("inputs", &P::inputs)
+      .range(1.0, static_cast<double>(control::network::kMaxInputs))
+      .doc("the mlp's input count");
+  p.add("layers", &P::layers).range(1.0, 200.0).doc("the mlp's hidden then output sizes");
+  p.add("activation", &P::activation).range(1.0, 16.0).doc("the mlp's activation");
+  p.add("lo", &P::algorithm, &A::lo).range(-1e6, 1e6).doc("lowest gene value");
+  p.add("hi", &P::algorithm, &A::hi).range(-1e6, 1e6).doc("highest gene value");
+  p.add("sigma", &P::algorithm, &A::sigma).range(1e-12, 1e6).doc("initial mutation step size (sigma_ref)");
+  p.add("sigma_min", &P::algorithm, &A::sigma_min).range(1e-12, 1e6).doc("lowest step size");
+  p.add("sigma_max", &P::algorithm, &A::sigma_max).range(1e-12, 1e6).doc("highest step size");
+  p.add("sigma_probability", &P::algorithm, &A::sigma_probability)
+      .range(0.0, 1.0)
+      .doc("probability of changing sigma (x1.35 or x0.65) before each mutation");
+  p.add("controller", &P::controller).range(1.0, 63.0).doc("the name of the controller task it replaces");
+  p.add("sensor", &P::sensor).range(1.0, 63.0).doc("the task hooked into each controller");
+  p.add("actuator", &P::actuator).range(1.0, 63.0).doc("the task each controller drives");
+  p.add("radio", &P::radio).range(1.0, 63.0).doc("the radio task it broadcasts and listens through");
+  auto t =
+      os::declare_task_type("medea",
+                            "mEDEA swarm evolution: broadcasts its genome over the `radio` task every period, runs one "
+                            "mlp per lifetime, the next picked among the genomes heard (docs/evolution.md)",
+                            std::move(p), [](const P& c) -> kernel::Result<std::unique_ptr<MedeaTask>> {
+                              auto genes = mlp_genome_size(c.inputs, c.layers, c.activation);
+                              if (!genes) return kernel::Error{genes.error()};
+                              MedeaTaskOptions o = c;
+                              o.algorithm.genes = *genes;
+                              o.controller_type = "mlp";
+                              o.controller_params = "inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers +
+                                                    "\" activation=" + c.activation;
+                              return MedeaTask::create(std::move(o));
+                            });
   t.defaults.priority = 1;
   t.defaults.period = 300ms;
   t.defaults.queue_capacity = 64;
-  t.make = [](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    MedeaTaskOptions o;
-    o.lifetime = p.duration("lifetime");
-    o.algorithm.genes = mlp_genome_size(p);
-    o.algorithm.lo = p.real("lo");
-    o.algorithm.hi = p.real("hi");
-    o.algorithm.sigma = p.real("sigma");
-    o.algorithm.sigma_min = p.real("sigma_min");
-    o.algorithm.sigma_max = p.real("sigma_max");
-    o.algorithm.sigma_probability = p.real("sigma_probability");
-    o.controller_type = "mlp";
-    o.controller_params = "inputs=" + std::to_string(p.integer("inputs")) + " layers=\"" + p.string("layers") +
-                          "\" activation=" + p.string("activation");
-    o.controller = p.string("controller");
-    o.sensor = p.string("sensor");
-    o.actuator = p.string("actuator");
-    o.radio = p.string("radio");
-    auto task = MedeaTask::create(std::move(o));
-    if (!task) fail_make(task.error());
-    return std::move(task).value();
-  };
   return t;
 }
 

@@ -1,6 +1,5 @@
 #include "symb/evo/mu_plus_one_task.hpp"
 
-#include <stdexcept>
 #include <utility>
 
 #include "symb/os/node.hpp"
@@ -141,86 +140,79 @@ void MuPlusOneTask::finish_evaluation(double fitness) {
 
 namespace {
 
-using os::ParamType;
+// The mu_plus_one type's parameters: the task's options and the candidate mlp's shape.
+struct MuPlusOneParams : MuPlusOneTaskOptions {
+  std::int64_t inputs = 7;
+  std::string layers = "2";
+  std::string activation = "tanh";
+};
 
-[[noreturn]] void fail_make(const std::string& what) { throw std::invalid_argument(what); }
+// A word standing for one of two values.
+template <class T>
+os::ParamCodec<T> either(std::string name, std::string a, T va, std::string b, T vb) {
+  os::ParamCodec<T> c;
+  c.type = os::ParamType::kString;
+  c.parse = [=](const os::ParamValue& v) -> kernel::Result<T> {
+    const auto& w = std::get<std::string>(v);
+    if (w == a) return va;
+    if (w == b) return vb;
+    return kernel::Error{name + ": '" + w + "' is neither " + a + " nor " + b};
+  };
+  c.format = [=](T x) -> os::ParamValue { return x == va ? a : b; };
+  return c;
+}
 
 os::TaskType mu_plus_one_type() {
-  os::TaskType t;
-  t.name = "mu_plus_one";
-  t.doc =
+  using P = MuPlusOneParams;
+  using A = MuPlusOneOptions;
+  using S = ControllerSwapOptions;
+  os::ParamTable<P> p;
+  p.add("mu", &P::algorithm, &A::mu).range(2.0, 10000.0).doc("population size");
+  p.add("rho", &P::algorithm, &A::rho).range(0.0, 0.999).doc("re-evaluation probability per step");
+  p.add("sigma", &P::algorithm, &A::sigma).range(1e-12, 1e6).doc("Gaussian mutation step size (fixed)");
+  p.add("crossover", &P::algorithm, &A::crossover).range(0.0, 1.0).doc("probability of a uniform crossover");
+  p.add("selection", &P::algorithm, &A::selection,
+        either("selection", "tournament", ParentSelection::kBinaryTournament, "uniform", ParentSelection::kUniform))
+      .range(1.0, 16.0)
+      .doc("parent selection: tournament (binary) or uniform");
+  p.add("reevaluation", &P::algorithm, &A::reevaluation,
+        either("reevaluation", "average", Reevaluation::kAverage, "replace", Reevaluation::kReplace))
+      .range(1.0, 16.0)
+      .doc("a re-evaluated member's fitness: average (of all its runs) or replace (the newest)");
+  p.add("evaluation", &P::swap, &S::evaluation).range(0.001, 86400.0).doc("counted time per candidate (tau)");
+  p.add("recovery", &P::swap, &S::recovery).range(0.0, 3600.0).doc("uncounted time before it, after a swap");
+  p.add("genes", &P::algorithm, &A::genes)
+      .range(1.0, 20000.0)
+      .doc("genome length: must be the mlp's genome size ((inputs + 1) x outputs for a perceptron)");
+  p.add("inputs", &P::inputs).range(1.0, 1000.0).doc("the candidate mlp's input count");
+  p.add("layers", &P::layers).range(1.0, 200.0).doc("the candidate mlp's hidden then output sizes");
+  p.add("activation", &P::activation).range(1.0, 16.0).doc("the candidate mlp's activation");
+  p.add("lo", &P::algorithm, &A::lo).range(-1e6, 1e6).doc("lowest gene value");
+  p.add("hi", &P::algorithm, &A::hi).range(-1e6, 1e6).doc("highest gene value");
+  p.add("controller", &P::swap, &S::controller).range(1.0, 63.0).doc("the name of the controller task it replaces");
+  p.add("sensor", &P::swap, &S::sensor).range(1.0, 63.0).doc("the task hooked into each candidate");
+  p.add("actuator", &P::swap, &S::actuator).range(1.0, 63.0).doc("the task each candidate drives");
+  p.add("fitness", &P::swap, &S::fitness).range(1.0, 63.0).doc("the fitness task it reads");
+  auto t = os::declare_task_type(
+      "mu_plus_one",
       "encapsulated (mu+1)-ONLINE evolution: a population of mu genomes on the robot; replaces the "
-      "controller task by a new mlp per candidate, reads the fitness task's [sum, steps, step]";
-  const MuPlusOneTaskOptions d;
-  const MuPlusOneOptions& a = d.algorithm;
-  t.params = {
-      {"mu", ParamType::kInt, static_cast<std::int64_t>(a.mu), 2.0, 10000.0, "population size"},
-      {"rho", ParamType::kReal, a.rho, 0.0, 0.999, "re-evaluation probability per step"},
-      {"sigma", ParamType::kReal, a.sigma, 1e-12, 1e6, "Gaussian mutation step size (fixed)"},
-      {"crossover", ParamType::kReal, a.crossover, 0.0, 1.0, "probability of a uniform crossover"},
-      {"selection", ParamType::kString, std::string("tournament"), 1.0, 16.0,
-       "parent selection: tournament (binary) or uniform"},
-      {"reevaluation", ParamType::kString, std::string("average"), 1.0, 16.0,
-       "a re-evaluated member's fitness: average (of all its runs) or replace (the newest)"},
-      {"evaluation", ParamType::kDuration, d.swap.evaluation, 0.001, 86400.0, "counted time per candidate (tau)"},
-      {"recovery", ParamType::kDuration, d.swap.recovery, 0.0, 3600.0, "uncounted time before it, after a swap"},
-      {"genes", ParamType::kInt, static_cast<std::int64_t>(a.genes), 1.0, 20000.0,
-       "genome length: must be the mlp's genome size ((inputs + 1) x outputs for a perceptron)"},
-      {"inputs", ParamType::kInt, std::int64_t{7}, 1.0, 1000.0, "the candidate mlp's input count"},
-      {"layers", ParamType::kString, std::string("2"), 1.0, 200.0, "the candidate mlp's hidden then output sizes"},
-      {"activation", ParamType::kString, std::string("tanh"), 1.0, 16.0, "the candidate mlp's activation"},
-      {"lo", ParamType::kReal, a.lo, -1e6, 1e6, "lowest gene value"},
-      {"hi", ParamType::kReal, a.hi, -1e6, 1e6, "highest gene value"},
-      {"controller", ParamType::kString, d.swap.controller, 1.0, 63.0, "the name of the controller task it replaces"},
-      {"sensor", ParamType::kString, d.swap.sensor, 1.0, 63.0, "the task hooked into each candidate"},
-      {"actuator", ParamType::kString, d.swap.actuator, 1.0, 63.0, "the task each candidate drives"},
-      {"fitness", ParamType::kString, d.swap.fitness, 1.0, 63.0, "the fitness task it reads"},
-  };
+      "controller task by a new mlp per candidate, reads the fitness task's [sum, steps, step]",
+      std::move(p), [](const P& c) -> kernel::Result<std::unique_ptr<MuPlusOneTask>> {
+        auto needed = mlp_genome_size(c.inputs, c.layers, c.activation);
+        if (!needed) return kernel::Error{needed.error()};
+        if (c.algorithm.genes != *needed)
+          return kernel::Error{"genes: " + std::to_string(c.algorithm.genes) +
+                               " genes, but the mlp (inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers +
+                               "\") has " + std::to_string(*needed) + " weights and biases"};
+        MuPlusOneTaskOptions o = c;
+        o.swap.controller_type = "mlp";
+        o.swap.controller_params =
+            "inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers + "\" activation=" + c.activation;
+        return MuPlusOneTask::create(std::move(o));
+      });
   t.defaults.priority = 1;
   t.defaults.period = 1s;
   t.defaults.queue_capacity = 8;
-  t.make = [](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    MuPlusOneTaskOptions o;
-    MuPlusOneOptions& alg = o.algorithm;
-    alg.mu = static_cast<std::size_t>(p.integer("mu"));
-    alg.rho = p.real("rho");
-    alg.sigma = p.real("sigma");
-    alg.crossover = p.real("crossover");
-    const std::string selection = p.string("selection"), reevaluation = p.string("reevaluation");
-    if (selection == "tournament")
-      alg.selection = ParentSelection::kBinaryTournament;
-    else if (selection == "uniform")
-      alg.selection = ParentSelection::kUniform;
-    else
-      fail_make("selection: '" + selection + "' is neither tournament nor uniform");
-    if (reevaluation == "average")
-      alg.reevaluation = Reevaluation::kAverage;
-    else if (reevaluation == "replace")
-      alg.reevaluation = Reevaluation::kReplace;
-    else
-      fail_make("reevaluation: '" + reevaluation + "' is neither average nor replace");
-    alg.genes = static_cast<std::size_t>(p.integer("genes"));
-    auto needed = mlp_genome_size(p.integer("inputs"), p.string("layers"), p.string("activation"));
-    if (!needed) fail_make(needed.error());
-    if (alg.genes != *needed)
-      fail_make("genes: " + std::to_string(alg.genes) +
-                " genes, but the mlp (inputs=" + std::to_string(p.integer("inputs")) + " layers=\"" +
-                p.string("layers") + "\") has " + std::to_string(*needed) + " weights and biases");
-    alg.lo = p.real("lo");
-    alg.hi = p.real("hi");
-    o.swap.evaluation = p.duration("evaluation");
-    o.swap.recovery = p.duration("recovery");
-    o.swap.controller_type = "mlp";
-    o.swap.controller_params = "inputs=" + std::to_string(p.integer("inputs")) + " layers=\"" + p.string("layers") +
-                               "\" activation=" + p.string("activation");
-    o.swap.controller = p.string("controller");
-    o.swap.sensor = p.string("sensor");
-    o.swap.actuator = p.string("actuator");
-    o.swap.fitness = p.string("fitness");
-    auto task = MuPlusOneTask::create(std::move(o));
-    if (!task) fail_make(task.error());
-    return std::move(task).value();
-  };
   return t;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <exception>
+#include <new>
 
 #include "symb/kernel/counter.hpp"
 #include "symb/os/task_record.hpp"
@@ -345,10 +346,19 @@ Result<TaskId> Node::create(std::string_view type_name, std::string name, std::s
   auto values = config_.types->resolve(*type, params);
   if (!values) return Error{values.error()};
   std::unique_ptr<Task> task;
+  // Factories report errors as values; a constructor that throws anyway (std::bad_alloc for a huge
+  // size) must not take the node down either.
+  const std::string failed = "task type '" + type->name + "' could not make a task: ";
   try {
-    task = type->make(*values);
+    auto made = type->make(*values);
+    if (!made) return Error{failed + made.error()};
+    task = std::move(made).value();
+  } catch (const std::bad_alloc&) {
+    return Error{failed + "out of memory (a size too large?)"};
   } catch (const std::exception& e) {
-    return Error{"task type '" + type->name + "' could not make a task: " + e.what()};
+    return Error{failed + e.what()};
+  } catch (...) {
+    return Error{failed + "an exception that is not a std::exception"};
   }
   if (!task) return Error{"task type '" + type->name + "' made no task"};
   auto state = std::make_unique<detail::ParamState>();
@@ -622,6 +632,28 @@ std::size_t Node::task_count() const {
   return n;
 }
 
+namespace {
+
+// The port layouts of both ends' types must agree on every port the hook carries (types that
+// declare no ports, and tasks made in code, are not checked).
+Status check_layouts(const TaskRecord& s, const TaskRecord& r, int port_filter) {
+  if (!s.params || !r.params) return {};
+  const TaskType& st = *s.params->type;
+  const TaskType& rt = *r.params->type;
+  for (const PortSpec& out : st.outputs) {
+    if (port_filter >= 0 && out.port != port_filter) continue;
+    const PortSpec* in = find_port(rt.inputs, out.port);
+    if (in == nullptr || compatible(out.layout, in->layout)) continue;
+    return Error{"cannot hook '" + s.name + "' (" + st.name + ") to '" + r.name + "' (" + rt.name + "): port " +
+                 std::to_string(out.port) + " carries " + std::string(out.layout.name) + " (" +
+                 std::string(out.layout.doc) + ") out of '" + s.name + "', but '" + r.name + "' reads " +
+                 std::string(in->layout.name) + " (" + std::string(in->layout.doc) + ") there"};
+  }
+  return {};
+}
+
+}  // namespace
+
 Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   std::lock_guard lock(mu_);
   TaskRecord* s = lookup_locked(sender);
@@ -630,6 +662,7 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   if (r == nullptr) return Error{no_task(receiver).error()};
   if (options.port > 0xffff) return Error{"hook port must be -1 (any) or 0..65535"};
   if (options.suppress_window.count() < 0) return Error{"negative suppression window"};
+  if (auto st = check_layouts(*s, *r, options.port); !st) return Error{st.error()};
   detail::Hook h;
   h.serial = ++hook_serial_;
   h.priority = options.priority;

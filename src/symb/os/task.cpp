@@ -2,11 +2,27 @@
 
 #include "symb/os/node.hpp"
 #include "symb/os/task_record.hpp"
+#include "symb/os/task_type_registry.hpp"
 
 namespace symb::os {
 
-kernel::Status Task::on_parameter(std::string_view name, const ParamValue& /*value*/) {
-  return kernel::Error{"task does not accept a new '" + std::string(name) + "' while it runs"};
+kernel::Status Task::on_parameter(std::string_view name, const ParamValue& value) {
+  // The node sets record_->params before the task starts and never replaces it.
+  const TaskType* type = record_->params ? record_->params->type : nullptr;
+  const LiveParam* live = nullptr;
+  if (type != nullptr && !type->live.empty())
+    for (std::size_t i = 0; i < type->params.size(); ++i)
+      if (type->params[i].name == name) live = &type->live[i];
+  if (live == nullptr || !live->apply) {
+    const std::string what = type != nullptr ? type->name + " task" : "task";
+    return kernel::Error{"a running " + what + " keeps its " + std::string(name) +
+                         ": create a new task (and rehook) to change it"};
+  }
+  for (std::size_t i = 0; i < bindings_count_; ++i)
+    if (bindings_[i].owner == live->owner)
+      return live->apply(bindings_[i].object, value, [&] { return on_parameter_changed(name); });
+  return kernel::Error{"task type '" + type->name + "' declares '" + std::string(name) +
+                       "' live, but its task bound no options that hold it"};
 }
 
 Node& Task::node() const { return record_->node; }

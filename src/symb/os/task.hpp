@@ -5,6 +5,7 @@
 // handler throws (that task only; the rest of the node goes on).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <initializer_list>
 #include <span>
@@ -17,6 +18,7 @@
 #include "symb/os/ids.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/param.hpp"
+#include "symb/os/param_table.hpp"
 #include "symb/os/syslog.hpp"
 
 namespace symb::os {
@@ -76,9 +78,19 @@ class Task {
   virtual void on_message(const Message& /*message*/) {}
   virtual void on_tick() {}
   virtual void on_stop() {}
-  // A parameter changed at runtime (shell, scenario, genome). Runs on the task's own context; the
-  // value has passed the schema's type and range check. The default refuses every change.
-  virtual kernel::Status on_parameter(std::string_view name, const ParamValue& value);
+  // A live parameter (ParamTable's .live()) was just written into the options this task bound
+  // (bind_parameters), on this task's own context. Recompute what depends on it here, or refuse
+  // the value: the options are then put back and the error is the change's reply (logged).
+  virtual kernel::Status on_parameter_changed(std::string_view /*name*/) { return {}; }
+
+  // Declares where this task keeps its parameters: `options`, a member of the task, whose type is
+  // the config struct of its type's ParamTable or one of that struct's bases. A running task's
+  // live parameters are written there. Call from the constructor; up to kMaxBindings structs.
+  template <class Options>
+  void bind_parameters(Options& options) {
+    if (bindings_count_ < bindings_.size()) bindings_[bindings_count_++] = {detail::type_tag<Options>(), &options};
+  }
+  static constexpr std::size_t kMaxBindings = 3;
 
   // Services for handlers; valid from on_start() until on_stop() returns.
   Node& node() const;
@@ -108,7 +120,18 @@ class Task {
  private:
   friend class Node;
   friend struct detail::TaskRecord;
+  // A parameter changed at runtime (shell, scenario, genome); the value has passed the schema's
+  // type and range check. Runs on the task's own context: writes a live parameter through its
+  // type's declaration into the bound options, then on_parameter_changed(); refuses the others.
+  kernel::Status on_parameter(std::string_view name, const ParamValue& value);
+
+  struct Binding {
+    const void* owner = nullptr;
+    void* object = nullptr;
+  };
   detail::TaskRecord* record_ = nullptr;
+  std::array<Binding, kMaxBindings> bindings_{};
+  std::size_t bindings_count_ = 0;
 };
 
 }  // namespace symb::os

@@ -14,6 +14,8 @@ kernel::Status TaskTypeRegistry::add(TaskType type) {
   if (!is_valid_name(type.name)) return Error{"task type name '" + type.name + "' is not a valid name"};
   if (types_.contains(type.name)) return Error{"task type '" + type.name + "' is already registered"};
   if (!type.make) return Error{"task type '" + type.name + "' has no factory"};
+  if (!type.live.empty() && type.live.size() != type.params.size())
+    return Error{"task type '" + type.name + "': live parameters do not match its parameters"};
   for (std::size_t i = 0; i < type.params.size(); ++i) {
     const ParamSpec& p = type.params[i];
     if (!is_valid_name(p.name)) return Error{"task type '" + type.name + "': invalid parameter name '" + p.name + "'"};

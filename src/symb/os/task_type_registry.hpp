@@ -14,19 +14,69 @@
 
 #include "symb/kernel/result.hpp"
 #include "symb/os/param.hpp"
+#include "symb/os/param_table.hpp"
+#include "symb/os/port_layout.hpp"
 #include "symb/os/task.hpp"
 
 namespace symb::os {
 
+// Makes a task from resolved parameters; an error says why not (it becomes the creation error,
+// naming the type). Never throws by contract; Node::create still catches what a constructor throws.
+using TaskFactory = std::function<kernel::Result<std::unique_ptr<Task>>(const ParamSet&)>;
+
+// A registered type: what the registry and its users see. Made by declare_task_type() from a
+// ParamTable, so the schema, the factory's config and the live changes come from one declaration.
 struct TaskType {
   std::string name;
   std::string doc;
   std::vector<ParamSpec> params;
+  // How a running task takes a new value, one per params entry (empty: no parameter is live).
+  std::vector<LiveParam> live;
   TaskOptions defaults;  // priority, period and queue size unless the creator says otherwise
-  std::function<std::unique_ptr<Task>(const ParamSet&)> make;
+  // Declared ports (empty: unchecked). A hook whose sender's output and receiver's input share a
+  // port number with incompatible layouts is refused (Node::hook).
+  std::vector<PortSpec> inputs;
+  std::vector<PortSpec> outputs;
+  TaskFactory make;
 
   const ParamSpec* param(std::string_view param_name) const;
 };
+
+// A task type declared from its parameter table and a factory that receives the filled config:
+//
+//   os::ParamTable<NoiseOptions> p;
+//   p.add("gain", &NoiseOptions::gain).range(0.0, 1000.0).doc("the schema's gain").live();
+//   auto t = os::declare_task_type("noise", "motor schema: ...", std::move(p),
+//       [](const NoiseOptions& o) -> kernel::Result<std::unique_ptr<os::Task>> {
+//         return std::make_unique<NoiseSchema>(o);
+//       });
+//
+// `make` takes a const Config& and returns a Result of a unique_ptr to a Task (or to a class
+// derived from it), or such a unique_ptr; its errors are values, not exceptions.
+template <class Config, class Make>
+TaskType declare_task_type(std::string name, std::string doc, ParamTable<Config> params, Make make) {
+  TaskType t;
+  t.name = std::move(name);
+  t.doc = std::move(doc);
+  t.params = params.specs();
+  t.live = params.live_params();
+  auto table = std::make_shared<const ParamTable<Config>>(std::move(params));
+  t.make = [table, make = std::move(make)](const ParamSet& values) -> kernel::Result<std::unique_ptr<Task>> {
+    auto config = table->read(values);
+    if (!config) return kernel::Error{config.error()};
+    auto made = make(config.value());
+    if constexpr (requires { made.error(); }) {
+      if (!made) return kernel::Error{made.error()};
+      return std::unique_ptr<Task>(std::move(made).value());
+    } else {
+      return std::unique_ptr<Task>(std::move(made));
+    }
+  };
+  return t;
+}
+
+// The config of a type without parameters.
+struct NoParams {};
 
 class TaskTypeRegistry {
  public:

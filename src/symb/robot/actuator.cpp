@@ -106,6 +106,7 @@ ActuatorSinkTask::ActuatorSinkTask(std::shared_ptr<Actuator> actuator, Options o
       fail_warning_(options_.warn_interval),
       clamp_warning_(options_.warn_interval),
       timeout_warning_(options_.warn_interval) {
+  bind_parameters(options_);
   if (!actuator_) throw std::invalid_argument("actuator sink: no actuator");
   if (options_.timeout.count() < 0) throw std::invalid_argument("actuator sink: negative timeout");
   if (!options_.ranges.empty()) {
@@ -194,25 +195,18 @@ void ActuatorSinkTask::on_tick() {
             (r ? std::string("safe output applied") : "safe output refused: " + r.error()));
 }
 
-kernel::Status ActuatorSinkTask::on_parameter(std::string_view name, const os::ParamValue& value) {
+kernel::Status ActuatorSinkTask::on_parameter_changed(std::string_view name) {
   if (name == "warn_interval") {
-    options_.warn_interval = std::get<kernel::Duration>(value);
     fail_warning_.set_interval(options_.warn_interval);
     clamp_warning_.set_interval(options_.warn_interval);
     timeout_warning_.set_interval(options_.warn_interval);
-    return {};
-  }
-  if (name == "timeout") {
-    const auto t = std::get<kernel::Duration>(value);
-    if (t.count() < 0) return kernel::Error{"timeout must not be negative"};
+  } else if (name == "timeout") {
     // A new timeout counts from now, so changing it never stops the wheels at once.
-    options_.timeout = t;
     last_applied_ = now();
     timed_out_ = false;
     arm_watchdog();
-    return {};
   }
-  return os::Task::on_parameter(name, value);
+  return {};
 }
 
 }  // namespace symb::robot

@@ -35,8 +35,8 @@
 #include "symb/kernel/result.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 #include "symb/robot/channel_spec.hpp"
-#include "symb/robot/warning_limiter.hpp"
 
 namespace symb::robot {
 
@@ -116,7 +116,7 @@ class ActuatorSinkTask : public os::Task {
   void on_start() override;
   void on_message(const os::Message& m) override;
   void on_tick() override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   void arm_watchdog();
@@ -124,9 +124,9 @@ class ActuatorSinkTask : public os::Task {
   std::shared_ptr<Actuator> actuator_;
   Options options_;
   std::array<float, os::Payload::kInlineValues> narrowed_{};
-  WarningLimiter fail_warning_;
-  WarningLimiter clamp_warning_;
-  WarningLimiter timeout_warning_;
+  os::WarningLimiter fail_warning_;
+  os::WarningLimiter clamp_warning_;
+  os::WarningLimiter timeout_warning_;
   kernel::Time last_applied_{0};  // the watchdog's reference: start, last applied command
   bool timed_out_ = false;        // the safe output is on since the last expiry
   std::atomic<std::uint64_t> received_{0}, applied_{0}, failed_{0}, ignored_{0}, timeouts_{0};

@@ -27,6 +27,7 @@ ActuatorTask::ActuatorTask(std::shared_ptr<DifferentialDrive> drive, Options opt
       goal_warning_(options.warn_interval),
       odometry_warning_(options.warn_interval),
       drive_warning_(options.warn_interval) {
+  bind_parameters(options_);
   const auto bad = [](const std::string& why) { throw std::invalid_argument("actuator task: " + why); };
   if (!drive_) bad("no drive");
   if (!finite_positive(options_.max_speed)) bad("max_speed must be > 0");
@@ -79,7 +80,7 @@ void ActuatorTask::on_stop() {
   halt();
 }
 
-void ActuatorTask::warn(WarningLimiter& limiter, const std::string& text) {
+void ActuatorTask::warn(os::WarningLimiter& limiter, const std::string& text) {
   if (limiter.note(now()))
     log(os::LogLevel::kWarn,
         limiter.count() > 1 ? text + " (" + std::to_string(limiter.count()) + " since last report)" : text);
@@ -299,35 +300,13 @@ void ActuatorTask::on_tick() {
   wheels(left, right);
 }
 
-kernel::Status ActuatorTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  const auto real = [&](double& field, bool positive) -> kernel::Status {
-    const double v = std::get<double>(value);
-    if (positive ? !finite_positive(v) : !finite_non_negative(v))
-      return Error{std::string(name) + (positive ? " must be > 0" : " must be >= 0")};
-    field = v;
-    return {};
-  };
-  if (name == "max_speed") return real(options_.max_speed, true);
-  if (name == "kp_distance") return real(options_.kp_distance, false);
-  if (name == "kp_turn") return real(options_.kp_turn, false);
-  if (name == "kp_heading") return real(options_.kp_heading, false);
-  if (name == "distance_tolerance") return real(options_.distance_tolerance, true);
-  if (name == "angle_tolerance") return real(options_.angle_tolerance, true);
-  if (name == "wheel_base") return real(options_.wheel_base, true);
-  if (name == "odometry_timeout") {
-    const auto d = std::get<kernel::Duration>(value);
-    if (d.count() <= 0) return Error{"odometry_timeout must be > 0"};
-    options_.odometry_timeout = d;
-    return {};
-  }
+kernel::Status ActuatorTask::on_parameter_changed(std::string_view name) {
   if (name == "warn_interval") {
-    options_.warn_interval = std::get<kernel::Duration>(value);
     goal_warning_.set_interval(options_.warn_interval);
     odometry_warning_.set_interval(options_.warn_interval);
     drive_warning_.set_interval(options_.warn_interval);
-    return {};
   }
-  return os::Task::on_parameter(name, value);
+  return {};
 }
 
 }  // namespace symb::robot

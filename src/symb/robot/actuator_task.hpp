@@ -35,10 +35,10 @@
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 #include "symb/robot/differential_drive.hpp"
 #include "symb/robot/drive_goal.hpp"
 #include "symb/robot/ports.hpp"
-#include "symb/robot/warning_limiter.hpp"
 
 namespace symb::os {
 class Node;
@@ -98,7 +98,7 @@ class ActuatorTask : public os::Task {
   void on_message(const os::Message& m) override;
   void on_tick() override;
   void on_stop() override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   struct Pose {
@@ -119,7 +119,7 @@ class ActuatorTask : public os::Task {
   void wheels(double left, double right);
   void halt() { wheels(0, 0); }
   double speed_limit() const;
-  void warn(WarningLimiter& limiter, const std::string& text);
+  void warn(os::WarningLimiter& limiter, const std::string& text);
 
   std::shared_ptr<DifferentialDrive> drive_;
   Options options_;
@@ -131,9 +131,9 @@ class ActuatorTask : public os::Task {
   double left_dist_ = 0, right_dist_ = 0;
   bool have_wheels_ = false;
   kernel::Time last_odometry_{0};
-  WarningLimiter goal_warning_;
-  WarningLimiter odometry_warning_;
-  WarningLimiter drive_warning_;
+  os::WarningLimiter goal_warning_;
+  os::WarningLimiter odometry_warning_;
+  os::WarningLimiter drive_warning_;
   std::atomic<std::uint64_t> accepted_{0}, completed_{0}, aborted_{0}, rejected_{0}, timeouts_{0}, odometry_{0},
       odometry_rejected_{0}, drive_errors_{0};
   std::atomic<bool> busy_{false};

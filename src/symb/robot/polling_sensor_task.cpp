@@ -28,6 +28,7 @@ PollingSensorTask::PollingSensorTask(std::shared_ptr<PollingSensor> sensor, Opti
       fail_warning_(options_.warn_interval),
       reject_warning_(options_.warn_interval),
       clamp_warning_(options_.warn_interval) {
+  bind_parameters(options_);
   if (!sensor_) throw std::invalid_argument("polling sensor task: no sensor");
   if (!options_.ranges.empty()) {
     if (options_.ranges.size() != sensor_->channels().size())
@@ -97,15 +98,11 @@ void PollingSensorTask::on_tick() {
   sent_.fetch_add(1, std::memory_order_relaxed);
 }
 
-kernel::Status PollingSensorTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "warn_interval") {
-    options_.warn_interval = std::get<kernel::Duration>(value);
-    fail_warning_.set_interval(options_.warn_interval);
-    reject_warning_.set_interval(options_.warn_interval);
-    clamp_warning_.set_interval(options_.warn_interval);
-    return {};
-  }
-  return os::Task::on_parameter(name, value);
+kernel::Status PollingSensorTask::on_parameter_changed(std::string_view /*name: warn_interval*/) {
+  fail_warning_.set_interval(options_.warn_interval);
+  reject_warning_.set_interval(options_.warn_interval);
+  clamp_warning_.set_interval(options_.warn_interval);
+  return {};
 }
 
 }  // namespace symb::robot

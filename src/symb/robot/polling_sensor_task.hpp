@@ -29,8 +29,8 @@
 #include "symb/kernel/time.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 #include "symb/robot/channel_spec.hpp"
-#include "symb/robot/warning_limiter.hpp"
 
 namespace symb::robot {
 
@@ -84,7 +84,7 @@ class PollingSensorTask : public os::Task {
  protected:
   void on_start() override;
   void on_tick() override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   void failed(const std::string& why);
@@ -94,9 +94,9 @@ class PollingSensorTask : public os::Task {
   std::span<const ChannelSpec> specs_;  // options_.ranges or the driver's
   std::array<float, os::Payload::kInlineValues> raw_{};
   std::array<float, os::Payload::kInlineValues> out_{};
-  WarningLimiter fail_warning_;
-  WarningLimiter reject_warning_;
-  WarningLimiter clamp_warning_;
+  os::WarningLimiter fail_warning_;
+  os::WarningLimiter reject_warning_;
+  os::WarningLimiter clamp_warning_;
   std::atomic<std::uint64_t> ticks_{0}, sent_{0}, failed_{0}, rejected_{0}, clamped_{0}, consecutive_{0};
 };
 

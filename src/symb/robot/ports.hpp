@@ -6,6 +6,7 @@
 #pragma once
 
 #include "symb/os/ids.hpp"
+#include "symb/os/port_layout.hpp"
 
 namespace symb::robot {
 
@@ -17,5 +18,21 @@ inline constexpr os::Port kCommandPort = 1;
 inline constexpr os::Port kStatusPort = 2;
 // Internal: a device's "new data" notification, posted by a task to itself from outside any task.
 inline constexpr os::Port kWakePort = 0xfffe;
+
+// The message layouts task types declare on their ports (TaskType::inputs, outputs): a hook
+// whose ends disagree on a port is refused at hook time. os::kAnyLayout stands for a device's own
+// channels (a sensor task forwards whatever its device measures).
+namespace layout {
+// One number per sensor channel, as a sensor task sends it (7 for the Thymio's horizontal IR).
+inline constexpr os::PortLayout kSensorVector{"sensor-vector", "one number per sensor channel"};
+// [left, right] wheel speeds (Thymio units).
+inline constexpr os::PortLayout kWheelCommand{"wheel-command", "[left, right] wheel speeds"};
+// [x, y, heading] (cm or m, radians).
+inline constexpr os::PortLayout kPose{"pose", "[x, y, heading]"};
+// A motor schema's [vx, vy] vector.
+inline constexpr os::PortLayout kSchemaVector{"schema-vector", "[vx, vy]"};
+// [bit, 0 or 1]: sets or clears an external interrupt bit of an MDL2e program.
+inline constexpr os::PortLayout kExternalBit{"external-bit", "[bit, 0 or 1]"};
+}  // namespace layout
 
 }  // namespace symb::robot

@@ -1,157 +1,173 @@
 #include "symb/robot/robot_task_types.hpp"
 
-#include <stdexcept>
 #include <string>
 
 #include "symb/robot/actuator_task.hpp"
+#include "symb/robot/ports.hpp"
 
 namespace symb::robot {
 
 namespace {
 
 using namespace std::chrono_literals;
-using os::ParamSpec;
-using os::ParamType;
+using kernel::Error;
+using kernel::Result;
 
-// Lookups run inside TaskType::make, whose only way to explain a failure is an exception (the
-// node turns it into an error naming the type).
 template <class T>
-std::shared_ptr<T> find_device(const std::function<std::shared_ptr<T>(std::string_view)>& lookup,
-                               const std::string& name, const char* what, const char* param = "device") {
-  if (name.empty()) throw std::invalid_argument(std::string("name the ") + what + " to use: " + param + "=NAME");
-  if (!lookup) throw std::invalid_argument(std::string("this node has no ") + what + " devices");
+Result<std::shared_ptr<T>> find_device(const std::function<std::shared_ptr<T>(std::string_view)>& lookup,
+                                       const std::string& name, const char* what, const char* param = "device") {
+  if (name.empty()) return Error{std::string("name the ") + what + " to use: " + param + "=NAME"};
+  if (!lookup) return Error{std::string("this node has no ") + what + " devices"};
   auto d = lookup(name);
-  if (!d) throw std::invalid_argument(std::string("no ") + what + " named '" + name.substr(0, 63) + "'");
+  if (!d) return Error{std::string("no ") + what + " named '" + name.substr(0, 63) + "'"};
   return d;
 }
 
-std::vector<ChannelSpec> ranges_for(const std::vector<ChannelSpec>& channels, const std::string& text) {
-  if (text.empty()) return {};
+Result<std::vector<ChannelSpec>> ranges_for(const std::vector<ChannelSpec>& channels, const std::string& text) {
+  if (text.empty()) return std::vector<ChannelSpec>{};
   auto r = apply_ranges(channels, text);
-  if (!r) throw std::invalid_argument("ranges: " + r.error());
-  return std::move(r).value();
+  if (!r) return Error{"ranges: " + r.error()};
+  return r;
 }
 
-ParamSpec device_param(const char* doc) { return {"device", ParamType::kString, std::string(), 0.0, 63.0, doc}; }
-ParamSpec ranges_param() {
-  return {"ranges",
-          ParamType::kString,
-          std::string(),
-          0.0,
-          1024.0,
+// What the device-backed types share: the device's name and narrower ranges as text, on top of
+// the task's own options.
+template <class Options>
+struct DeviceParams : Options {
+  std::string device;
+  std::string ranges_text;
+};
+
+template <class Options>
+void add_device_params(os::ParamTable<DeviceParams<Options>>& p, const char* device_doc) {
+  using P = DeviceParams<Options>;
+  p.add("device", &P::device).range(0, 63).doc(device_doc);
+  p.add("ranges", &P::ranges_text)
+      .range(0, 1024)
+      .doc(
           "narrower channel ranges: lo:hi for all channels or lo:hi,lo:hi,... one per channel; empty: the "
-          "device's"};
+          "device's");
+  p.add("warn_interval", &P::warn_interval)
+      .range(0.0, 3600.0)
+      .doc("at most one warning of a kind per interval (counts say how many it stands for)")
+      .live();
 }
-ParamSpec warn_param() {
-  return {"warn_interval",
-          ParamType::kDuration,
-          kernel::Duration{1s},
-          0.0,
-          3600.0,
-          "at most one warning of a kind per interval (counts say how many it stands for)"};
+
+// The device and the ranges of `p` resolved into the task's options.
+template <class Device, class Options>
+Result<std::pair<std::shared_ptr<Device>, Options>> resolve_device(
+    const std::function<std::shared_ptr<Device>(std::string_view)>& lookup, const DeviceParams<Options>& p,
+    const char* what) {
+  auto dev = find_device(lookup, p.device, what);
+  if (!dev) return Error{dev.error()};
+  Options o = p;
+  auto ranges = ranges_for((*dev)->channels(), p.ranges_text);
+  if (!ranges) return Error{ranges.error()};
+  o.ranges = std::move(ranges).value();
+  return std::pair{std::move(dev).value(), std::move(o)};
 }
+
+struct DriveParams : ActuatorTask::Options {
+  std::string drive;
+};
 
 }  // namespace
 
 kernel::Status register_robot_task_types(os::TaskTypeRegistry& registry, RobotDevices devices) {
   auto shared = std::make_shared<const RobotDevices>(std::move(devices));
 
-  os::TaskType sensor;
-  sensor.name = "sensor";
-  sensor.doc = "forwards an active sensor's samples (one number per channel) to hooked tasks";
-  sensor.params = {device_param("the active sensor"), ranges_param(), warn_param()};
+  os::ParamTable<DeviceParams<SensorTask::Options>> sp;
+  add_device_params(sp, "the active sensor");
+  auto sensor = os::declare_task_type(
+      "sensor", "forwards an active sensor's samples (one number per channel) to hooked tasks", std::move(sp),
+      [shared](const DeviceParams<SensorTask::Options>& p) -> Result<std::unique_ptr<SensorTask>> {
+        auto r = resolve_device(shared->sensor, p, "sensor");
+        if (!r) return Error{r.error()};
+        return std::make_unique<SensorTask>(std::move(r.value().first), std::move(r.value().second));
+      });
   sensor.defaults.priority = 1;  // data first: tasks that act on it at the same instant see it
   sensor.defaults.queue_capacity = 4;
-  sensor.make = [shared](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    auto dev = find_device(shared->sensor, p.string("device"), "sensor");
-    SensorTask::Options o;
-    o.ranges = ranges_for(dev->channels(), p.string("ranges"));
-    o.warn_interval = p.duration("warn_interval");
-    return std::make_unique<SensorTask>(std::move(dev), std::move(o));
-  };
+  sensor.outputs = {{kDataPort, "samples", os::kAnyLayout}};
 
-  os::TaskType polling;
-  polling.name = "polling_sensor";
-  polling.doc = "polls a passive sensor at its period and sends each fresh sample to hooked tasks";
-  polling.params = {device_param("the polled sensor"), ranges_param(), warn_param()};
+  os::ParamTable<DeviceParams<PollingSensorTask::Options>> pp;
+  add_device_params(pp, "the polled sensor");
+  auto polling = os::declare_task_type(
+      "polling_sensor", "polls a passive sensor at its period and sends each fresh sample to hooked tasks",
+      std::move(pp),
+      [shared](const DeviceParams<PollingSensorTask::Options>& p) -> Result<std::unique_ptr<PollingSensorTask>> {
+        auto r = resolve_device(shared->polling_sensor, p, "polling sensor");
+        if (!r) return Error{r.error()};
+        return std::make_unique<PollingSensorTask>(std::move(r.value().first), std::move(r.value().second));
+      });
   polling.defaults.period = 30ms;  // the paper's IR rate, 33.33 Hz
   polling.defaults.priority = 1;
   polling.defaults.queue_capacity = 4;
-  polling.make = [shared](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    auto dev = find_device(shared->polling_sensor, p.string("device"), "polling sensor");
-    PollingSensorTask::Options o;
-    o.ranges = ranges_for(dev->channels(), p.string("ranges"));
-    o.warn_interval = p.duration("warn_interval");
-    return std::make_unique<PollingSensorTask>(std::move(dev), std::move(o));
-  };
+  polling.outputs = {{kDataPort, "samples", os::kAnyLayout}};
 
-  os::TaskType sink;
-  sink.name = "actuator_sink";
-  sink.doc = "applies every message it receives (one number per channel) to an actuator at once";
-  sink.params = {device_param("the actuator"),
-                 ranges_param(),
-                 warn_param(),
-                 {"timeout", ParamType::kDuration, kernel::Duration{0}, 0.0, 3600.0,
-                  "watchdog: apply the safe output (closest to 0) when no command came for this long; 0: off"}};
+  using SinkParams = DeviceParams<ActuatorSinkTask::Options>;
+  os::ParamTable<SinkParams> kp;
+  add_device_params(kp, "the actuator");
+  kp.add("timeout", &SinkParams::timeout)
+      .range(0.0, 3600.0)
+      .doc("watchdog: apply the safe output (closest to 0) when no command came for this long; 0: off")
+      .live();
+  auto sink = os::declare_task_type(
+      "actuator_sink", "applies every message it receives (one number per channel) to an actuator at once",
+      std::move(kp), [shared](const SinkParams& p) -> Result<std::unique_ptr<ActuatorSinkTask>> {
+        auto r = resolve_device(shared->actuator, p, "actuator");
+        if (!r) return Error{r.error()};
+        return std::make_unique<ActuatorSinkTask>(std::move(r.value().first), std::move(r.value().second));
+      });
   sink.defaults.queue_capacity = 8;
   // No period by default: a sink with a watchdog gives itself one (ActuatorSinkTask::arm_watchdog).
-  sink.make = [shared](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    auto dev = find_device(shared->actuator, p.string("device"), "actuator");
-    ActuatorSinkTask::Options o;
-    o.ranges = ranges_for(dev->channels(), p.string("ranges"));
-    o.warn_interval = p.duration("warn_interval");
-    o.timeout = p.duration("timeout");
-    return std::make_unique<ActuatorSinkTask>(std::move(dev), std::move(o));
-  };
+  sink.inputs = {{kDataPort, "command", os::kAnyLayout}};
 
-  const ActuatorTask::Options d;
-  os::TaskType drive;
-  drive.name = "actuator_task";
-  drive.doc = "drives a differential-drive base towards goals (drive, turn, hold speed) using hooked odometry";
-  drive.params = {
-      {"drive", ParamType::kString, std::string(), 0.0, 63.0, "the differential drive"},
-      {"max_speed", ParamType::kReal, d.max_speed, 0.001, 100.0,
-       "wheel speed limit, m/s (the drive's own applies too)"},
-      {"kp_distance", ParamType::kReal, d.kp_distance, 0.0, 1000.0, "forward speed per metre to go, 1/s"},
-      {"kp_turn", ParamType::kReal, d.kp_turn, 0.0, 1000.0, "turn rate per radian to turn, 1/s"},
-      {"kp_heading", ParamType::kReal, d.kp_heading, 0.0, 1000.0, "turn rate per radian off heading when driving, 1/s"},
-      {"distance_tolerance", ParamType::kReal, d.distance_tolerance, 1e-6, 10.0, "a drive goal is reached within, m"},
-      {"angle_tolerance", ParamType::kReal, d.angle_tolerance, 1e-6, 1.0, "a turn goal is reached within, rad"},
-      {"odometry_timeout", ParamType::kDuration, d.odometry_timeout, 0.001, 3600.0,
-       "a goal is aborted and the wheels stopped when odometry is silent this long"},
-      {"odometry", ParamType::kString, std::string("pose"), 1.0, 16.0,
-       "pose: [x, y, theta]; wheels: cumulative wheel distances [left, right]"},
-      {"wheel_base", ParamType::kReal, d.wheel_base, 0.001, 100.0, "distance between the wheels, m"},
-      {"odometry_port", ParamType::kInt, std::int64_t{d.odometry_port}, 0.0, 65535.0, "port odometry arrives on"},
-      {"command_port", ParamType::kInt, std::int64_t{d.command_port}, 0.0, 65535.0, "port goals arrive on"},
-      warn_param(),
-  };
+  os::ParamTable<DriveParams> dp;
+  dp.add("drive", &DriveParams::drive).range(0, 63).doc("the differential drive");
+  dp.add("max_speed", &DriveParams::max_speed)
+      .range(0.001, 100.0)
+      .doc("wheel speed limit, m/s (the drive's own applies too)")
+      .live();
+  dp.add("kp_distance", &DriveParams::kp_distance).range(0.0, 1000.0).doc("forward speed per metre to go, 1/s").live();
+  dp.add("kp_turn", &DriveParams::kp_turn).range(0.0, 1000.0).doc("turn rate per radian to turn, 1/s").live();
+  dp.add("kp_heading", &DriveParams::kp_heading)
+      .range(0.0, 1000.0)
+      .doc("turn rate per radian off heading when driving, 1/s")
+      .live();
+  dp.add("distance_tolerance", &DriveParams::distance_tolerance)
+      .range(1e-6, 10.0)
+      .doc("a drive goal is reached within, m")
+      .live();
+  dp.add("angle_tolerance", &DriveParams::angle_tolerance)
+      .range(1e-6, 1.0)
+      .doc("a turn goal is reached within, rad")
+      .live();
+  dp.add("odometry_timeout", &DriveParams::odometry_timeout)
+      .range(0.001, 3600.0)
+      .doc("a goal is aborted and the wheels stopped when odometry is silent this long")
+      .live();
+  dp.add("odometry", &DriveParams::odometry,
+         os::choice<OdometryFormat>("odometry",
+                                    {{"pose", OdometryFormat::kPose}, {"wheels", OdometryFormat::kWheelDistances}}))
+      .range(1.0, 16.0)
+      .doc("pose: [x, y, theta]; wheels: cumulative wheel distances [left, right]");
+  dp.add("wheel_base", &DriveParams::wheel_base).range(0.001, 100.0).doc("distance between the wheels, m").live();
+  dp.add("odometry_port", &DriveParams::odometry_port).range(0.0, 65535.0).doc("port odometry arrives on");
+  dp.add("command_port", &DriveParams::command_port).range(0.0, 65535.0).doc("port goals arrive on");
+  dp.add("warn_interval", &DriveParams::warn_interval)
+      .range(0.0, 3600.0)
+      .doc("at most one warning of a kind per interval (counts say how many it stands for)")
+      .live();
+  auto drive = os::declare_task_type(
+      "actuator_task", "drives a differential-drive base towards goals (drive, turn, hold speed) using hooked odometry",
+      std::move(dp), [shared](const DriveParams& p) -> Result<std::unique_ptr<ActuatorTask>> {
+        auto dev = find_device(shared->drive, p.drive, "drive", "drive");
+        if (!dev) return Error{dev.error()};
+        return std::make_unique<ActuatorTask>(std::move(dev).value(), p);
+      });
   drive.defaults.period = 20ms;
   drive.defaults.priority = 0;
   drive.defaults.queue_capacity = 16;
-  drive.make = [shared](const os::ParamSet& p) -> std::unique_ptr<os::Task> {
-    auto dev = find_device(shared->drive, p.string("drive"), "drive", "drive");
-    ActuatorTask::Options o;
-    o.max_speed = p.real("max_speed");
-    o.kp_distance = p.real("kp_distance");
-    o.kp_turn = p.real("kp_turn");
-    o.kp_heading = p.real("kp_heading");
-    o.distance_tolerance = p.real("distance_tolerance");
-    o.angle_tolerance = p.real("angle_tolerance");
-    o.odometry_timeout = p.duration("odometry_timeout");
-    const std::string& format = p.string("odometry");
-    if (format == "pose")
-      o.odometry = OdometryFormat::kPose;
-    else if (format == "wheels")
-      o.odometry = OdometryFormat::kWheelDistances;
-    else
-      throw std::invalid_argument("odometry must be 'pose' or 'wheels', not '" + format + "'");
-    o.wheel_base = p.real("wheel_base");
-    o.odometry_port = static_cast<os::Port>(p.integer("odometry_port"));
-    o.command_port = static_cast<os::Port>(p.integer("command_port"));
-    o.warn_interval = p.duration("warn_interval");
-    return std::make_unique<ActuatorTask>(std::move(dev), o);
-  };
 
   for (auto* t : {&sensor, &polling, &sink, &drive})
     if (auto st = registry.add(std::move(*t)); !st) return st;

@@ -150,6 +150,7 @@ SensorTask::SensorTask(std::shared_ptr<Sensor> sensor, Options options)
       clamp_warning_(options_.warn_interval),
       reject_warning_(options_.warn_interval),
       overwrite_warning_(options_.warn_interval) {
+  bind_parameters(options_);
   if (!sensor_) throw std::invalid_argument("sensor task: no sensor");
   if (!options_.ranges.empty()) {
     if (options_.ranges.size() != sensor_->channels().size())
@@ -256,15 +257,11 @@ void SensorTask::report(const SensorStats& st) {
                                  "' lost: the mailbox was full before this task ran");
 }
 
-kernel::Status SensorTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "warn_interval") {
-    options_.warn_interval = std::get<kernel::Duration>(value);
-    clamp_warning_.set_interval(options_.warn_interval);
-    reject_warning_.set_interval(options_.warn_interval);
-    overwrite_warning_.set_interval(options_.warn_interval);
-    return {};
-  }
-  return os::Task::on_parameter(name, value);
+kernel::Status SensorTask::on_parameter_changed(std::string_view /*name: warn_interval*/) {
+  clamp_warning_.set_interval(options_.warn_interval);
+  reject_warning_.set_interval(options_.warn_interval);
+  overwrite_warning_.set_interval(options_.warn_interval);
+  return {};
 }
 
 }  // namespace symb::robot

@@ -43,8 +43,8 @@
 #include "symb/kernel/time.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/task.hpp"
+#include "symb/os/warning_limiter.hpp"
 #include "symb/robot/channel_spec.hpp"
-#include "symb/robot/warning_limiter.hpp"
 
 namespace symb::robot {
 
@@ -170,7 +170,7 @@ class SensorTask : public os::Task {
   void on_start() override;
   void on_message(const os::Message& m) override;
   void on_stop() override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
+  kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
   struct Link;
@@ -183,9 +183,9 @@ class SensorTask : public os::Task {
   bool attached_ = false;
   std::vector<SensorSample> batch_;
   SensorStats seen_;  // the sensor's counters at the last report
-  WarningLimiter clamp_warning_;
-  WarningLimiter reject_warning_;
-  WarningLimiter overwrite_warning_;
+  os::WarningLimiter clamp_warning_;
+  os::WarningLimiter reject_warning_;
+  os::WarningLimiter overwrite_warning_;
   std::atomic<std::uint64_t> forwarded_{0};
   std::atomic<std::uint64_t> clamped_{0};
   std::atomic<std::uint64_t> rejected_{0};

@@ -213,27 +213,21 @@ kernel::Result<ShellSession> attach_shell(os::Node& node, std::shared_ptr<io::IO
 }
 
 kernel::Status register_shell_types(os::TaskTypeRegistry& registry, std::shared_ptr<const DeviceTable> devices) {
-  os::TaskType type;
-  type.name = "shell";
-  type.doc = "command shell; hook a raw stream task to it and it to the stream task";
-  type.params = {
-      {"terminal", os::ParamType::kBool, false, std::nullopt, std::nullopt, "echo and line editing for a person"},
-      {"prompt", os::ParamType::kString, std::string("symb> "), std::nullopt, 64.0, "prompt in terminal mode"},
-      {"token", os::ParamType::kString, std::string(), std::nullopt, 256.0, "first line must be this (empty: none)"},
-      {"close_on_exit", os::ParamType::kBool, false, std::nullopt, std::nullopt,
-       "exit deletes the shell and its stream task"},
-  };
+  os::ParamTable<ShellOptions> p;
+  p.add("terminal", &ShellOptions::terminal).doc("echo and line editing for a person");
+  p.add("prompt", &ShellOptions::prompt).at_most(64.0).doc("prompt in terminal mode");
+  p.add("token", &ShellOptions::token).at_most(256.0).doc("first line must be this (empty: none)");
+  p.add("close_on_exit", &ShellOptions::close_on_exit)
+      .default_value(false)
+      .doc("exit deletes the shell and its stream task");
+  auto type = os::declare_task_type("shell", "command shell; hook a raw stream task to it and it to the stream task",
+                                    std::move(p), [devices](const ShellOptions& c) {
+                                      ShellOptions o = c;
+                                      o.devices = devices;
+                                      return std::make_unique<CommandShellTask>(std::move(o));
+                                    });
   type.defaults.period = CommandShellTask::kTick;
   type.defaults.queue_capacity = kShellQueue;
-  type.make = [devices](const os::ParamSet& p) {
-    ShellOptions o;
-    o.terminal = p.boolean("terminal");
-    o.prompt = p.string("prompt");
-    o.token = p.string("token");
-    o.close_on_exit = p.boolean("close_on_exit");
-    o.devices = devices;
-    return std::make_unique<CommandShellTask>(std::move(o));
-  };
   return registry.add(std::move(type));
 }
 

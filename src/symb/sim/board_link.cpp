@@ -7,9 +7,9 @@
 
 #include "symb/io/bytes.hpp"
 #include "symb/io/stream_task.hpp"
+#include "symb/os/warning_limiter.hpp"
 #include "symb/robot/channel_spec.hpp"
 #include "symb/robot/ports.hpp"
-#include "symb/robot/warning_limiter.hpp"
 #include "symb/sim/hil_protocol.hpp"
 #include "symb/sim/scenario.hpp"
 #include "symb/sim/sim_drivers.hpp"
@@ -70,7 +70,7 @@ class HilLinkTask final : public io::StreamTask {
   }
 
   std::shared_ptr<LinkShared> shared_;
-  robot::WarningLimiter bad_warning_;
+  os::WarningLimiter bad_warning_;
   std::uint64_t reported_bad_ = 0;
 };
 
@@ -162,8 +162,8 @@ class HilIrTask final : public os::Task {
   std::shared_ptr<LinkShared> shared_;
   const std::vector<robot::ChannelSpec> channels_;
   const kernel::Duration lost_after_;
-  robot::WarningLimiter malformed_warning_;
-  robot::WarningLimiter order_warning_;
+  os::WarningLimiter malformed_warning_;
+  os::WarningLimiter order_warning_;
   kernel::Time last_frame_{0};
   std::uint32_t last_seq_ = 0;
   bool have_seq_ = false;
@@ -238,9 +238,9 @@ class HilWheelsTask final : public os::Task {
   std::shared_ptr<LinkShared> shared_;
   const std::vector<robot::ChannelSpec> channels_;
   const kernel::Duration timeout_;
-  robot::WarningLimiter reject_warning_;
-  robot::WarningLimiter clamp_warning_;
-  robot::WarningLimiter timeout_warning_;
+  os::WarningLimiter reject_warning_;
+  os::WarningLimiter clamp_warning_;
+  os::WarningLimiter timeout_warning_;
   kernel::Time last_command_{0};
   bool timed_out_ = false;
 };

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
-#include <stdexcept>
 
 #include "symb/apps/swarm/layouts.hpp"
 
@@ -22,40 +21,36 @@ double wrap_angle(double a) {
 }  // namespace
 
 os::TaskType KinematicsTask::type() {
-  os::TaskType t;
-  t.name = "kinematics";
-  t.doc = "differential-drive body in a square walled arena: integrates wheel speeds, sends the pose";
-  t.params = {
-      {"arena", os::ParamType::kReal, 4.0, 0.1, 1000.0, "side of the square arena, m"},
-      {"radius", os::ParamType::kReal, 0.05, 0.001, 10.0, "body radius, m"},
-      {"wheel_base", os::ParamType::kReal, 0.1, 0.01, 10.0, "distance between the wheels, m"},
-      {"max_wheel_speed", os::ParamType::kReal, 0.5, 0.0, 10.0, "wheel speed limit, m/s"},
-      {"command_timeout", os::ParamType::kDuration, kernel::Duration{std::chrono::milliseconds(200)}, 0.001, 3600.0,
-       "the wheels stop when no command came for this long"},
-  };
+  using P = KinematicsParams;
+  os::ParamTable<P> p;
+  p.add("arena", &P::arena).range(0.1, 1000.0).doc("side of the square arena, m");
+  p.add("radius", &P::radius).range(0.001, 10.0).doc("body radius, m");
+  p.add("wheel_base", &P::wheel_base).range(0.01, 10.0).doc("distance between the wheels, m");
+  p.add("max_wheel_speed", &P::max_wheel_speed).range(0.0, 10.0).doc("wheel speed limit, m/s");
+  p.add("command_timeout", &P::command_timeout)
+      .range(0.001, 3600.0)
+      .doc("the wheels stop when no command came for this long");
+  auto t = os::declare_task_type(
+      "kinematics", "differential-drive body in a square walled arena: integrates wheel speeds, sends the pose",
+      std::move(p), [](const P& c) -> kernel::Result<std::unique_ptr<KinematicsTask>> {
+        if (2 * c.radius >= c.arena)
+          return kernel::Error{"a body of radius " + std::to_string(c.radius) + " m does not fit an arena of " +
+                               std::to_string(c.arena) + " m"};
+        return std::make_unique<KinematicsTask>(c);
+      });
   t.defaults.period = std::chrono::milliseconds(10);
   t.defaults.priority = 2;  // the world moves before anyone senses it at the same instant
   t.defaults.queue_capacity = 4;
-  t.make = [](const os::ParamSet& p) { return std::make_unique<KinematicsTask>(p); };
   return t;
 }
 
-KinematicsTask::KinematicsTask(const os::ParamSet& p)
-    : arena_(p.real("arena")),
-      radius_(p.real("radius")),
-      wheel_base_(p.real("wheel_base")),
-      max_wheel_speed_(p.real("max_wheel_speed")),
-      command_timeout_(p.duration("command_timeout")) {
-  if (2 * radius_ >= arena_)
-    throw std::invalid_argument("a body of radius " + std::to_string(radius_) + " m does not fit an arena of " +
-                                std::to_string(arena_) + " m");
-}
+KinematicsTask::KinematicsTask(const KinematicsParams& params) : p_(params) {}
 
 void KinematicsTask::on_start() {
   // Where the robot is put down is part of the node's seeded randomness, so a run is repeatable.
   auto& rng = random();
-  x_ = rng.uniform(radius_, arena_ - radius_);
-  y_ = rng.uniform(radius_, arena_ - radius_);
+  x_ = rng.uniform(p_.radius, p_.arena - p_.radius);
+  y_ = rng.uniform(p_.radius, p_.arena - p_.radius);
   heading_ = rng.uniform(-kPi, kPi);
   last_step_ = now();
   char text[96];
@@ -67,8 +62,8 @@ void KinematicsTask::on_start() {
 void KinematicsTask::on_message(const os::Message& m) {
   const auto v = m.numbers();
   if (v.size() < WheelLayout::kCount) return;  // not a wheel command: someone hooked us to something else
-  left_ = std::clamp(static_cast<double>(v[WheelLayout::kLeft]), -max_wheel_speed_, max_wheel_speed_);
-  right_ = std::clamp(static_cast<double>(v[WheelLayout::kRight]), -max_wheel_speed_, max_wheel_speed_);
+  left_ = std::clamp(static_cast<double>(v[WheelLayout::kLeft]), -p_.max_wheel_speed, p_.max_wheel_speed);
+  right_ = std::clamp(static_cast<double>(v[WheelLayout::kRight]), -p_.max_wheel_speed, p_.max_wheel_speed);
   last_command_ = now();
   if (stopped_by_timeout_) {
     stopped_by_timeout_ = false;
@@ -82,20 +77,20 @@ void KinematicsTask::on_tick() {
   // that jitters; a long stall (a debugger, a loaded machine) is not turned into a teleport.
   const double dt = std::min(kernel::to_seconds(t - last_step_), 0.1);
   last_step_ = t;
-  if (!stopped_by_timeout_ && t - last_command_ > command_timeout_) {
+  if (!stopped_by_timeout_ && t - last_command_ > p_.command_timeout) {
     // A controller that died or was suspended must not leave the robot driving blind.
     stopped_by_timeout_ = true;
     left_ = right_ = 0;
     log(os::LogLevel::kWarn, "no wheel command for too long: stopped");
   }
   speed_ = (left_ + right_) / 2;
-  turn_rate_ = (right_ - left_) / wheel_base_;
+  turn_rate_ = (right_ - left_) / p_.wheel_base;
   // Midpoint heading: second-order accurate for a constant turn rate, at no extra cost.
   const double mid = heading_ + turn_rate_ * dt / 2;
   double x = x_ + speed_ * std::cos(mid) * dt;
   double y = y_ + speed_ * std::sin(mid) * dt;
   heading_ = wrap_angle(heading_ + turn_rate_ * dt);
-  const double lo = radius_, hi = arena_ - radius_;
+  const double lo = p_.radius, hi = p_.arena - p_.radius;
   const char* wall = x < lo ? "west" : x > hi ? "east" : y < lo ? "south" : y > hi ? "north" : nullptr;
   x_ = std::clamp(x, lo, hi);
   y_ = std::clamp(y, lo, hi);

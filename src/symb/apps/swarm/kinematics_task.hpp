@@ -9,11 +9,18 @@
 
 namespace symb::apps::swarm {
 
+struct KinematicsParams {
+  double arena = 4.0;            // side of the square arena, m
+  double radius = 0.05;          // body radius, m
+  double wheel_base = 0.1;       // m
+  double max_wheel_speed = 0.5;  // m/s
+  kernel::Duration command_timeout = std::chrono::milliseconds(200);
+};
+
 class KinematicsTask final : public os::Task {
  public:
-  // Throws std::invalid_argument when the body does not fit the arena (Node::create turns that
-  // into an error naming the type).
-  explicit KinematicsTask(const os::ParamSet& params);
+  // The body must fit the arena (the type's factory checks it).
+  explicit KinematicsTask(const KinematicsParams& params);
 
   // The registry entry: parameters arena, radius, wheel_base, max_wheel_speed, command_timeout;
   // period 10 ms.
@@ -28,11 +35,7 @@ class KinematicsTask final : public os::Task {
   void send_pose();
   void note_contact(bool contact, const char* wall);
 
-  const double arena_;
-  const double radius_;
-  const double wheel_base_;
-  const double max_wheel_speed_;
-  const kernel::Duration command_timeout_;
+  const KinematicsParams p_;
 
   double x_ = 0, y_ = 0, heading_ = 0;
   double left_ = 0, right_ = 0;  // commanded wheel speeds, m/s

@@ -10,33 +10,18 @@
 namespace symb::apps::swarm {
 
 os::TaskType ProximityTask::type() {
-  os::TaskType t;
-  t.name = "proximity";
-  t.doc = "four-ray range sensor (front, left, back, right) against the walls of a square arena";
-  t.params = {
-      {"arena", os::ParamType::kReal, 4.0, 0.1, 1000.0, "side of the square arena, m"},
-      {"range", os::ParamType::kReal, 0.5, 0.01, 100.0, "farthest distance sensed, m"},
-      {"noise", os::ParamType::kReal, 0.005, 0.0, 1.0, "standard deviation of the reading, m"},
-  };
+  os::ParamTable<ProximityParams> p;
+  p.add("arena", &ProximityParams::arena).range(0.1, 1000.0).doc("side of the square arena, m");
+  p.add("range", &ProximityParams::range).range(0.01, 100.0).doc("farthest distance sensed, m").live();
+  p.add("noise", &ProximityParams::noise).range(0.0, 1.0).doc("standard deviation of the reading, m").live();
+  auto t = os::declare_task_type(
+      "proximity", "four-ray range sensor (front, left, back, right) against the walls of a square arena", std::move(p),
+      [](const ProximityParams& c) { return std::make_unique<ProximityTask>(c); });
   t.defaults.period = std::chrono::milliseconds(30);
   t.defaults.priority = 1;
   // Only the newest pose matters to a sensor.
   t.defaults.queue_capacity = 2;
-  t.make = [](const os::ParamSet& p) { return std::make_unique<ProximityTask>(p); };
   return t;
-}
-
-ProximityTask::ProximityTask(const os::ParamSet& p)
-    : arena_(p.real("arena")), range_(p.real("range")), noise_(p.real("noise")) {}
-
-kernel::Status ProximityTask::on_parameter(std::string_view name, const os::ParamValue& value) {
-  if (name == "range")
-    range_ = std::get<double>(value);
-  else if (name == "noise")
-    noise_ = std::get<double>(value);
-  else
-    return os::Task::on_parameter(name, value);
-  return {};
 }
 
 void ProximityTask::on_message(const os::Message& m) {
@@ -52,9 +37,9 @@ double ProximityTask::ray(double angle) const {
   // Distance from (x, y) along `angle` to the first wall of [0, arena]^2.
   const double c = std::cos(angle), s = std::sin(angle);
   double d = std::numeric_limits<double>::infinity();
-  if (c > 1e-12) d = std::min(d, (arena_ - x_) / c);
+  if (c > 1e-12) d = std::min(d, (p_.arena - x_) / c);
   if (c < -1e-12) d = std::min(d, -x_ / c);
-  if (s > 1e-12) d = std::min(d, (arena_ - y_) / s);
+  if (s > 1e-12) d = std::min(d, (p_.arena - y_) / s);
   if (s < -1e-12) d = std::min(d, -y_ / s);
   return std::max(d, 0.0);
 }
@@ -68,10 +53,10 @@ void ProximityTask::on_tick() {
   auto& rng = random();
   for (int k = 0; k < 4; ++k) {
     double d = ray(heading_ + k * kQuarter);
-    if (noise_ > 0) d += noise_ * rng.normal();
-    out[slots[k]] = static_cast<float>(std::clamp(d, 0.0, range_));
+    if (p_.noise > 0) d += p_.noise * rng.normal();
+    out[slots[k]] = static_cast<float>(std::clamp(d, 0.0, p_.range));
   }
-  out[ProximityLayout::kRange] = static_cast<float>(range_);
+  out[ProximityLayout::kRange] = static_cast<float>(p_.range);
   send(ProximityLayout::kPort, std::span<const float>(out));
 }
 

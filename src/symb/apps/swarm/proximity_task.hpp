@@ -10,9 +10,15 @@
 
 namespace symb::apps::swarm {
 
+struct ProximityParams {
+  double arena = 4.0;    // side of the square arena, m
+  double range = 0.5;    // farthest distance sensed, m
+  double noise = 0.005;  // standard deviation of the reading, m
+};
+
 class ProximityTask final : public os::Task {
  public:
-  explicit ProximityTask(const os::ParamSet& params);
+  explicit ProximityTask(const ProximityParams& params) : p_(params) { bind_parameters(p_); }
 
   // The registry entry: parameters arena, range, noise; period 30 ms (the paper's 33 Hz IR).
   static os::TaskType type();
@@ -20,14 +26,11 @@ class ProximityTask final : public os::Task {
  protected:
   void on_message(const os::Message& message) override;
   void on_tick() override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
   double ray(double angle) const;
 
-  const double arena_;
-  double range_;
-  double noise_;
+  ProximityParams p_;  // range and noise change at runtime
   bool have_pose_ = false;
   double x_ = 0, y_ = 0, heading_ = 0;
 };

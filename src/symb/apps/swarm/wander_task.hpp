@@ -9,9 +9,16 @@
 
 namespace symb::apps::swarm {
 
+struct WanderParams {
+  double speed = 0.25;      // cruising speed, m/s
+  double turn_noise = 2.0;  // standard deviation of the random turn, rad/s
+  double avoid_gain = 6.0;  // turn rate for an obstacle at zero distance, rad/s
+  double wheel_base = 0.1;  // m
+};
+
 class WanderTask final : public os::Task {
  public:
-  explicit WanderTask(const os::ParamSet& params);
+  explicit WanderTask(const WanderParams& params) : p_(params) { bind_parameters(p_); }
 
   // The registry entry: parameters speed, turn_noise, avoid_gain, wheel_base; event-driven (no
   // period).
@@ -19,13 +26,9 @@ class WanderTask final : public os::Task {
 
  protected:
   void on_message(const os::Message& message) override;
-  kernel::Status on_parameter(std::string_view name, const os::ParamValue& value) override;
 
  private:
-  double speed_;
-  double turn_noise_;
-  double avoid_gain_;
-  const double wheel_base_;
+  WanderParams p_;  // speed, turn_noise and avoid_gain change at runtime
   bool avoiding_ = false;
 };
 
