@@ -1,0 +1,123 @@
+// `symb run` as a person runs it, through the binary as a child process: Ctrl-C in the middle of a
+// run writes what was run (whole CSV rows, the summary saying where it stopped, the pictures), and
+// a command shell on stdio fed from a pipe runs every line it was given.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+const std::string kMaze = std::string(SYMB_SCENARIO_DIR) + "/maze.yaml";
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("symb_run_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(p);
+  return p;
+}
+
+std::size_t count(const std::string& text, char c) {
+  std::size_t n = 0;
+  for (char x : text) n += x == c ? 1 : 0;
+  return n;
+}
+
+TEST(RunCommand, CtrlCWritesWhatWasRun) {
+  const fs::path out = scratch("interrupt");
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    // Paced, so that there is a middle to interrupt: 10 min simulated would take 12 s.
+    ::execl(SYMB_BINARY, SYMB_BINARY, "run", kMaze.c_str(), "--out", out.c_str(), "--duration", "10min", "--speed",
+            "50", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Interrupt once a few hundred rows are on disk (what is asserted below: rows were written).
+  const auto deadline = std::chrono::steady_clock::now() + 30s;
+  while (count(read(out / "steps.csv"), '\n') < 300 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(10ms);
+  ASSERT_GE(count(read(out / "steps.csv"), '\n'), 300u);
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "the run died of its signal instead of stopping";
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+
+  const std::string summary = read(out / "summary.txt");
+  EXPECT_NE(summary.find("interrupted: at "), std::string::npos) << summary;
+  EXPECT_NE(summary.find(" s of 600.00 s"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("trajectory hash: "), std::string::npos);
+  EXPECT_NE(read(out / "trajectory.svg").find("</svg>"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "syslog.txt"));
+  EXPECT_TRUE(fs::exists(out / "probes.csv"));
+
+  // Every row whole: the same number of fields as the header, and the file ends with a newline.
+  const std::string csv = read(out / "steps.csv");
+  ASSERT_FALSE(csv.empty());
+  EXPECT_EQ(csv.back(), '\n');
+  std::istringstream rows(csv);
+  std::string header, row;
+  std::getline(rows, header);
+  const std::size_t fields = count(header, ',');
+  std::size_t n = 0;
+  while (std::getline(rows, row)) {
+    ASSERT_EQ(count(row, ','), fields) << "row " << n + 2 << ": " << row;
+    ++n;
+  }
+  EXPECT_GE(n, 299u);
+  fs::remove_all(out);
+}
+
+// A script piped into a stdio shell: every line runs (the last one has no newline), the replies
+// come out on stdout, the end of input is reported, and the run goes on to its end.
+TEST(RunCommand, StdioShellFromAPipeRunsEveryLine) {
+  const fs::path out = scratch("stdio");
+  fs::create_directories(out);
+  const fs::path script = out / "script.symb";
+  {
+    std::ofstream s(script, std::ios::binary);
+    s << "tasks\nsuspend controller\ntime";
+  }
+  const std::string bin = SYMB_BINARY;
+  const std::string command = "'" + bin + "' run '" + kMaze + "' --shell stdio --duration 3s --speed 10 --out '" +
+                              (out / "run").string() + "' < '" + script.string() + "' > '" +
+                              (out / "stdout.txt").string() + "' 2> '" + (out / "stderr.txt").string() + "'";
+  const int status = std::system(command.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << read(out / "stderr.txt");
+  const std::string replies = read(out / "stdout.txt");
+  EXPECT_NE(replies.find("controller"), std::string::npos) << replies;  // `tasks`
+  EXPECT_NE(replies.find("suspended"), std::string::npos) << replies;   // `suspend controller`
+  EXPECT_NE(replies.find("TIME"), std::string::npos) << replies;        // `time`, without its newline
+  EXPECT_NE(read(out / "stderr.txt").find("shell: the session ended"), std::string::npos) << read(out / "stderr.txt");
+  EXPECT_NE(read(out / "run" / "syslog.txt").find("end of input: the session ends"), std::string::npos);
+  // The run went on to its end after the input ended.
+  EXPECT_NE(read(out / "run" / "summary.txt").find("simulated: 3.00 s"), std::string::npos)
+      << read(out / "run" / "summary.txt");
+  fs::remove_all(out);
+}
+
+}  // namespace
