@@ -218,13 +218,18 @@ TEST(ShellSession, OverTcpWithAToken) {
   ASSERT_TRUE(conn) << conn.error();
   Peer script(std::shared_ptr<io::IOStream>(std::move(conn).value()), false);
   script.type("open-sesame\n");
-  ASSERT_TRUE(eventually([&] { return b.node->find("shell1") && b.node->find("shell1.io"); }));
-  const auto shell = *b.node->find("shell1");
-  const auto io = *b.node->find("shell1.io");
-  std::size_t both_ways = 0;
-  for (const auto& h : b.node->hooks())
-    both_ways += (h.sender == shell && h.receiver == io) || (h.sender == io && h.receiver == shell);
-  EXPECT_EQ(both_ways, 2u);
+  // The session's tasks exist before their hooks are made (attach_shell creates, hooks, then
+  // starts them): wait for the hooks themselves, not for the tasks.
+  const auto hooked_both_ways = [&] {
+    const auto shell = b.node->find("shell1");
+    const auto io = b.node->find("shell1.io");
+    if (!shell || !io) return false;
+    std::size_t both_ways = 0;
+    for (const auto& h : b.node->hooks())
+      both_ways += (h.sender == *shell && h.receiver == *io) || (h.sender == *io && h.receiver == *shell);
+    return both_ways == 2;
+  };
+  ASSERT_TRUE(eventually(hooked_both_ways));
 
   run_scenario(*b.node, script);
 
