@@ -16,6 +16,9 @@
 
 #include <gtest/gtest.h>
 
+#include "symb/apps/run/scenario_run.hpp"
+#include "symb/sim/scenario.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -118,6 +121,59 @@ TEST(RunCommand, StdioShellFromAPipeRunsEveryLine) {
   EXPECT_NE(read(out / "run" / "summary.txt").find("simulated: 3.00 s"), std::string::npos)
       << read(out / "run" / "summary.txt");
   fs::remove_all(out);
+}
+
+// One limit for a run's length: a scenario's `duration` and `symb run --duration` both stop at
+// sim::kMaxRunDuration (168 h), and both take it exactly.
+TEST(RunCommand, ScenarioAndCommandLineShareTheDurationLimit) {
+  std::string maze = read(kMaze);
+  const auto with = [&](const std::string& d) {
+    std::string text = maze;
+    const auto at = text.find("\nduration: 10min");
+    EXPECT_NE(at, std::string::npos);
+    return text.replace(at, 16, "\nduration: " + d);
+  };
+  EXPECT_TRUE(symb::sim::parse_scenario(with("168h"), "t.yaml").ok());
+  auto longer = symb::sim::parse_scenario(with("168.001h"), "t.yaml");
+  ASSERT_FALSE(longer.ok());
+  EXPECT_NE(longer.error().find("t.yaml:9:11: duration must be between 1ms and 604800s"), std::string::npos)
+      << longer.error();
+
+  const std::string bin = SYMB_BINARY;
+  const fs::path err = scratch("duration_err");
+  const auto run = [&](const std::string& duration) {
+    // --csv-every 0 is refused after --duration is read: exit 2 either way, and the message says
+    // which option it was.
+    const int status = std::system(("'" + bin + "' run '" + kMaze + "' --duration " + duration +
+                                    " --csv-every 0 >/dev/null 2>'" + err.string() + "'")
+                                       .c_str());
+    EXPECT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 2);
+    return read(err);
+  };
+  EXPECT_EQ(run("168h").find("--duration"), std::string::npos) << read(err);
+  EXPECT_NE(run("169h").find("--duration"), std::string::npos) << read(err);
+  fs::remove(err);
+}
+
+// Every shipped scenario starts without a warning about a task it does not define (the
+// obstacle-avoidance program once started an 'obstacle_logger' no scenario had).
+TEST(RunCommand, ShippedScenariosNameOnlyTheirOwnTasks) {
+  std::size_t scenarios = 0;
+  for (const auto& e : fs::directory_iterator(SYMB_SCENARIO_DIR)) {
+    if (e.path().extension() != ".yaml") continue;
+    ++scenarios;
+    symb::apps::run::RunOptions o;
+    o.scenario_path = e.path().string();
+    o.duration = std::chrono::seconds(2);
+    o.out_dir = scratch("shipped_" + e.path().stem().string());
+    auto r = symb::apps::run::run_scenario(o);
+    ASSERT_TRUE(r.ok()) << e.path() << ": " << r.error();
+    const std::string log = read(*o.out_dir / "syslog.txt");
+    EXPECT_EQ(log.find("no task named"), std::string::npos) << e.path() << "\n" << log;
+    fs::remove_all(*o.out_dir);
+  }
+  EXPECT_GE(scenarios, 10u);
 }
 
 }  // namespace

@@ -209,6 +209,22 @@ TEST_F(ShellTest, SetAndParams) {
   EXPECT_EQ(error("set e9 value 1"), "error: column 5: node 'board' has no task 'e9' (did you mean 'e1'?)\n");
 }
 
+// The same rule as a scenario file's (scenario_parser_test: "is given twice"): one hook per
+// sender, receiver and port, whatever its priority or policy.
+TEST_F(ShellTest, TheSameHookTwiceIsRefused) {
+  ok("create emitter src --period 10ms");
+  ok("create sink dst");
+  EXPECT_EQ(ok("hook src dst"), "hook 1: src -> dst\n");
+  EXPECT_EQ(error("hook src dst --priority 3 --policy refuse"),
+            "error: column 6: task 'src' is already hooked to 'dst' (hook 1)\n");
+  EXPECT_EQ(ok("hook src dst --port 2"), "hook 2: src -> dst\n");  // another port: another hook
+  EXPECT_EQ(error("hook src dst --port 2"),
+            "error: column 6: task 'src' is already hooked to 'dst' on port 2 (hook 2)\n");
+  EXPECT_EQ(node_->hooks().size(), 2u);
+  ok("unhook 1");
+  EXPECT_EQ(ok("hook src dst"), "hook 3: src -> dst\n");
+}
+
 TEST_F(ShellTest, HooksCarryMessagesAndCanBeChanged) {
   ok("create emitter src --period 10ms");
   ok("create sink dst");

@@ -564,7 +564,6 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   if (options.port > 0xffff) return Error{"hook port must be -1 (any) or 0..65535"};
   if (options.suppress_window.count() < 0) return Error{"negative suppression window"};
   detail::Hook h;
-  h.serial = ++hook_serial_;
   h.priority = options.priority;
   h.port = options.port < 0 ? -1 : options.port;
   h.policy = options.policy;
@@ -573,6 +572,12 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   h.suppress_window = options.suppress_window;
   {
     std::lock_guard out(s->out_mu);
+    for (const detail::Hook& x : s->hooks)
+      if (x.receiver == r && same_hook_key(x.port, h.port))
+        return Error{"task '" + s->name + "' is already hooked to '" + r->name + "'" +
+                     (h.port < 0 ? std::string() : " on port " + std::to_string(h.port)) + " (hook " +
+                     std::to_string(x.serial) + ")"};
+    h.serial = ++hook_serial_;
     // Higher-priority hooks deliver first; equal priorities keep hook order.
     auto at =
         std::find_if(s->hooks.begin(), s->hooks.end(), [&](const detail::Hook& x) { return x.priority < h.priority; });

@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
 constexpr std::string_view kCommand = "symb sim";
-constexpr kernel::Duration kMaxDuration = std::chrono::hours(24 * 7);
+constexpr kernel::Duration kMaxDuration = sim::kMaxRunDuration;  // a scenario's limit too
 
 constexpr OptionSpec kOptions[] = {
     {"--serial", "PATH", "the board's data line; one per robot, comma-separated, in scenario order"},

@@ -13,6 +13,7 @@
 #include "symb/apps/run/scenario_run.hpp"
 #include "symb/evo/genome.hpp"
 #include "symb/os/param.hpp"
+#include "symb/sim/scenario.hpp"
 
 namespace symb::apps::run {
 
@@ -21,7 +22,7 @@ namespace {
 using namespace std::chrono_literals;
 
 constexpr std::string_view kCommand = "symb run";
-constexpr kernel::Duration kMaxDuration = std::chrono::hours(24 * 7);
+constexpr kernel::Duration kMaxDuration = sim::kMaxRunDuration;  // a scenario's limit too
 
 constexpr OptionSpec kOptions[] = {
     {"--out", "DIR", "output folder (default out/<scenario name>)"},
