@@ -2,8 +2,15 @@
 // their refusals, the fault injector's promise (one corrupted frame = exactly one bad frame at a
 // decoder, nothing lost around it), the board's device tasks over a real pseudo-terminal driven
 // by a hand-written simulator, and the HilSimulator against a silent board.
+#include <unistd.h>
+
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <functional>
+#include <mutex>
+#include <optional>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -293,6 +300,169 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
   EXPECT_LE(s.frames_sent, 35u);
   ASSERT_FALSE(events.empty());
   EXPECT_NE(events.back().find("board silent"), std::string::npos);
+}
+
+// A serial path that goes away and comes back, as a USB adapter's does when it is pulled and
+// plugged in again: a symlink to a pseudo-terminal, removed with the pseudo-terminal, then made
+// again to a new one.
+struct Replug {
+  std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("symb-replug-" + std::to_string(::getpid()) + "-" +
+                                                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::optional<io::PtyPair> pty;
+
+  Replug() { plug(); }
+  ~Replug() { std::filesystem::remove(path); }
+  void plug() {
+    auto p = io::PtyPair::open("replug");
+    ASSERT_TRUE(p.ok()) << p.error();
+    pty = std::move(p).value();
+    std::filesystem::remove(path);
+    std::filesystem::create_symlink(pty->slave_path, path);
+  }
+  void unplug() {
+    std::filesystem::remove(path);
+    pty->master->close();
+    pty->slave->close();
+    pty.reset();
+  }
+};
+
+bool eventually(const std::function<bool()>& cond, kernel::Duration limit = 10s) {
+  const auto end = std::chrono::steady_clock::now() + limit;
+  while (!cond()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(2ms);
+  }
+  return true;
+}
+
+TEST(BoardLinkTest, ALineThatGoesAwayIsReopenedAndNothingIsCountedSentIntoIt) {
+  Replug line;
+  auto port = std::make_shared<io::SerialPort>("uart0", line.path.string());
+  ASSERT_TRUE(port->open().ok());
+  Board board(port);
+  FakeSim sim{line.pty->master, io::FrameDecoder(256), {}};
+  sim.send(0, 100, 0);
+  sim.read_for(60ms);
+  ASSERT_TRUE(eventually([&] { return board.link->stats().frames_written >= 1; }));
+  EXPECT_TRUE(sim.answered(0, 100.0f));
+
+  line.unplug();
+  ASSERT_TRUE(eventually([&] { return board.link->stats().line_losses == 1; }));
+  BoardLinkStats s = board.link->stats();
+  EXPECT_FALSE(s.line_open);
+  // Commands while the line is down are not sent, and said so.
+  const std::uint64_t written = s.frames_written;
+  const auto wheels = *board.node.find("wheels");
+  for (int i = 0; i < 3; ++i) {
+    os::Message m;
+    m.payload = os::Payload{50.0f, 50.0f};
+    ASSERT_TRUE(board.node.post(wheels, m).ok());
+  }
+  ASSERT_TRUE(eventually([&] { return board.link->stats().frames_unsent >= 3; }));
+  EXPECT_EQ(board.link->stats().frames_written, written);
+  EXPECT_TRUE(board.logged("serial line 'uart0' down"));
+  EXPECT_TRUE(board.logged("reopen attempt 1 failed"));
+
+  std::this_thread::sleep_for(300ms);  // an outage long enough to measure
+  line.plug();
+  ASSERT_TRUE(eventually([&] { return board.link->stats().line_reopens == 1; }));
+  s = board.link->stats();
+  EXPECT_TRUE(s.line_open);
+  EXPECT_GE(s.line_down, 300ms);
+  EXPECT_LT(s.line_down, 5s);
+  EXPECT_TRUE(board.logged("serial line 'uart0' open again after"));
+
+  // The same path, a new device: frames flow both ways again.
+  FakeSim again{line.pty->master, io::FrameDecoder(256), {}};
+  for (std::uint32_t seq = 1; seq <= 3; ++seq) {
+    again.send(seq, 200, 0);
+    again.read_for(40ms);
+  }
+  ASSERT_TRUE(eventually([&] {
+    again.read_for(10ms);
+    return again.answered(3, 200.0f);
+  }));
+  s = board.link->stats();
+  EXPECT_GT(s.frames_written, written);
+  EXPECT_EQ(s.line_losses, 1u);
+  EXPECT_EQ(s.frames_written + s.frames_unsent, s.wheel_commands + s.watchdog_stops);
+}
+
+TEST(HilSimulatorTest, ALineThatGoesAwayIsReopenedAndItsDowntimeCounted) {
+  WorldSpec spec;
+  spec.width = 200;
+  spec.height = 200;
+  EnkiWorld world(spec, 1);
+  world.add_robot("r", RobotKind::kThymio2, Pose{100, 100, 0});
+  Replug line;
+  auto port = std::make_shared<io::SerialPort>("data.r", line.path.string());
+  ASSERT_TRUE(port->open().ok());
+  HilSimulatorOptions o;
+  o.period = 30ms;
+  std::mutex events_mu;
+  std::vector<std::string> events;
+  o.on_event = [&](const std::string& e) {
+    std::lock_guard lock(events_mu);
+    events.push_back(e);
+  };
+  HilSimulator simulator(world, {port}, o);
+  std::atomic<std::uint64_t> ir_at_board{0};
+  std::atomic<bool> stop{false};
+  // The board's end: counts the IR frames that arrive on whatever device is plugged in.
+  std::mutex pty_mu;
+  std::thread board([&] {
+    io::FrameDecoder d(256);
+    std::vector<std::byte> buf(1024);
+    while (!stop) {
+      std::shared_ptr<io::SerialPort> master;
+      {
+        std::lock_guard lock(pty_mu);
+        if (line.pty) master = line.pty->master;
+      }
+      if (!master) {
+        std::this_thread::sleep_for(5ms);
+        continue;
+      }
+      auto n = master->read_some(buf, 5ms);
+      if (!n || *n == 0) continue;
+      d.feed(std::span<const std::byte>(buf.data(), *n), [&](std::span<const std::byte> p) {
+        if (decode_ir_payload(p).ok()) ir_at_board.fetch_add(1);
+      });
+    }
+  });
+  std::thread run([&] { (void)simulator.run_for(3s); });
+  ASSERT_TRUE(eventually([&] { return ir_at_board.load() >= 5; }));
+  {
+    std::lock_guard lock(pty_mu);
+    line.unplug();
+  }
+  ASSERT_TRUE(eventually([&] { return simulator.stats()[0].line_losses == 1; }));
+  EXPECT_FALSE(simulator.stats()[0].line_open);
+  ASSERT_TRUE(eventually([&] { return simulator.stats()[0].unsent >= 5; }));
+  const std::uint64_t sent_while_down = simulator.stats()[0].frames_sent;
+  {
+    std::lock_guard lock(pty_mu);
+    line.plug();
+  }
+  ASSERT_TRUE(eventually([&] { return simulator.stats()[0].line_reopens == 1; }));
+  const std::uint64_t before = ir_at_board.load();
+  ASSERT_TRUE(eventually([&] { return ir_at_board.load() >= before + 5; }));
+  simulator.stop();
+  run.join();
+  stop = true;
+  board.join();
+  const HilRobotStats s = simulator.stats()[0];
+  EXPECT_TRUE(s.line_open);
+  EXPECT_GE(s.line_down, 3 * o.period);  // five frames counted unsent, one a period apart
+  EXPECT_LT(s.line_down, 5s);
+  EXPECT_GT(s.frames_sent, sent_while_down);
+  std::lock_guard lock(events_mu);
+  std::string all;
+  for (const auto& e : events) all += e + "\n";
+  EXPECT_NE(all.find("serial line 'data.r' down"), std::string::npos) << all;
+  EXPECT_NE(all.find("serial line 'data.r' open again after"), std::string::npos) << all;
 }
 
 }  // namespace
