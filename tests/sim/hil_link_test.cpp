@@ -151,6 +151,15 @@ struct FakeSim {
     ASSERT_TRUE(port->write_all(io::encode_frame(encode_ir_payload(f))).ok());
   }
   void send_raw(std::span<const std::byte> payload) { ASSERT_TRUE(port->write_all(io::encode_frame(payload)).ok()); }
+  // Reads wheel frames until `cond` holds (true) or 10 s passed (false): a test waits for what it
+  // asserts, not for a while that is long enough on an idle machine.
+  bool read_until(const std::function<bool()>& cond) {
+    for (auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10); !cond();) {
+      if (std::chrono::steady_clock::now() > end) return false;
+      read_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  }
   // Reads wheel frames for `d`.
   void read_for(kernel::Duration d) {
     std::vector<std::byte> buf(1024);
@@ -176,9 +185,11 @@ TEST(BoardLinkTest, AnswersEchoTheSequenceAndBadInputIsCountedNotFatal) {
     sim.send(seq, 100.0f * static_cast<float>(seq), 5000.0f);  // ir1 above kIrMax: clamped
     sim.read_for(30ms);
   }
+  ASSERT_TRUE(sim.read_until([&] { return sim.answered(5, 500.0f); }));
   ASSERT_FALSE(sim.got.empty());
-  const HilWheelFrame last = sim.got.back();
-  EXPECT_EQ(last.seq, 5u);
+  HilWheelFrame last{};
+  for (const auto& f : sim.got)
+    if (f.seq == 5 && f.left != 0.0f) last = f;
   EXPECT_EQ(last.left, 500.0f);    // 100 * 5, in range
   EXPECT_EQ(last.right, -500.0f);  // -kIrMax clamped to the wheel range
   bool saw_three = false;
@@ -195,7 +206,10 @@ TEST(BoardLinkTest, AnswersEchoTheSequenceAndBadInputIsCountedNotFatal) {
   ASSERT_TRUE(corrupt_frame(bad, r));
   ASSERT_TRUE(pty->master->write_all(bad).ok());
   sim.send(11, 20, 0);
-  sim.read_for(150ms);
+  // The controller sends only on input, so the watchdog stops the wheels 45 ms after seq 11's
+  // answer: wait for that stop, the last thing the board does here.
+  ASSERT_TRUE(sim.read_until(
+      [&] { return sim.answered(11, 20.0f) && sim.got.back().seq == 11u && sim.got.back().left == 0.0f; }));
   const BoardLinkStats s = board.link->stats();
   EXPECT_EQ(s.ir_frames, 8u);  // 0..5, 9, 11
   EXPECT_EQ(s.out_of_order, 1u);
@@ -204,10 +218,6 @@ TEST(BoardLinkTest, AnswersEchoTheSequenceAndBadInputIsCountedNotFatal) {
   EXPECT_EQ(s.decoder.dropped(), 1u);
   EXPECT_EQ(s.bad_frames(), 2u);
   EXPECT_EQ(s.last_seq, 11u);
-  EXPECT_TRUE(sim.answered(11, 20.0f));
-  // The controller sends only on input, so the watchdog stops the wheels 45 ms later.
-  EXPECT_EQ(sim.got.back().seq, 11u);
-  EXPECT_EQ(sim.got.back().left, 0.0f);
   EXPECT_TRUE(board.logged("out-of-order"));
   EXPECT_TRUE(board.logged("malformed"));
 }
@@ -222,7 +232,9 @@ TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
     sim.read_for(30ms);
   }
   sim.got.clear();
-  sim.read_for(500ms);  // silence: more than 10 periods
+  // Silence: more than 10 periods, until the board says the link is lost.
+  ASSERT_TRUE(sim.read_until([&] { return board.logged("link lost: no IR frame"); }));
+  ASSERT_TRUE(sim.read_until([&] { return !sim.got.empty(); }));  // the watchdog's stop
   BoardLinkStats s = board.link->stats();
   EXPECT_FALSE(s.link_up);
   EXPECT_EQ(s.link_losses, 1u);
@@ -235,7 +247,7 @@ TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
   EXPECT_EQ(sim.got.back().right, 0.0f);
 
   sim.send(5, 120, 0);
-  sim.read_for(100ms);
+  ASSERT_TRUE(sim.read_until([&] { return sim.answered(5, 120.0f); }));
   s = board.link->stats();
   EXPECT_TRUE(s.link_up);
   EXPECT_EQ(s.link_recoveries, 1u);
@@ -244,7 +256,7 @@ TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
 
   // A new simulator run starts at seq 0 again: accepted, and said.
   sim.send(0, 30, 0);
-  sim.read_for(100ms);
+  ASSERT_TRUE(sim.read_until([&] { return sim.answered(0, 30.0f); }));
   EXPECT_EQ(board.link->stats().restarts, 1u);
   EXPECT_TRUE(board.logged("started anew"));
   EXPECT_TRUE(sim.answered(0, 30.0f));
