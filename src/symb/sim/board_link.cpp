@@ -40,6 +40,7 @@ class HilLinkTask final : public io::StreamTask {
   void on_start() override {
     io::StreamTask::on_start();
     watch_line();
+    refresh();
   }
   void on_message(const os::Message& m) override {
     if (!m.source.valid()) {  // from the line
@@ -321,6 +322,8 @@ std::shared_ptr<BoardLink> BoardLink::create(std::shared_ptr<io::IOStream> port,
   if (!port) throw std::invalid_argument("BoardLink: no port");
   if (options.control_period.count() <= 0 || options.lost_periods < 1 || !(options.watchdog_periods >= 0))
     throw std::invalid_argument("BoardLink: control period, lost_periods and watchdog_periods must be positive");
+  if (options.reopen_first.count() <= 0 || options.reopen_most < options.reopen_first)
+    throw std::invalid_argument("BoardLink: reopen_first must be positive and at most reopen_most");
   return std::shared_ptr<BoardLink>(new BoardLink(std::move(port), options));
 }
 

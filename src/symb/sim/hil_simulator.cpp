@@ -58,6 +58,8 @@ HilSimulator::HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStrea
     throw std::invalid_argument("HilSimulator: the period must be in (0, 1 s]");
   if (!(options_.corrupt >= 0 && options_.corrupt <= 1))
     throw std::invalid_argument("HilSimulator: corrupt must be in [0, 1]");
+  if (options_.reopen_first.count() <= 0 || options_.reopen_most < options_.reopen_first)
+    throw std::invalid_argument("HilSimulator: reopen_first must be positive and at most reopen_most");
   hold_steps_ = static_cast<std::uint64_t>(std::max<std::int64_t>(1, options_.hold / options_.period));
   for (std::size_t i = 0; i < robots_.size(); ++i) {
     robots_[i].stats.robot = world.robot_name(i);

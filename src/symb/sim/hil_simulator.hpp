@@ -98,7 +98,8 @@ class HilSimulator {
   // One port per robot of `world`, in robot order. Ports are opened (if closed), their unread
   // input flushed, and those that are file descriptors get a short write timeout, so a board
   // that does not read costs the step a few milliseconds at most. Throws std::invalid_argument
-  // on a wrong port count, a period outside (0, 1 s] or `corrupt` outside [0, 1].
+  // on a wrong port count, a period outside (0, 1 s], `corrupt` outside [0, 1] or a reopen
+  // backoff that is not positive and ascending.
   HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStream>> ports, HilSimulatorOptions options);
   ~HilSimulator();
   HilSimulator(const HilSimulator&) = delete;
