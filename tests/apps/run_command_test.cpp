@@ -25,6 +25,7 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
 const std::string kMaze = std::string(SYMB_SCENARIO_DIR) + "/maze.yaml";
+const std::string kSubsumption = std::string(SYMB_SCENARIO_DIR) + "/subsumption.yaml";
 
 std::string read(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -54,8 +55,9 @@ TEST(RunCommand, CtrlCWritesWhatWasRun) {
     ::dup2(null, 1);
     ::dup2(null, 2);
     // Paced, so that there is a middle to interrupt: 10 min simulated would take 12 s.
-    ::execl(SYMB_BINARY, SYMB_BINARY, "run", kMaze.c_str(), "--out", out.c_str(), "--duration", "10min", "--speed",
-            "50", static_cast<char*>(nullptr));
+    // A controller that publishes probes, so that their pictures are written too.
+    ::execl(SYMB_BINARY, SYMB_BINARY, "run", kSubsumption.c_str(), "--out", out.c_str(), "--duration", "10min",
+            "--speed", "50", static_cast<char*>(nullptr));
     ::_exit(127);
   }
   // Interrupt once a few hundred rows are on disk (what is asserted below: rows were written).
@@ -75,7 +77,11 @@ TEST(RunCommand, CtrlCWritesWhatWasRun) {
   EXPECT_NE(summary.find("trajectory hash: "), std::string::npos);
   EXPECT_NE(read(out / "trajectory.svg").find("</svg>"), std::string::npos);
   EXPECT_TRUE(fs::exists(out / "syslog.txt"));
-  EXPECT_TRUE(fs::exists(out / "probes.csv"));
+  EXPECT_GT(count(read(out / "probes.csv"), '\n'), 1u);
+  std::size_t pictures = 0;
+  if (fs::is_directory(out / "probes"))
+    for (const auto& e : fs::directory_iterator(out / "probes")) pictures += e.path().extension() == ".svg" ? 1 : 0;
+  EXPECT_GT(pictures, 0u) << "no probe pictures";
 
   // Every row whole: the same number of fields as the header, and the file ends with a newline.
   const std::string csv = read(out / "steps.csv");
