@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -262,12 +263,19 @@ TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
   EXPECT_TRUE(sim.answered(0, 30.0f));
 }
 
-TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
+// A 2 m square without walls and one robot 'r' in its middle: nothing for the IR to see.
+std::unique_ptr<EnkiWorld> open_arena_with_one_robot() {
   WorldSpec spec;
   spec.width = 200;
   spec.height = 200;
-  EnkiWorld world(spec, 1);
-  world.add_robot("r", RobotKind::kThymio2, Pose{100, 100, 0});
+  auto world = std::make_unique<EnkiWorld>(spec, 1);
+  world->add_robot("r", RobotKind::kThymio2, Pose{100, 100, 0});
+  return world;
+}
+
+TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
+  auto world_ptr = open_arena_with_one_robot();
+  EnkiWorld& world = *world_ptr;
   auto pty = io::PtyPair::open("hil");
   ASSERT_TRUE(pty.ok()) << pty.error();
   HilSimulatorOptions o;
@@ -408,11 +416,8 @@ TEST(BoardLinkTest, ALineThatGoesAwayIsReopenedAndNothingIsCountedSentIntoIt) {
 }
 
 TEST(HilSimulatorTest, ALineThatGoesAwayIsReopenedAndItsDowntimeCounted) {
-  WorldSpec spec;
-  spec.width = 200;
-  spec.height = 200;
-  EnkiWorld world(spec, 1);
-  world.add_robot("r", RobotKind::kThymio2, Pose{100, 100, 0});
+  auto world_ptr = open_arena_with_one_robot();
+  EnkiWorld& world = *world_ptr;
   Replug line;
   auto port = std::make_shared<io::SerialPort>("data.r", line.path.string());
   ASSERT_TRUE(port->open().ok());
