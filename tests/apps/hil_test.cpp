@@ -223,20 +223,30 @@ TEST_F(Hil, FollowsTheInProcessRunOfTheMaze) {
               din, dhil, window, same, sum / static_cast<double>(window), link.at("late"));
 }
 
+// The newest "board: frames N good, M bad" line of a board's periodic statistics: N + M.
+long long frames_seen(const std::string& board_output) {
+  const auto at = board_output.rfind("board: frames ");
+  if (at == std::string::npos) return -1;
+  long long good = 0, bad = 0;
+  if (std::sscanf(board_output.c_str() + at, "board: frames %lld good, %lld bad", &good, &bad) != 2) return -1;
+  return good + bad;
+}
+
 TEST_F(Hil, CorruptedFramesAreCountedExactlyAndTheRobotStillNavigates) {
-  auto b = board();
+  auto b = board("--stats-every 100ms");
   ASSERT_EQ(sim("hil", "--seed 1 --corrupt 0.05 --duration " + std::to_string(kCorruptSeconds) + "s"), 0)
       << sim_output_;
-  // Let the board read the last frames before it is stopped.
-  std::this_thread::sleep_for(300ms);
+  const auto sim_stats = sim_link_stats(dir_ / "hil" / "summary.txt");
+  ASSERT_FALSE(sim_stats.empty());
+  const long long sent = sim_stats.at("frames_sent"), corrupted = sim_stats.at("corrupted");
+  // The board is stopped once it has read every frame sent (its statistics say so), not after a
+  // guessed while.
+  for (int i = 0; i < 1000 && frames_seen(b->output()) < sent; ++i) std::this_thread::sleep_for(10ms);
   b->interrupt();
   ASSERT_EQ(b->wait(), 0) << b->output();
   const std::string board_out = b->output();
   const auto board_stats = fields(board_out, "board-stats:");
-  const auto sim_stats = sim_link_stats(dir_ / "hil" / "summary.txt");
   ASSERT_FALSE(board_stats.empty()) << board_out;
-  ASSERT_FALSE(sim_stats.empty());
-  const long long sent = sim_stats.at("frames_sent"), corrupted = sim_stats.at("corrupted");
   // About 5% of the frames (binomial: 4 standard deviations either way).
   const double expect = 0.05 * static_cast<double>(sent), sd = std::sqrt(expect * 0.95);
   EXPECT_NEAR(static_cast<double>(corrupted), expect, 4 * sd + 1);
@@ -268,6 +278,67 @@ TEST_F(Hil, BoardKeepsRunningWhenTheLinkGoesSilentAndComesBack) {
   // Both runs were answered: the second simulator drove the robot too.
   const auto second = path_of(dir_ / "second" / "steps.csv");
   EXPECT_GT(travelled(second), 2.0);
+}
+
+// `symb link` stopped and started again mid-run (the cable, or a USB adapter, pulled and plugged
+// back): both sides notice, reopen their paths and go on; the run completes and says how long its
+// line was down.
+TEST_F(Hil, BothSidesReopenTheirLinesWhenTheLinkComesBack) {
+  auto b = board("--stats-every 100ms");
+  Child sim("sim '" + kScenario + "' --serial '" + (dir_ / "tty" / "sim").string() + "' --out '" +
+                (dir_ / "back").string() + "' --quiet --duration 6s",
+            dir_ / "back.log");
+  // The run is under way once the board has read a second of frames (its statistics say so).
+  for (int i = 0; i < 1000 && frames_seen(b->output()) < 34; ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_GE(frames_seen(b->output()), 34) << b->output();
+  link_->interrupt();
+  ASSERT_EQ(link_->wait(), 0) << link_->output();
+  std::this_thread::sleep_for(500ms);  // the outage: no link at all
+  link_ = std::make_unique<Child>("link --dir '" + (dir_ / "tty").string() + "'", dir_ / "link2.log");
+  ASSERT_EQ(sim.wait(), 0) << sim.output();
+  const auto link = sim_link_stats(dir_ / "back" / "summary.txt");
+  EXPECT_EQ(link.at("line_losses"), 1) << sim.output();
+  EXPECT_EQ(link.at("line_reopens"), 1) << sim.output();
+  EXPECT_EQ(link.at("line_open"), 1);
+  EXPECT_GE(link.at("line_down_ms"), 400);
+  EXPECT_GT(link.at("unsent"), 0);
+  EXPECT_NE(sim.output().find("open again after"), std::string::npos) << sim.output();
+  b->interrupt();
+  ASSERT_EQ(b->wait(), 0) << b->output();
+  const auto s = fields(b->output(), "board-stats:");
+  EXPECT_EQ(s.at("line_losses"), 1) << b->output();
+  EXPECT_EQ(s.at("line_reopens"), 1) << b->output();
+  EXPECT_GE(s.at("line_down_ms"), 400);
+  // The board answered after the line came back: the simulator applied frames in the last second.
+  const auto hil = path_of(dir_ / "back" / "steps.csv");
+  ASSERT_GT(hil.size(), 170u);
+  const Point end = hil.back(), before = hil[hil.size() - 34];
+  EXPECT_GT(std::hypot(end.x - before.x, end.y - before.y), 1.0) << "the robot should drive again";
+}
+
+// A link that never comes back: both sides report the run as failed, with the time it was down.
+TEST_F(Hil, ADeadLinkFailsBothSides) {
+  auto b = board("--stats-every 100ms");
+  Child sim("sim '" + kScenario + "' --serial '" + (dir_ / "tty" / "sim").string() + "' --out '" +
+                (dir_ / "dead").string() + "' --quiet --duration 3s",
+            dir_ / "dead.log");
+  // The run is under way once the board has read a second of frames (its statistics say so).
+  for (int i = 0; i < 1000 && frames_seen(b->output()) < 34; ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_GE(frames_seen(b->output()), 34) << b->output();
+  link_->interrupt();
+  ASSERT_EQ(link_->wait(), 0) << link_->output();
+  link_.reset();
+  EXPECT_EQ(sim.wait(), 1) << sim.output();
+  EXPECT_NE(sim.output().find("dead link"), std::string::npos) << sim.output();
+  const std::string summary = read_file(dir_ / "dead" / "summary.txt");
+  EXPECT_NE(summary.find("dead link: the serial line was down at the end of the run"), std::string::npos) << summary;
+  const auto link = sim_link_stats(dir_ / "dead" / "summary.txt");
+  EXPECT_EQ(link.at("line_open"), 0);
+  EXPECT_GE(link.at("line_down_ms"), 1000);
+  EXPECT_GT(link.at("unsent"), 0);
+  b->interrupt();
+  EXPECT_EQ(b->wait(), 1) << b->output();
+  EXPECT_NE(b->output().find("was down when the board stopped"), std::string::npos) << b->output();
 }
 
 }  // namespace

@@ -14,7 +14,7 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/apps/swarm_demo.hpp"
+#include "symb/apps/swarm/swarm_demo.hpp"
 
 namespace symb::apps {
 namespace {

@@ -68,6 +68,11 @@ TEST(StdioStream, ReadsAndWritesBorrowedDescriptors) {
   ASSERT_FALSE(eof);
   EXPECT_NE(eof.error().find("end of stream"), std::string::npos) << eof.error();
   EXPECT_FALSE(s.is_open());
+  EXPECT_TRUE(s.input_ended());
+  // Only the input ended: the replies to what was read still go out (a script piped into a shell).
+  ASSERT_TRUE(s.write_all(as_bytes("reply\n")).ok());
+  EXPECT_EQ(read_exactly(reader_side, 6).size(), 6u);
+  EXPECT_FALSE(s.read_some(buf, 10ms));  // and reading stays over, at once
   s.close();
   EXPECT_NE(::fcntl(out.fd[1], F_GETFD), -1) << "a borrowed descriptor was closed";
   EXPECT_TRUE(s.open());

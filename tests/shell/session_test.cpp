@@ -2,6 +2,9 @@
 // StreamTask, the test typing at the master as a person would) and TCP (TcpShellServer with a
 // token). Each command's effect is checked on the node itself. The thread executor runs these
 // (real time, real threads); every wait has a deadline and none is a fixed sleep.
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <functional>
 #include <thread>
@@ -10,6 +13,7 @@
 
 #include "symb/io/loopback_stream.hpp"
 #include "symb/io/pty_pair.hpp"
+#include "symb/io/stdio_stream.hpp"
 #include "symb/io/stream_task.hpp"
 #include "symb/io/tcp_stream.hpp"
 #include "symb/kernel/thread_executor.hpp"
@@ -168,6 +172,39 @@ struct Board {
   std::unique_ptr<os::Node> node;
 };
 
+// A script piped in (a file, `printf ... |`): the input ends right after the last line, which has
+// no newline. Every line runs, the replies still go out, then the session ends by itself.
+TEST(ShellSession, InputThatEndsRunsEveryLineThenEndsTheSession) {
+  Board b;
+  int in[2], out[2];
+  ASSERT_EQ(::pipe2(in, O_CLOEXEC), 0);
+  ASSERT_EQ(::pipe2(out, O_CLOEXEC), 0);
+  const std::string script = "create sink piped1\ncreate sink piped2\ntime";
+  ASSERT_EQ(::write(in[1], script.data(), script.size()), static_cast<ssize_t>(script.size()));
+  ::close(in[1]);
+  auto stream = std::make_shared<io::StdioStream>("pipe", in[0], out[1]);
+  auto session = attach_shell(*b.node, stream, ShellOptions{}, "script");
+  ASSERT_TRUE(session) << session.error();
+  EXPECT_TRUE(eventually([&] { return !b.node->find("script") && !b.node->find("script.io"); }));
+  EXPECT_TRUE(b.node->find("piped1") && b.node->find("piped2"));
+  std::string replies;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(out[0], buf, sizeof buf)) > 0;) {
+    replies.append(buf, static_cast<std::size_t>(n));
+    if (replies.find("NODE") != std::string::npos && replies.ends_with("\n") &&
+        replies.find("board ") != std::string::npos)
+      break;
+  }
+  EXPECT_NE(replies.find("created 'piped1'"), std::string::npos) << replies;
+  EXPECT_NE(replies.find("created 'piped2'"), std::string::npos) << replies;
+  EXPECT_NE(replies.find("NODE"), std::string::npos) << replies;  // `time`, the line without a newline
+  bool said = false;
+  for (const auto& e : b.node->log().since(0))
+    said = said || e.text.find("end of input: the session ends") != std::string::npos;
+  EXPECT_TRUE(said);
+  for (int fd : {in[0], out[0], out[1]}) ::close(fd);
+}
+
 TEST(ShellSession, OverAPseudoTerminal) {
   Board b;
   auto pty = io::PtyPair::open("pty");
@@ -218,13 +255,18 @@ TEST(ShellSession, OverTcpWithAToken) {
   ASSERT_TRUE(conn) << conn.error();
   Peer script(std::shared_ptr<io::IOStream>(std::move(conn).value()), false);
   script.type("open-sesame\n");
-  ASSERT_TRUE(eventually([&] { return b.node->find("shell1") && b.node->find("shell1.io"); }));
-  const auto shell = *b.node->find("shell1");
-  const auto io = *b.node->find("shell1.io");
-  std::size_t both_ways = 0;
-  for (const auto& h : b.node->hooks())
-    both_ways += (h.sender == shell && h.receiver == io) || (h.sender == io && h.receiver == shell);
-  EXPECT_EQ(both_ways, 2u);
+  // The session's tasks exist before their hooks are made (attach_shell creates, hooks, then
+  // starts them): wait for the hooks themselves, not for the tasks.
+  const auto hooked_both_ways = [&] {
+    const auto shell = b.node->find("shell1");
+    const auto io = b.node->find("shell1.io");
+    if (!shell || !io) return false;
+    std::size_t both_ways = 0;
+    for (const auto& h : b.node->hooks())
+      both_ways += (h.sender == *shell && h.receiver == *io) || (h.sender == *io && h.receiver == *shell);
+    return both_ways == 2;
+  };
+  ASSERT_TRUE(eventually(hooked_both_ways));
 
   run_scenario(*b.node, script);
 

@@ -223,6 +223,22 @@ TEST_F(ShellTest, SetAndParams) {
   EXPECT_EQ(error("set e9 value 1"), "error: column 5: node 'board' has no task 'e9' (did you mean 'e1'?)\n");
 }
 
+// The same rule as a scenario file's (scenario_parser_test: "is given twice"): one hook per
+// sender, receiver and port, whatever its priority or policy.
+TEST_F(ShellTest, TheSameHookTwiceIsRefused) {
+  ok("create emitter src --period 10ms");
+  ok("create sink dst");
+  EXPECT_EQ(ok("hook src dst"), "hook 1: src -> dst\n");
+  EXPECT_EQ(error("hook src dst --priority 3 --policy refuse"),
+            "error: column 6: task 'src' is already hooked to 'dst' (hook 1)\n");
+  EXPECT_EQ(ok("hook src dst --port 2"), "hook 2: src -> dst\n");  // another port: another hook
+  EXPECT_EQ(error("hook src dst --port 2"),
+            "error: column 6: task 'src' is already hooked to 'dst' on port 2 (hook 2)\n");
+  EXPECT_EQ(node_->hooks().size(), 2u);
+  ok("unhook 1");
+  EXPECT_EQ(ok("hook src dst"), "hook 3: src -> dst\n");
+}
+
 TEST_F(ShellTest, HooksCarryMessagesAndCanBeChanged) {
   ok("create emitter src --period 10ms");
   ok("create sink dst");
@@ -389,7 +405,7 @@ TEST_F(ShellTest, RunScripts) {
 
   scripts_["outer.symb"] = "run inner.symb\n";
   scripts_["inner.symb"] = "sleep 5\n";
-  EXPECT_NE(error("run outer.symb").find("error: outer.symb:1: inner.symb:1: column 1: unknown command 'sleep'"),
+  EXPECT_NE(error("run outer.symb").find("error: outer.symb:1: inner.symb:1: column 1: not a shell command"),
             std::string::npos);
 
   scripts_["loop.symb"] = "run loop.symb\n";
@@ -410,6 +426,35 @@ TEST_F(ShellTest, RunScripts) {
   EXPECT_FALSE(shell_->exit_requested());  // exit in a script ends the script only
 
   EXPECT_EQ(error("run nowhere.symb"), "error: column 5: cannot read 'nowhere.symb': no such file\n");
+}
+
+// `run` reads any file the process may read; what is not a script is described, never quoted.
+TEST_F(ShellTest, RunNeverQuotesAFileItCannotRun) {
+  const std::string secret = "root:$6$s3cr3tSalt$hashhashhash:19000:0:99999:7:::";
+  scripts_["shadow"] = secret + "\ndaemon:*:19000:0:99999:7:::\n";
+  const std::string shadow = error("run shadow");
+  EXPECT_EQ(shadow.find("root"), std::string::npos) << shadow;
+  EXPECT_EQ(shadow.find("s3cr3t"), std::string::npos) << shadow;
+  EXPECT_NE(shadow.find("error: shadow:1: column 1: not a shell command"), std::string::npos) << shadow;
+
+  std::string binary =
+      "\x7f"
+      "ELF\x02\x01\x01";
+  binary += std::string(3, '\0') + "MAGICBYTES\n";
+  scripts_["a.out"] = binary;
+  const std::string bin = error("run a.out");
+  EXPECT_EQ(bin.find("ELF"), std::string::npos) << bin;
+  EXPECT_EQ(bin.find("MAGIC"), std::string::npos) << bin;
+  EXPECT_NE(bin.find("error: a.out:1: column 1: control character 0x7f"), std::string::npos) << bin;
+
+  // Second line bad, first line good: the first ran, the error names line 2 without its text.
+  scripts_["half"] = "create sink h1\npassword=hunter2\n";
+  const std::string half = error("run half");
+  EXPECT_EQ(half.find("hunter2"), std::string::npos) << half;
+  EXPECT_NE(half.find("error: half:2: column 1: not a shell command"), std::string::npos) << half;
+  EXPECT_TRUE(node_->find("h1"));
+  // Typed at the prompt, the unknown word is the person's own and is quoted with a hint.
+  EXPECT_NE(error("tasksx").find("unknown command 'tasksx' (did you mean 'tasks'?)"), std::string::npos);
 }
 
 TEST(ShellFiles, RunReadsRegularFilesOnly) {

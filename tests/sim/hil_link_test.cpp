@@ -2,8 +2,16 @@
 // their refusals, the fault injector's promise (one corrupted frame = exactly one bad frame at a
 // decoder, nothing lost around it), the board's device tasks over a real pseudo-terminal driven
 // by a hand-written simulator, and the HilSimulator against a silent board.
+#include <unistd.h>
+
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -144,6 +152,15 @@ struct FakeSim {
     ASSERT_TRUE(port->write_all(io::encode_frame(encode_ir_payload(f))).ok());
   }
   void send_raw(std::span<const std::byte> payload) { ASSERT_TRUE(port->write_all(io::encode_frame(payload)).ok()); }
+  // Reads wheel frames until `cond` holds (true) or 10 s passed (false): a test waits for what it
+  // asserts, not for a while that is long enough on an idle machine.
+  bool read_until(const std::function<bool()>& cond) {
+    for (auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10); !cond();) {
+      if (std::chrono::steady_clock::now() > end) return false;
+      read_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  }
   // Reads wheel frames for `d`.
   void read_for(kernel::Duration d) {
     std::vector<std::byte> buf(1024);
@@ -169,9 +186,11 @@ TEST(BoardLinkTest, AnswersEchoTheSequenceAndBadInputIsCountedNotFatal) {
     sim.send(seq, 100.0f * static_cast<float>(seq), 5000.0f);  // ir1 above kIrMax: clamped
     sim.read_for(30ms);
   }
+  ASSERT_TRUE(sim.read_until([&] { return sim.answered(5, 500.0f); }));
   ASSERT_FALSE(sim.got.empty());
-  const HilWheelFrame last = sim.got.back();
-  EXPECT_EQ(last.seq, 5u);
+  HilWheelFrame last{};
+  for (const auto& f : sim.got)
+    if (f.seq == 5 && f.left != 0.0f) last = f;
   EXPECT_EQ(last.left, 500.0f);    // 100 * 5, in range
   EXPECT_EQ(last.right, -500.0f);  // -kIrMax clamped to the wheel range
   bool saw_three = false;
@@ -188,7 +207,10 @@ TEST(BoardLinkTest, AnswersEchoTheSequenceAndBadInputIsCountedNotFatal) {
   ASSERT_TRUE(corrupt_frame(bad, r));
   ASSERT_TRUE(pty->master->write_all(bad).ok());
   sim.send(11, 20, 0);
-  sim.read_for(150ms);
+  // The controller sends only on input, so the watchdog stops the wheels 45 ms after seq 11's
+  // answer: wait for that stop, the last thing the board does here.
+  ASSERT_TRUE(sim.read_until(
+      [&] { return sim.answered(11, 20.0f) && sim.got.back().seq == 11u && sim.got.back().left == 0.0f; }));
   const BoardLinkStats s = board.link->stats();
   EXPECT_EQ(s.ir_frames, 8u);  // 0..5, 9, 11
   EXPECT_EQ(s.out_of_order, 1u);
@@ -197,10 +219,6 @@ TEST(BoardLinkTest, AnswersEchoTheSequenceAndBadInputIsCountedNotFatal) {
   EXPECT_EQ(s.decoder.dropped(), 1u);
   EXPECT_EQ(s.bad_frames(), 2u);
   EXPECT_EQ(s.last_seq, 11u);
-  EXPECT_TRUE(sim.answered(11, 20.0f));
-  // The controller sends only on input, so the watchdog stops the wheels 45 ms later.
-  EXPECT_EQ(sim.got.back().seq, 11u);
-  EXPECT_EQ(sim.got.back().left, 0.0f);
   EXPECT_TRUE(board.logged("out-of-order"));
   EXPECT_TRUE(board.logged("malformed"));
 }
@@ -215,7 +233,9 @@ TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
     sim.read_for(30ms);
   }
   sim.got.clear();
-  sim.read_for(500ms);  // silence: more than 10 periods
+  // Silence: more than 10 periods, until the board says the link is lost.
+  ASSERT_TRUE(sim.read_until([&] { return board.logged("link lost: no IR frame"); }));
+  ASSERT_TRUE(sim.read_until([&] { return !sim.got.empty(); }));  // the watchdog's stop
   BoardLinkStats s = board.link->stats();
   EXPECT_FALSE(s.link_up);
   EXPECT_EQ(s.link_losses, 1u);
@@ -228,7 +248,7 @@ TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
   EXPECT_EQ(sim.got.back().right, 0.0f);
 
   sim.send(5, 120, 0);
-  sim.read_for(100ms);
+  ASSERT_TRUE(sim.read_until([&] { return sim.answered(5, 120.0f); }));
   s = board.link->stats();
   EXPECT_TRUE(s.link_up);
   EXPECT_EQ(s.link_recoveries, 1u);
@@ -237,18 +257,25 @@ TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
 
   // A new simulator run starts at seq 0 again: accepted, and said.
   sim.send(0, 30, 0);
-  sim.read_for(100ms);
+  ASSERT_TRUE(sim.read_until([&] { return sim.answered(0, 30.0f); }));
   EXPECT_EQ(board.link->stats().restarts, 1u);
   EXPECT_TRUE(board.logged("started anew"));
   EXPECT_TRUE(sim.answered(0, 30.0f));
 }
 
-TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
+// A 2 m square without walls and one robot 'r' in its middle: nothing for the IR to see.
+std::unique_ptr<EnkiWorld> open_arena_with_one_robot() {
   WorldSpec spec;
   spec.width = 200;
   spec.height = 200;
-  EnkiWorld world(spec, 1);
-  world.add_robot("r", RobotKind::kThymio2, Pose{100, 100, 0});
+  auto world = std::make_unique<EnkiWorld>(spec, 1);
+  world->add_robot("r", RobotKind::kThymio2, Pose{100, 100, 0});
+  return world;
+}
+
+TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
+  auto world_ptr = open_arena_with_one_robot();
+  EnkiWorld& world = *world_ptr;
   auto pty = io::PtyPair::open("hil");
   ASSERT_TRUE(pty.ok()) << pty.error();
   HilSimulatorOptions o;
@@ -293,6 +320,171 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
   EXPECT_LE(s.frames_sent, 35u);
   ASSERT_FALSE(events.empty());
   EXPECT_NE(events.back().find("board silent"), std::string::npos);
+}
+
+// A serial path that goes away and comes back, as a USB adapter's does when it is pulled and
+// plugged in again: a symlink to a pseudo-terminal, removed with the pseudo-terminal, then made
+// again to a new one.
+struct Replug {
+  std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("symb-replug-" + std::to_string(::getpid()) + "-" +
+                                                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::optional<io::PtyPair> pty;
+
+  Replug() { plug(); }
+  ~Replug() { std::filesystem::remove(path); }
+  void plug() {
+    auto p = io::PtyPair::open("replug");
+    ASSERT_TRUE(p.ok()) << p.error();
+    pty = std::move(p).value();
+    std::filesystem::remove(path);
+    std::filesystem::create_symlink(pty->slave_path, path);
+  }
+  void unplug() {
+    std::filesystem::remove(path);
+    pty->master->close();
+    pty->slave->close();
+    pty.reset();
+  }
+};
+
+bool eventually(const std::function<bool()>& cond, kernel::Duration limit = 10s) {
+  const auto end = std::chrono::steady_clock::now() + limit;
+  while (!cond()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(2ms);
+  }
+  return true;
+}
+
+TEST(BoardLinkTest, ALineThatGoesAwayIsReopenedAndNothingIsCountedSentIntoIt) {
+  Replug line;
+  auto port = std::make_shared<io::SerialPort>("uart0", line.path.string());
+  ASSERT_TRUE(port->open().ok());
+  Board board(port);
+  FakeSim sim{line.pty->master, io::FrameDecoder(256), {}};
+  sim.send(0, 100, 0);
+  ASSERT_TRUE(eventually([&] {
+    sim.read_for(10ms);
+    return sim.answered(0, 100.0f);
+  }));
+
+  line.unplug();
+  ASSERT_TRUE(eventually([&] { return board.link->stats().line_losses == 1; }));
+  BoardLinkStats s = board.link->stats();
+  EXPECT_FALSE(s.line_open);
+  // Commands while the line is down are not sent, and said so.
+  const std::uint64_t written = s.frames_written;
+  const auto wheels = *board.node.find("wheels");
+  for (int i = 0; i < 3; ++i) {
+    os::Message m;
+    m.payload = os::Payload{50.0f, 50.0f};
+    ASSERT_TRUE(board.node.post(wheels, m).ok());
+  }
+  ASSERT_TRUE(eventually([&] { return board.link->stats().frames_unsent >= 3; }));
+  EXPECT_EQ(board.link->stats().frames_written, written);
+  EXPECT_TRUE(board.logged("serial line 'uart0' down"));
+  EXPECT_TRUE(board.logged("reopen attempt 1 failed"));
+
+  std::this_thread::sleep_for(300ms);  // an outage long enough to measure
+  line.plug();
+  ASSERT_TRUE(eventually([&] { return board.link->stats().line_reopens == 1; }));
+  s = board.link->stats();
+  EXPECT_TRUE(s.line_open);
+  EXPECT_GE(s.line_down, 300ms);
+  EXPECT_LT(s.line_down, 5s);
+  EXPECT_TRUE(board.logged("serial line 'uart0' open again after"));
+
+  // The same path, a new device: frames flow both ways again.
+  FakeSim again{line.pty->master, io::FrameDecoder(256), {}};
+  for (std::uint32_t seq = 1; seq <= 3; ++seq) {
+    again.send(seq, 200, 0);
+    again.read_for(40ms);
+  }
+  ASSERT_TRUE(eventually([&] {
+    again.read_for(10ms);
+    return again.answered(3, 200.0f);
+  }));
+  s = board.link->stats();
+  EXPECT_GT(s.frames_written, written);
+  EXPECT_EQ(s.line_losses, 1u);
+  // Every wheel frame made was written or counted unsent, once the ones in flight have arrived.
+  EXPECT_TRUE(eventually([&] {
+    const BoardLinkStats x = board.link->stats();
+    return x.frames_written + x.frames_unsent == x.wheel_commands + x.watchdog_stops;
+  }));
+}
+
+TEST(HilSimulatorTest, ALineThatGoesAwayIsReopenedAndItsDowntimeCounted) {
+  auto world_ptr = open_arena_with_one_robot();
+  EnkiWorld& world = *world_ptr;
+  Replug line;
+  auto port = std::make_shared<io::SerialPort>("data.r", line.path.string());
+  ASSERT_TRUE(port->open().ok());
+  HilSimulatorOptions o;
+  o.period = 30ms;
+  std::mutex events_mu;
+  std::vector<std::string> events;
+  o.on_event = [&](const std::string& e) {
+    std::lock_guard lock(events_mu);
+    events.push_back(e);
+  };
+  HilSimulator simulator(world, {port}, o);
+  std::atomic<std::uint64_t> ir_at_board{0};
+  std::atomic<bool> stop{false};
+  // The board's end: counts the IR frames that arrive on whatever device is plugged in.
+  std::mutex pty_mu;
+  std::thread board([&] {
+    io::FrameDecoder d(256);
+    std::vector<std::byte> buf(1024);
+    while (!stop) {
+      std::shared_ptr<io::SerialPort> master;
+      {
+        std::lock_guard lock(pty_mu);
+        if (line.pty) master = line.pty->master;
+      }
+      if (!master) {
+        std::this_thread::sleep_for(5ms);
+        continue;
+      }
+      auto n = master->read_some(buf, 5ms);
+      if (!n || *n == 0) continue;
+      d.feed(std::span<const std::byte>(buf.data(), *n), [&](std::span<const std::byte> p) {
+        if (decode_ir_payload(p).ok()) ir_at_board.fetch_add(1);
+      });
+    }
+  });
+  std::thread run([&] { (void)simulator.run_for(3s); });
+  ASSERT_TRUE(eventually([&] { return ir_at_board.load() >= 5; }));
+  {
+    std::lock_guard lock(pty_mu);
+    line.unplug();
+  }
+  ASSERT_TRUE(eventually([&] { return simulator.stats()[0].line_losses == 1; }));
+  EXPECT_FALSE(simulator.stats()[0].line_open);
+  ASSERT_TRUE(eventually([&] { return simulator.stats()[0].unsent >= 5; }));
+  const std::uint64_t sent_while_down = simulator.stats()[0].frames_sent;
+  {
+    std::lock_guard lock(pty_mu);
+    line.plug();
+  }
+  ASSERT_TRUE(eventually([&] { return simulator.stats()[0].line_reopens == 1; }));
+  const std::uint64_t before = ir_at_board.load();
+  ASSERT_TRUE(eventually([&] { return ir_at_board.load() >= before + 5; }));
+  simulator.stop();
+  run.join();
+  stop = true;
+  board.join();
+  const HilRobotStats s = simulator.stats()[0];
+  EXPECT_TRUE(s.line_open);
+  EXPECT_GE(s.line_down, 3 * o.period);  // five frames counted unsent, one a period apart
+  EXPECT_LT(s.line_down, 5s);
+  EXPECT_GT(s.frames_sent, sent_while_down);
+  std::lock_guard lock(events_mu);
+  std::string all;
+  for (const auto& e : events) all += e + "\n";
+  EXPECT_NE(all.find("serial line 'data.r' down"), std::string::npos) << all;
+  EXPECT_NE(all.find("serial line 'data.r' open again after"), std::string::npos) << all;
 }
 
 }  // namespace

@@ -18,8 +18,9 @@
 namespace symb::apps {
 
 inline constexpr int kExitOk = 0;
-inline constexpr int kExitFailure = 1;  // the command was fine but could not be carried out
-inline constexpr int kExitUsage = 2;    // the command line was wrong
+inline constexpr int kExitFailure = 1;        // the command was fine but could not be carried out
+inline constexpr int kExitUsage = 2;          // the command line was wrong
+inline constexpr int kExitInterrupted = 130;  // stopped early by Ctrl-C (128 + SIGINT), results written
 
 struct UsageError {
   std::string message;

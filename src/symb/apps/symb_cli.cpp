@@ -6,7 +6,7 @@
 #include "symb/apps/hil/hil_commands.hpp"
 #include "symb/apps/run/run_command.hpp"
 #include "symb/apps/shell_client.hpp"
-#include "symb/apps/swarm_command.hpp"
+#include "symb/apps/swarm/swarm_command.hpp"
 
 #ifndef SYMB_VERSION
 #define SYMB_VERSION "unknown"

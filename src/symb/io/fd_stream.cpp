@@ -178,12 +178,23 @@ void FdStream::close() { fd_.close(); }
 bool FdStream::is_open() const {
   if (!fd_.attached()) return false;
   std::lock_guard lock(state_mu_);
-  return failure_.empty();
+  return failure_.empty() && input_failure_.empty();
 }
 
 std::string FdStream::failure() const {
   std::lock_guard lock(state_mu_);
-  return failure_;
+  return failure_.empty() ? input_failure_ : failure_;
+}
+
+bool FdStream::input_ended() const {
+  std::lock_guard lock(state_mu_);
+  return !input_failure_.empty() || !failure_.empty();
+}
+
+void FdStream::fail_input(std::string reason) {
+  std::lock_guard lock(state_mu_);
+  std::string& slot = separate_input_ ? input_failure_ : failure_;
+  if (slot.empty()) slot = std::move(reason);
 }
 
 void FdStream::set_write_timeout(kernel::Duration t) {
@@ -194,6 +205,11 @@ void FdStream::set_write_timeout(kernel::Duration t) {
 kernel::Duration FdStream::write_timeout() const {
   std::lock_guard lock(state_mu_);
   return write_timeout_;
+}
+
+bool FdStream::output_failed() const {
+  std::lock_guard lock(state_mu_);
+  return !failure_.empty();
 }
 
 void FdStream::fail(std::string reason) {
@@ -232,7 +248,9 @@ kernel::Status FdStream::attach(int read_fd, int write_fd, bool owned) {
     write_blocking_ = write_blocking;
     write_is_socket_ = write_socket;
     write_is_fifo_ = write_fifo;
+    separate_input_ = read_fd >= 0 && write_fd >= 0 && read_fd != write_fd;
     failure_.clear();
+    input_failure_.clear();
   }
   if (auto st = fd_.attach(read_fd, write_fd, owned); !st)
     return kernel::Error{"device '" + name() + "': " + st.error()};
@@ -241,7 +259,7 @@ kernel::Status FdStream::attach(int read_fd, int write_fd, bool owned) {
 
 kernel::Result<std::size_t> FdStream::read_some(std::span<std::byte> buf, kernel::Duration timeout) {
   auto use = fd_.use();
-  if (!use || !failure().empty()) return closed_error();
+  if (!use || input_ended()) return closed_error();
   const int fd = use->read_fd();
   if (fd < 0) return kernel::Error{"stream '" + name() + "' cannot be read"};
   if (buf.empty()) return std::size_t{0};
@@ -253,33 +271,33 @@ kernel::Result<std::size_t> FdStream::read_some(std::span<std::byte> buf, kernel
       case WakeableFd::Wait::kTimeout: return std::size_t{0};
       case WakeableFd::Wait::kFailed: {
         std::string why = "poll failed: " + errno_text(errno);
-        fail(why);
+        fail_input(why);
         return kernel::Error{"stream '" + name() + "': " + why};
       }
       case WakeableFd::Wait::kReady: break;
     }
     if ((revents & POLLNVAL) != 0) {
-      fail("descriptor not valid");
+      fail_input("descriptor not valid");
       return closed_error();
     }
     const ssize_t n = ::read(fd, buf.data(), buf.size());
     if (n > 0) return static_cast<std::size_t>(n);
     if (n == 0) {
-      fail("end of stream");
+      fail_input("end of stream");
       return closed_error();
     }
     const int e = errno;
     // Readiness can be spurious; the next wait returns at the deadline at the latest.
     if (e == EINTR || e == EAGAIN || e == EWOULDBLOCK) continue;
     // A pseudo-terminal reports its other end going away as EIO.
-    fail(e == EIO ? "end of stream (the other end is gone)" : "read failed: " + errno_text(e));
+    fail_input(e == EIO ? "end of stream (the other end is gone)" : "read failed: " + errno_text(e));
     return closed_error();
   }
 }
 
 kernel::Status FdStream::write_all(std::span<const std::byte> data) {
   auto use = fd_.use();
-  if (!use || !failure().empty()) return closed_error();
+  if (!use || output_failed()) return closed_error();
   const int fd = use->write_fd();
   if (fd < 0) return kernel::Error{"stream '" + name() + "' cannot be written"};
   bool blocking = false, socket = false, fifo = false;

@@ -92,7 +92,9 @@ class FdStream : public IOStream {
   bool is_open() const override;
   // Waits up to `timeout` for the first byte, then returns what one read() gives. End of stream
   // (the peer closed, a pseudo-terminal's other end went away) and device errors are errors, after
-  // which is_open() is false until the stream is closed and opened again.
+  // which is_open() is false until the stream is closed and opened again. When input and output
+  // are separate descriptors (stdin and stdout), the end of the input stops only the input:
+  // input_ended() is true, is_open() false, and write_all() goes on writing the output.
   kernel::Result<std::size_t> read_some(std::span<std::byte> buf, kernel::Duration timeout) override;
   // Writes everything or fails; gives up when the device takes no byte for write_timeout().
   kernel::Status write_all(std::span<const std::byte> data) override;
@@ -103,6 +105,8 @@ class FdStream : public IOStream {
   kernel::Duration write_timeout() const;
   // Why the stream stopped (end of stream, a device error), or empty while it works.
   std::string failure() const;
+  // The input reached its end (see read_some); the output may still work.
+  bool input_ended() const;
 
  protected:
   explicit FdStream(const std::string& name);
@@ -120,6 +124,9 @@ class FdStream : public IOStream {
   }
   // Marks the stream broken (is_open() false) with a reason; the descriptors stay until close().
   void fail(std::string reason);
+  // The same for a failure met while reading: with separate descriptors it stops the input only.
+  void fail_input(std::string reason);
+  bool output_failed() const;
   WakeableFd& fd() { return fd_; }
 
  private:
@@ -128,6 +135,8 @@ class FdStream : public IOStream {
   WakeableFd fd_;
   mutable std::mutex state_mu_;
   std::string failure_;
+  std::string input_failure_;  // separate descriptors: why the input stopped
+  bool separate_input_ = false;
   kernel::Duration write_timeout_ = std::chrono::seconds(2);
   bool write_is_socket_ = false;
   bool write_is_fifo_ = false;

@@ -98,12 +98,19 @@ void StreamTask::read_loop(std::shared_ptr<Shared> shared) {
         os::Node* n = shared->node;
         std::string name = stream_->name();
         n->inject([weak, name] {
-          if (auto s = weak.lock()) s->node->log().warn(name, "stream closed");
+          auto s = weak.lock();
+          if (!s) return;
+          s->node->log().warn(name, "stream closed");
+          // Through this task's own queue, so that it follows the data injected before it.
+          os::Message m;
+          m.port = kEndPort;
+          (void)s->node->post(s->self, m, os::QueuePolicy::kRefuse);
         });
       }
       std::this_thread::sleep_for(options_.poll);
       continue;
     }
+    reported_closed = false;  // open again (reopened): its next loss is reported anew
     auto got = stream_->read_some(buf, options_.poll);
     if (!got || *got == 0) continue;
     std::span<const std::byte> chunk(buf.data(), *got);
@@ -164,6 +171,10 @@ void StreamTask::write_out(std::span<const std::byte> bytes) {
 void StreamTask::on_message(const os::Message& m) {
   if (m.port == kInboundPort && !m.source.valid()) {
     send(kDataPort, m.payload);
+    return;
+  }
+  if (m.port == kEndPort && !m.source.valid()) {
+    send(kEndPort, m.payload);
     return;
   }
   out_.clear();

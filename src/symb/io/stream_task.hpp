@@ -49,6 +49,10 @@ struct StreamStats {
 class StreamTask : public os::Task {
  public:
   static constexpr os::Port kDataPort = 0;
+  // Sent once, without a payload, after the last data when the stream stops delivering (end of
+  // input, the device went away), and again after each reopening that is lost: a reader of
+  // lines (a shell) hears here that no more will come, in order after what did.
+  static constexpr os::Port kEndPort = 1;
   // Internal: chunks from the reader thread arrive on this port from outside any task.
   static constexpr os::Port kInboundPort = 0xffff;
 

@@ -64,6 +64,14 @@ struct HookTraffic {
   }
 };
 
+// The rule for duplicate hooks, in one place: a hook is known by its sender, its receiver and its
+// port (-1, any port, being one value), and a second hook with the same three would deliver
+// every message twice. Node::hook refuses it (the shell's `hook`, code); the scenario parser
+// refuses it with the file's line.
+inline bool same_hook_key(std::int32_t port_a, std::int32_t port_b) {
+  return (port_a < 0 ? -1 : port_a) == (port_b < 0 ? -1 : port_b);
+}
+
 struct HookInfo {
   HookId id;
   TaskId sender;

@@ -660,11 +660,12 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   if (s == nullptr) return Error{no_task(sender).error()};
   TaskRecord* r = lookup_locked(receiver);
   if (r == nullptr) return Error{no_task(receiver).error()};
+  // One rule with scenario files: a task's output never feeds its own queue (a cycle of one).
+  if (s == r) return Error{"task '" + s->name + "' is hooked to itself"};
   if (options.port > 0xffff) return Error{"hook port must be -1 (any) or 0..65535"};
   if (options.suppress_window.count() < 0) return Error{"negative suppression window"};
   if (auto st = check_layouts(*s, *r, options.port); !st) return Error{st.error()};
   detail::Hook h;
-  h.serial = ++hook_serial_;
   h.priority = options.priority;
   h.port = options.port < 0 ? -1 : options.port;
   h.policy = options.policy;
@@ -673,6 +674,12 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   h.suppress_window = options.suppress_window;
   {
     std::lock_guard out(s->out_mu);
+    for (const detail::Hook& x : s->hooks)
+      if (x.receiver == r && same_hook_key(x.port, h.port))
+        return Error{"task '" + s->name + "' is already hooked to '" + r->name + "'" +
+                     (h.port < 0 ? std::string() : " on port " + std::to_string(h.port)) + " (hook " +
+                     std::to_string(x.serial) + ")"};
+    h.serial = ++hook_serial_;
     h.sent_before = s->sent.load(std::memory_order_relaxed);
     {
       std::lock_guard in(r->in_mu);

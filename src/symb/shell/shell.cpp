@@ -316,6 +316,13 @@ Reply Shell::run_line(std::string_view line, int depth) {
   const Command* command = nullptr;
   for (const auto& c : table())
     if (c.help.name == word.text) command = &c;
+  if (command == nullptr && depth > 0) {
+    // A line of a file given to `run`: the file may be anything readable (a binary, a password
+    // file), so its bytes are never quoted back; the position and the kind of problem say enough.
+    return fail(at_column(word.column,
+                          "not a shell command (the line's first word is not one; its text is not "
+                          "shown, as the file may not be a shell script)"));
+  }
   if (command == nullptr) {
     std::vector<std::string_view> names;
     for (const auto& c : table()) names.push_back(c.help.name);

@@ -67,14 +67,44 @@ void CommandShellTask::say(const std::string& text) {
 }
 
 void CommandShellTask::on_message(const os::Message& m) {
+  if (closing_ || !shell_) return;
   const io::Bytes* bytes = io::bytes_of(m);
-  if (bytes == nullptr || closing_ || !shell_) return;
+  if (bytes == nullptr && m.port == io::StreamTask::kEndPort) {
+    end_of_input();
+    return;
+  }
+  if (bytes == nullptr) return;
   if (!peer_.valid() && m.source.valid()) {
     peer_ = m.source;
     shell_->protect(peer_);
   }
+  feed(bytes->data);
+}
+
+void CommandShellTask::end_of_input() {
+  // A last line without its newline was typed all the same: it runs before the session ends.
+  if (!editor_.buffer().empty()) {
+    const char nl = '\n';
+    feed(std::as_bytes(std::span<const char>(&nl, 1)));
+  }
+  if (closing_) return;
+  if (!options_.close_on_exit) {
+    // A console stays for the line's return (a replugged adapter), locked again if it has a token.
+    log(os::LogLevel::kInfo, "end of input: the console waits for its line");
+    if (!options_.token.empty()) {
+      locked_ = true;
+      editor_.set_secret(true);
+      editor_.set_prompt("token: ");
+    }
+    return;
+  }
+  log(os::LogLevel::kInfo, "end of input: the session ends");
+  close_session();
+}
+
+void CommandShellTask::feed(std::span<const std::byte> data) {
   events_.clear();
-  const std::string echo = editor_.feed(bytes->data, events_);
+  const std::string echo = editor_.feed(data, events_);
   std::string out;
   std::size_t echoed = 0;
   for (const auto& e : events_) {

@@ -68,6 +68,10 @@ class CommandShellTask : public os::Task {
   void on_stop() override;
 
  private:
+  // Runs the lines in `data` and sends the replies.
+  void feed(std::span<const std::byte> data);
+  // The stream task said no more input will come: the last line runs, then the session closes.
+  void end_of_input();
   // What to send for one editor event.
   std::string handle(const EditorEvent& e);
   std::string unlock(const std::string& line);

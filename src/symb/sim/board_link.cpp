@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "symb/io/bytes.hpp"
+#include "symb/io/fd_stream.hpp"
+#include "symb/io/reopen_backoff.hpp"
 #include "symb/io/stream_task.hpp"
 #include "symb/os/warning_limiter.hpp"
 #include "symb/robot/channel_spec.hpp"
@@ -26,31 +28,93 @@ std::int64_t ms(kernel::Duration d) { return std::chrono::duration_cast<std::chr
 // stats (at every message and tick) and reports bad frames in the node's log.
 class HilLinkTask final : public io::StreamTask {
  public:
-  HilLinkTask(std::shared_ptr<io::IOStream> port, std::shared_ptr<LinkShared> shared, kernel::Duration warn)
+  HilLinkTask(std::shared_ptr<io::IOStream> port, std::shared_ptr<LinkShared> shared, const BoardLinkOptions& o)
       : io::StreamTask(std::move(port), Options{io::StreamMode::kFrames, 4096, 256, std::chrono::milliseconds(20)}),
         shared_(std::move(shared)),
-        bad_warning_(warn) {}
+        bad_warning_(o.warn_interval),
+        backoff_(o.reopen_first, o.reopen_most),
+        reopen_first_(o.reopen_first),
+        reopen_most_(o.reopen_most) {}
 
  protected:
-  void on_message(const os::Message& m) override {
-    io::StreamTask::on_message(m);
+  void on_start() override {
+    io::StreamTask::on_start();
+    watch_line();
     refresh();
   }
-  void on_tick() override { refresh(); }
+  void on_message(const os::Message& m) override {
+    if (!m.source.valid()) {  // from the line
+      io::StreamTask::on_message(m);
+      refresh();
+      return;
+    }
+    // A wheel frame for the line: counted sent only when the line took it.
+    bool written = false;
+    if (stream().is_open()) {
+      const std::uint64_t errors = stats().write_errors;
+      io::StreamTask::on_message(m);
+      written = stats().write_errors == errors;
+    }
+    {
+      std::lock_guard lock(shared_->mu);
+      ++(written ? shared_->stats.frames_written : shared_->stats.frames_unsent);
+    }
+    if (!written) watch_line();
+    refresh();
+  }
+  void on_tick() override {
+    watch_line();
+    refresh();
+  }
   void on_stop() override {
     io::StreamTask::on_stop();
     refresh();
   }
 
  private:
+  // Notices a line that went away and reopens it by its path with backoff.
+  void watch_line() {
+    const kernel::Time t = now();
+    if (stream().is_open()) {
+      if (backoff_.down()) reopened(t);
+      return;
+    }
+    if (!backoff_.down()) {
+      backoff_.lost(t);
+      const auto* fd = dynamic_cast<const io::FdStream*>(&stream());
+      const std::string why = fd != nullptr ? fd->failure() : std::string();
+      log(os::LogLevel::kWarn, "serial line '" + stream().name() + "' down" + (why.empty() ? "" : " (" + why + ")") +
+                                   ": reopening it at once, then after " + std::to_string(ms(reopen_first_)) +
+                                   " ms, doubling up to " + std::to_string(ms(reopen_most_)) + " ms");
+    }
+    if (!backoff_.due(t)) return;
+    if (auto st = stream().open(); st) {
+      reopened(t);
+    } else {
+      const kernel::Duration wait = backoff_.failed(t);
+      log(os::LogLevel::kInfo, "reopen attempt " + std::to_string(backoff_.attempts()) + " failed: " + st.error() +
+                                   "; next in " + std::to_string(ms(wait)) + " ms");
+    }
+  }
+  void reopened(kernel::Time t) {
+    const kernel::Duration outage = backoff_.reopened(t);
+    log(os::LogLevel::kInfo, "serial line '" + stream().name() + "' open again after " + std::to_string(ms(outage)) +
+                                 " ms (" + std::to_string(backoff_.attempts()) + " attempt(s))");
+  }
+
   void refresh() {
     const io::StreamStats s = stats();
+    const kernel::Time t = now();
     {
       std::lock_guard lock(shared_->mu);
       shared_->stats.bytes_in = s.bytes_in;
       shared_->stats.bytes_out = s.bytes_out;
       shared_->stats.write_errors = s.write_errors;
       shared_->stats.decoder = s.frames;
+      shared_->stats.line_losses = backoff_.losses();
+      shared_->stats.line_reopens = backoff_.reopens();
+      shared_->stats.line_down = backoff_.down_for(t);
+      shared_->stats.line_open = !backoff_.down() && s.open;
     }
     const std::uint64_t bad = s.frames.dropped();
     if (bad > reported_bad_) {
@@ -71,6 +135,9 @@ class HilLinkTask final : public io::StreamTask {
 
   std::shared_ptr<LinkShared> shared_;
   os::WarningLimiter bad_warning_;
+  io::ReopenBackoff backoff_;
+  const kernel::Duration reopen_first_;
+  const kernel::Duration reopen_most_;
   std::uint64_t reported_bad_ = 0;
 };
 
@@ -89,6 +156,7 @@ class HilIrTask final : public os::Task {
 
   void on_message(const os::Message& m) override {
     const io::Bytes* bytes = io::bytes_of(m);
+    if (bytes == nullptr && m.port == io::StreamTask::kEndPort) return;  // the line's loss: the link reports it
     auto frame = bytes ? decode_ir_payload(bytes->data) : kernel::Error{"a message without frame bytes"};
     if (!frame) {
       bump([](BoardLinkStats& s) { ++s.malformed; });
@@ -254,6 +322,8 @@ std::shared_ptr<BoardLink> BoardLink::create(std::shared_ptr<io::IOStream> port,
   if (!port) throw std::invalid_argument("BoardLink: no port");
   if (options.control_period.count() <= 0 || options.lost_periods < 1 || !(options.watchdog_periods >= 0))
     throw std::invalid_argument("BoardLink: control period, lost_periods and watchdog_periods must be positive");
+  if (options.reopen_first.count() <= 0 || options.reopen_most < options.reopen_first)
+    throw std::invalid_argument("BoardLink: reopen_first must be positive and at most reopen_most");
   return std::shared_ptr<BoardLink>(new BoardLink(std::move(port), options));
 }
 
@@ -264,8 +334,8 @@ kernel::Status BoardLink::make_device_tasks(os::Node& node) {
   os::TaskOptions device_options;
   device_options.period = options_.control_period;
   device_options.queue_capacity = 8;
-  auto link = node.create(std::string(kLinkTaskName),
-                          std::make_unique<HilLinkTask>(port_, shared_, options_.warn_interval), link_options);
+  auto link =
+      node.create(std::string(kLinkTaskName), std::make_unique<HilLinkTask>(port_, shared_, options_), link_options);
   if (!link) return kernel::Error{"link: " + link.error()};
   auto ir = node.create(std::string(kIrTaskName), std::make_unique<HilIrTask>(shared_, options_), device_options);
   if (!ir) return kernel::Error{"ir: " + ir.error()};
@@ -288,16 +358,20 @@ BoardLinkStats BoardLink::stats() const {
 }
 
 std::string describe(const BoardLinkStats& s) {
-  char buf[400];
+  char buf[600];
   std::snprintf(buf, sizeof buf,
                 "frames %llu good, %llu bad (crc %llu), %llu missed, %llu out of order; link %s (%llu lost, "
-                "%llu back), last seq %u; wheels %llu sent, %llu refused, %llu watchdog stops",
+                "%llu back), last seq %u; wheels %llu commands, %llu refused, %llu watchdog stops; frames %llu "
+                "sent, %llu not sent; serial line %s (%llu lost, %llu reopened, down %lld ms in all)",
                 static_cast<unsigned long long>(s.ir_frames), static_cast<unsigned long long>(s.bad_frames()),
                 static_cast<unsigned long long>(s.decoder.crc_errors), static_cast<unsigned long long>(s.missed),
                 static_cast<unsigned long long>(s.out_of_order), s.link_up ? "up" : "down",
                 static_cast<unsigned long long>(s.link_losses), static_cast<unsigned long long>(s.link_recoveries),
                 static_cast<unsigned>(s.last_seq), static_cast<unsigned long long>(s.wheel_commands),
-                static_cast<unsigned long long>(s.wheel_rejected), static_cast<unsigned long long>(s.watchdog_stops));
+                static_cast<unsigned long long>(s.wheel_rejected), static_cast<unsigned long long>(s.watchdog_stops),
+                static_cast<unsigned long long>(s.frames_written), static_cast<unsigned long long>(s.frames_unsent),
+                s.line_open ? "open" : "DOWN", static_cast<unsigned long long>(s.line_losses),
+                static_cast<unsigned long long>(s.line_reopens), static_cast<long long>(ms(s.line_down)));
   return buf;
 }
 

@@ -12,6 +12,10 @@
 //           `lost_periods` control periods it logs that the link is lost, and when frames come
 //           back it logs that and goes on. A frame with seq 0 starts a new run (a simulator that
 //           started or restarted).
+//           When the device goes away (end of stream, I/O errors: a USB adapter pulled, the
+//           other end of a pseudo-terminal closed) the link logs it, reopens the same path with
+//           backoff (reopen_first, doubling up to reopen_most), and logs the reopening; frames
+//           given to it meanwhile are counted unsent, never sent.
 //   wheels  takes [left, right] in Thymio motor units from the controller, rejects NaN and wrong
 //           counts, clamps to +-500 and sends [seq, left, right] to `link`, seq being the newest
 //           IR frame `ir` passed on (the paper's PlayerActuatorTask). Its watchdog is the
@@ -46,6 +50,10 @@ struct BoardLinkOptions {
   // The wheels watchdog: stop after this many control periods without a command (as in-process).
   double watchdog_periods = 1.5;
   kernel::Duration warn_interval = std::chrono::seconds(1);
+  // A serial line that went away (a pulled USB adapter, a pseudo-terminal closed) is reopened by
+  // its path: at once, then after reopen_first, doubling up to reopen_most (io::ReopenBackoff).
+  kernel::Duration reopen_first = std::chrono::milliseconds(100);
+  kernel::Duration reopen_most = std::chrono::seconds(2);
 };
 
 struct BoardLinkStats {
@@ -55,6 +63,14 @@ struct BoardLinkStats {
   std::uint64_t bytes_out = 0;
   std::uint64_t write_errors = 0;
   io::FrameStats decoder;  // frames: good frames; dropped(): bad ones
+  // The serial line itself (the device, not the frames on it): written + unsent == the wheel
+  // frames the link was given; a frame is never counted sent into a line that is down.
+  std::uint64_t frames_written = 0;  // wheel frames the line took
+  std::uint64_t frames_unsent = 0;   // wheel frames dropped: the line was down or refused them
+  std::uint64_t line_losses = 0;     // times the device went away
+  std::uint64_t line_reopens = 0;    // times it was opened again
+  kernel::Duration line_down{0};     // time down in all, the outage in progress included
+  bool line_open = false;
   // The ir task.
   std::uint64_t ir_frames = 0;     // IR frames passed on to the controller
   std::uint64_t malformed = 0;     // good frames that are not IR frames (count, sequence, NaN)
@@ -104,7 +120,8 @@ class BoardLink : public std::enable_shared_from_this<BoardLink> {
   std::shared_ptr<Shared> shared_;
 };
 
-// "ir 1234 good, 3 bad, 5 missed, 0 out of order; link up; wheels 1230 sent, 0 watchdog stops"
+// "frames 1234 good, 3 bad (crc 3), ...; wheels 1230 commands, ...; frames 1230 sent, 0 not sent;
+// serial line open (0 lost, 0 reopened, down 0 ms in all)"
 std::string describe(const BoardLinkStats& s);
 
 }  // namespace symb::sim

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "symb/io/fd_stream.hpp"
+#include "symb/io/reopen_backoff.hpp"
 #include "symb/sim/sim_drivers.hpp"
 
 namespace symb::sim {
@@ -21,13 +22,22 @@ struct HilSimulator::Robot {
   io::FrameDecoder decoder{256};
   HilRobotStats stats;
   std::uint64_t quiet_steps = 0;  // steps since the last applied frame
+  io::ReopenBackoff backoff;
 };
 
+namespace {
+kernel::Time steady_now() { return std::chrono::duration_cast<kernel::Duration>(Clock::now().time_since_epoch()); }
+std::int64_t ms(kernel::Duration d) { return std::chrono::duration_cast<std::chrono::milliseconds>(d).count(); }
+}  // namespace
+
 std::string describe(const HilRobotStats& s) {
-  return "sent " + u(s.frames_sent) + " (" + u(s.corrupted) + " corrupted, " + u(s.write_errors) +
-         " not taken); received " + u(s.received) + " good, " + u(s.bad_frames()) + " bad; applied " + u(s.applied) +
-         " (" + u(s.late) + " late), " + u(s.stale) + " stale, " + u(s.missing) + " steps without a new frame, " +
-         u(s.silences) + " silences, " + u(s.recoveries) + " recoveries";
+  return "sent " + u(s.frames_sent) + " (" + u(s.corrupted) + " corrupted, " + u(s.write_errors) + " not taken, " +
+         u(s.unsent) + " not sent: line down); serial line " + (s.line_open ? "open" : "DOWN") + " (" +
+         u(s.line_losses) + " lost, " + u(s.line_reopens) + " reopened, down " +
+         u(static_cast<std::uint64_t>(ms(s.line_down))) + " ms in all); received " + u(s.received) + " good, " +
+         u(s.bad_frames()) + " bad; applied " + u(s.applied) + " (" + u(s.late) + " late), " + u(s.stale) + " stale, " +
+         u(s.missing) + " steps without a new frame, " + u(s.silences) + " silences, " + u(s.recoveries) +
+         " recoveries";
 }
 
 HilSimulator::HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStream>> ports, HilSimulatorOptions options)
@@ -48,8 +58,13 @@ HilSimulator::HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStrea
     throw std::invalid_argument("HilSimulator: the period must be in (0, 1 s]");
   if (!(options_.corrupt >= 0 && options_.corrupt <= 1))
     throw std::invalid_argument("HilSimulator: corrupt must be in [0, 1]");
+  if (options_.reopen_first.count() <= 0 || options_.reopen_most < options_.reopen_first)
+    throw std::invalid_argument("HilSimulator: reopen_first must be positive and at most reopen_most");
   hold_steps_ = static_cast<std::uint64_t>(std::max<std::int64_t>(1, options_.hold / options_.period));
-  for (std::size_t i = 0; i < robots_.size(); ++i) robots_[i].stats.robot = world.robot_name(i);
+  for (std::size_t i = 0; i < robots_.size(); ++i) {
+    robots_[i].stats.robot = world.robot_name(i);
+    robots_[i].backoff = io::ReopenBackoff(options_.reopen_first, options_.reopen_most);
+  }
 }
 
 HilSimulator::~HilSimulator() = default;
@@ -89,12 +104,51 @@ void HilSimulator::send_ir(std::size_t i, std::uint32_t seq) {
   io::encode_frame(encode_ir_payload(f), frame_);
   const bool hit = corruptor_.roll() && corrupt_frame(frame_, corruptor_.random());
   corruptor_.count(hit);
-  const auto st = ports_[i]->write_all(frame_);
+  // Into a line that is down nothing is written, and nothing is counted sent.
+  const bool open = ports_[i]->is_open();
+  const bool sent = open && ports_[i]->write_all(frame_).ok();
   std::lock_guard lock(stats_mu_);
   HilRobotStats& s = robots_[i].stats;
-  ++s.frames_sent;
-  s.corrupted += hit ? 1 : 0;
-  s.write_errors += st ? 0 : 1;
+  s.frames_sent += sent ? 1 : 0;
+  s.corrupted += sent && hit ? 1 : 0;
+  s.write_errors += open && !sent ? 1 : 0;
+  s.unsent += open ? 0 : 1;
+}
+
+void HilSimulator::watch_line(std::size_t i) {
+  io::IOStream& port = *ports_[i];
+  Robot& r = robots_[i];
+  const kernel::Time t = steady_now();
+  std::string note;
+  if (!port.is_open()) {
+    if (!r.backoff.down()) {
+      r.backoff.lost(t);
+      const auto* fd = dynamic_cast<const io::FdStream*>(&port);
+      const std::string why = fd != nullptr ? fd->failure() : std::string();
+      event("robot " + r.stats.robot + ": serial line '" + port.name() + "' down" +
+            (why.empty() ? "" : " (" + why + ")") + ": reopening it with backoff");
+    }
+    if (r.backoff.due(t)) {
+      if (auto st = port.open(); st) {
+        (void)port.ioctl("flush");
+        if (auto* fd = dynamic_cast<io::FdStream*>(&port)) fd->set_write_timeout(options_.period / 4);
+        note = "robot " + r.stats.robot + ": serial line '" + port.name() + "' open again after " +
+               std::to_string(ms(r.backoff.reopened(t))) + " ms";
+      } else {
+        const kernel::Duration wait = r.backoff.failed(t);
+        event("robot " + r.stats.robot + ": reopen attempt " + std::to_string(r.backoff.attempts()) +
+              " failed: " + st.error() + "; next in " + std::to_string(ms(wait)) + " ms");
+      }
+    }
+  }
+  {
+    std::lock_guard lock(stats_mu_);
+    r.stats.line_losses = r.backoff.losses();
+    r.stats.line_reopens = r.backoff.reopens();
+    r.stats.line_down = r.backoff.down_for(t);
+    r.stats.line_open = !r.backoff.down();
+  }
+  if (!note.empty()) event(note);
 }
 
 std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_frame) {
@@ -137,6 +191,7 @@ kernel::Status HilSimulator::wait_for_boards(kernel::Duration timeout) {
   for (;;) {
     bool all = true;
     for (std::size_t i = 0; i < robots_.size(); ++i) {
+      watch_line(i);
       bool any = false;
       (void)read_wheels(i, any);
       bool answered = false;
@@ -186,6 +241,7 @@ kernel::Result<std::uint64_t> HilSimulator::run_for(kernel::Duration duration) {
 
     // 1. wheels from the newest answer, or the last speeds, or a stop after `hold`.
     for (std::size_t i = 0; i < robots_.size(); ++i) {
+      watch_line(i);
       bool any = false;
       const auto f = read_wheels(i, any);
       Robot& r = robots_[i];

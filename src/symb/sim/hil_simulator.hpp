@@ -19,6 +19,10 @@
 // its last speeds for `hold`, then stops, and it is reported; when frames come back it follows
 // them again.
 //
+// A line whose device goes away (writes or reads fail: a USB adapter pulled, `symb link`
+// stopped) is reported, reopened by its path with backoff and used again once it is back;
+// frames meanwhile are counted unsent. stats() says how long each line was down.
+//
 // Fault injection: `corrupt` is the fraction of outgoing IR frames to corrupt (corrupt_frame,
 // one byte, always caught by the CRC), drawn from a RandomStream seeded with `seed`.
 //
@@ -53,22 +57,32 @@ struct HilSimulatorOptions {
   std::uint64_t seed = 1;
   // Link events for the person ("robot r1: board silent ..."); called on the stepping thread.
   std::function<void(const std::string&)> on_event;
+  // A line whose device went away is reopened by its path at once, then after reopen_first,
+  // doubling up to reopen_most (io::ReopenBackoff); meanwhile its frames are counted unsent.
+  kernel::Duration reopen_first = std::chrono::milliseconds(100);
+  kernel::Duration reopen_most = std::chrono::seconds(2);
 };
 
 struct HilRobotStats {
   std::string robot;
-  std::uint64_t frames_sent = 0;   // IR frames written, handshake included
+  std::uint64_t frames_sent = 0;   // IR frames the line took, handshake included
   std::uint64_t corrupted = 0;     // of them, corrupted by the fault injector
   std::uint64_t write_errors = 0;  // frames the port did not take (the board is not reading)
-  std::uint64_t received = 0;      // good wheel frames
-  std::uint64_t malformed = 0;     // good frames that are no wheel frame
-  io::FrameStats decoder;          // dropped(): bad frames (CRC, framing)
-  std::uint64_t applied = 0;       // steps that took new speeds from a frame
-  std::uint64_t late = 0;          // ... that answered an older IR frame than the newest sent
-  std::uint64_t stale = 0;         // frames older than one already applied: dropped
-  std::uint64_t missing = 0;       // steps with no new frame (the last speeds kept)
-  std::uint64_t silences = 0;      // times the board fell silent for `hold` (robot stopped)
-  std::uint64_t recoveries = 0;    // times it answered again after that
+  std::uint64_t unsent = 0;        // frames not written at all: the line was down
+  // The serial line itself: lost when the device goes away, reopened by its path with backoff.
+  std::uint64_t line_losses = 0;
+  std::uint64_t line_reopens = 0;
+  kernel::Duration line_down{0};  // in all, the outage in progress included
+  bool line_open = true;
+  std::uint64_t received = 0;    // good wheel frames
+  std::uint64_t malformed = 0;   // good frames that are no wheel frame
+  io::FrameStats decoder;        // dropped(): bad frames (CRC, framing)
+  std::uint64_t applied = 0;     // steps that took new speeds from a frame
+  std::uint64_t late = 0;        // ... that answered an older IR frame than the newest sent
+  std::uint64_t stale = 0;       // frames older than one already applied: dropped
+  std::uint64_t missing = 0;     // steps with no new frame (the last speeds kept)
+  std::uint64_t silences = 0;    // times the board fell silent for `hold` (robot stopped)
+  std::uint64_t recoveries = 0;  // times it answered again after that
   bool silent = false;
   bool answered = false;  // the handshake was answered
   std::uint32_t last_applied = 0;
@@ -84,7 +98,8 @@ class HilSimulator {
   // One port per robot of `world`, in robot order. Ports are opened (if closed), their unread
   // input flushed, and those that are file descriptors get a short write timeout, so a board
   // that does not read costs the step a few milliseconds at most. Throws std::invalid_argument
-  // on a wrong port count, a period outside (0, 1 s] or `corrupt` outside [0, 1].
+  // on a wrong port count, a period outside (0, 1 s], `corrupt` outside [0, 1] or a reopen
+  // backoff that is not positive and ascending.
   HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStream>> ports, HilSimulatorOptions options);
   ~HilSimulator();
   HilSimulator(const HilSimulator&) = delete;
@@ -109,6 +124,8 @@ class HilSimulator {
   struct Robot;
   kernel::Status open_ports();
   void send_ir(std::size_t robot, std::uint32_t seq);
+  // Notices a line that went away and reopens it with backoff (before each step).
+  void watch_line(std::size_t robot);
   // Reads what arrived, non-blocking; returns the newest valid wheel frame with seq >= 1.
   std::optional<HilWheelFrame> read_wheels(std::size_t robot, bool& any_frame);
   void event(const std::string& text);

@@ -58,6 +58,10 @@ inline constexpr int kMaxNesting = 64;           // mappings and sequences insid
 inline constexpr std::size_t kMaxRobots = 1000;  // after `count` expansion
 inline constexpr std::size_t kMaxWalls = 2000;
 inline constexpr std::size_t kMaxZones = 100;
+// The longest run: a scenario's `duration` and the commands' --duration (symb run, sim, evolve)
+// all stop here. 168 h (a week) simulated is hours of wall clock for a swarm at full speed; and
+// a HIL run's sequence numbers last 139 h at 30 ms.
+inline constexpr kernel::Duration kMaxRunDuration = std::chrono::hours(168);
 
 struct TaskSpec {
   std::string name;

@@ -439,7 +439,7 @@ struct Parser {
     if (auto d = m.get("description"); d.IsDefined() && !d.IsNull()) sc.description = rd.text(d, "description");
     if (auto s = m.get("seed"); s.IsDefined()) sc.seed = rd.unsigned_integer(s, "seed");
     if (auto d = m.get("duration"); d.IsDefined())
-      sc.duration = rd.duration(d, "duration", std::chrono::milliseconds(1), std::chrono::hours(24 * 30));
+      sc.duration = rd.duration(d, "duration", std::chrono::milliseconds(1), kMaxRunDuration);
     if (auto p = m.get("control_period"); p.IsDefined())
       sc.control_period = rd.duration(p, "control_period", std::chrono::milliseconds(1), std::chrono::seconds(1));
     world(m.require("world"));
@@ -812,7 +812,7 @@ struct Parser {
       }
     if (h.from == h.to) src.fail(h.where, "task '" + h.from + "' is hooked to itself");
     for (const auto& o : r.hooks)
-      if (o.from == h.from && o.to == h.to && o.options.port == h.options.port)
+      if (o.from == h.from && o.to == h.to && os::same_hook_key(o.options.port, h.options.port))
         src.fail(h.where, "hook " + h.from + " -> " + h.to + " is given twice (first at line " +
                               std::to_string(o.where.line) + ")");
     if (r.hooks.size() >= kMaxHooksPerRobot)

@@ -5,13 +5,14 @@
 
 #include "symb/apps/evolve/evolve_run.hpp"
 #include "symb/apps/progress_line.hpp"
+#include "symb/sim/scenario.hpp"
 
 namespace symb::apps::evolve {
 
 namespace {
 
 constexpr std::string_view kCommand = "symb evolve";
-constexpr kernel::Duration kMaxDuration = std::chrono::hours(24 * 7);
+constexpr kernel::Duration kMaxDuration = sim::kMaxRunDuration;  // a scenario's limit too
 
 constexpr OptionSpec kOptions[] = {
     {"--out", "DIR", "output folder (default out/evolve/<scenario file name>)"},

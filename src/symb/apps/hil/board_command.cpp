@@ -41,7 +41,9 @@ void print_help(std::ostream& out) {
       << "the link statistics (frames good, bad, missed) are printed as it runs.\n\n"
       << "Options:\n"
       << describe_options(kOptions) << "\n"
-      << "Runs until Ctrl-C (or --duration); it keeps running when the link goes silent.\n";
+      << "Runs until Ctrl-C (or --duration); it keeps running when the link goes silent, and when the\n"
+      << "serial device goes away it reopens the path with backoff (100 ms doubling to 2 s). It exits\n"
+      << "1 when the line was down at the end (a dead link), with how long it was down.\n";
 }
 
 }  // namespace
@@ -174,9 +176,19 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
           << "board-stats: good=" << s.ir_frames << " bad=" << s.bad_frames() << " missed=" << s.missed
           << " out_of_order=" << s.out_of_order << " malformed=" << s.malformed << " losses=" << s.link_losses
           << " recoveries=" << s.link_recoveries << " wheels=" << s.wheel_commands << " watchdog=" << s.watchdog_stops
-          << " bytes_in=" << s.bytes_in << "\n";
+          << " bytes_in=" << s.bytes_in << " sent=" << s.frames_written << " unsent=" << s.frames_unsent
+          << " line_losses=" << s.line_losses << " line_reopens=" << s.line_reopens
+          << " line_down_ms=" << std::chrono::duration_cast<std::chrono::milliseconds>(s.line_down).count()
+          << " line_open=" << (s.line_open ? 1 : 0) << "\n";
   port->close();
   if (shell_port) shell_port->close();
+  // A dead link is a failed run: the serial line was down when the board stopped.
+  if (!s.line_open) {
+    ctx.err << kCommand << ": the serial line " << serial << " was down when the board stopped (down "
+            << fixed(std::chrono::duration<double>(s.line_down).count(), 1) << " s in all, " << s.line_losses
+            << " loss(es), " << s.line_reopens << " reopening(s))\n";
+    return kExitFailure;
+  }
   return kExitOk;
 }
 

@@ -15,20 +15,12 @@
 #include <vector>
 
 #include "symb/apps/cli_args.hpp"
+#include "symb/apps/interrupt_flag.hpp"
 #include "symb/os/syslog.hpp"
 
 namespace symb::apps::hil {
 
-// While alive, SIGINT and SIGTERM set a flag instead of ending the process (a handler can reach
-// only a static, which is why this flag is one: it belongs to the process, as signals do).
-class InterruptFlag {
- public:
-  InterruptFlag();
-  ~InterruptFlag();
-  InterruptFlag(const InterruptFlag&) = delete;
-  InterruptFlag& operator=(const InterruptFlag&) = delete;
-  bool raised() const;
-};
+using apps::InterruptFlag;
 
 // Writes a node's log entries to a stream, one line each, prefixed with the node's name;
 // serialised, as tasks on several threads log at once.

@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
 constexpr std::string_view kCommand = "symb sim";
-constexpr kernel::Duration kMaxDuration = std::chrono::hours(24 * 7);
+constexpr kernel::Duration kMaxDuration = sim::kMaxRunDuration;  // a scenario's limit too
 
 constexpr OptionSpec kOptions[] = {
     {"--serial", "PATH", "the board's data line; one per robot, comma-separated, in scenario order"},
@@ -50,7 +50,9 @@ void print_help(std::ostream& out) {
       << "Options:\n"
       << describe_options(kOptions) << "\n"
       << "Writes trajectory.svg, steps.csv and summary.txt (with the link statistics) into the\n"
-      << "output folder. Ctrl-C stops early and still writes them.\n";
+      << "output folder. Ctrl-C stops early and still writes them. A line whose device goes away is\n"
+      << "reopened with backoff (100 ms doubling to 2 s); the run exits 1 when a line was still down\n"
+      << "at its end (a dead link), and summary.txt says how long each line was down.\n";
 }
 
 kernel::Status write_file(const fs::path& path, const std::string& text) {
@@ -235,11 +237,19 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
     summary << x.name << "," << fixed(x.distance / 100, 3) << "," << x.contact_events << "," << x.contact_steps << ","
             << fixed(x.moving_seconds, 2) << "," << fixed(x.end.x, 1) << "," << fixed(x.end.y, 1) << "\n";
   summary << "\nrobot,frames_sent,corrupted,write_errors,received,bad,applied,late,stale,missing,silences,"
-             "recoveries\n";
-  for (const auto& s : link)
+             "recoveries,unsent,line_losses,line_reopens,line_down_ms,line_open\n";
+  std::string dead;  // the robots whose line was down at the end
+  for (const auto& s : link) {
+    const auto down_ms = std::chrono::duration_cast<std::chrono::milliseconds>(s.line_down).count();
     summary << s.robot << "," << s.frames_sent << "," << s.corrupted << "," << s.write_errors << "," << s.received
             << "," << s.bad_frames() << "," << s.applied << "," << s.late << "," << s.stale << "," << s.missing << ","
-            << s.silences << "," << s.recoveries << "\n";
+            << s.silences << "," << s.recoveries << "," << s.unsent << "," << s.line_losses << "," << s.line_reopens
+            << "," << down_ms << "," << (s.line_open ? 1 : 0) << "\n";
+    if (!s.line_open)
+      dead += (dead.empty() ? "" : "; ") + s.robot + " (down " + fixed(static_cast<double>(down_ms) / 1000, 1) +
+              " s in all, " + std::to_string(s.line_losses) + " loss(es))";
+  }
+  if (!dead.empty()) summary << "\ndead link: the serial line was down at the end of the run: " << dead << "\n";
   csv.close();
   std::ostringstream svg;
   run::write_maze_svg(
@@ -264,6 +274,10 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   ctx.out << "results in " << dir.string() << "/\n"
           << "  " << (dir / "trajectory.svg").string() << "\n  " << (dir / "steps.csv").string() << "\n  "
           << (dir / "summary.txt").string() << "\n";
+  if (!dead.empty()) {
+    ctx.err << kCommand << ": dead link: the serial line was down at the end of the run: " << dead << "\n";
+    return kExitFailure;
+  }
   return kExitOk;
 }
 

@@ -58,6 +58,8 @@ void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<co
       out << buf << svg_escape(z.name) << "</text>\n";
     }
   }
+  // Square caps reach half the stroke width past each end: the drawn wall is its segment plus its
+  // thickness long, as the solid wall is (enki_world.cpp adds the thickness to the box's length).
   out << "<g stroke=\"#333\" stroke-linecap=\"square\">\n";
   for (const sim::WallSpec& wall : world.walls) {
     std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke-width=\"%.1f\"/>\n",

@@ -8,10 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "symb/apps/interrupt_flag.hpp"
 #include "symb/apps/progress_line.hpp"
 #include "symb/apps/run/scenario_run.hpp"
 #include "symb/evo/genome.hpp"
 #include "symb/os/param.hpp"
+#include "symb/sim/scenario.hpp"
 
 namespace symb::apps::run {
 
@@ -20,7 +22,7 @@ namespace {
 using namespace std::chrono_literals;
 
 constexpr std::string_view kCommand = "symb run";
-constexpr kernel::Duration kMaxDuration = std::chrono::hours(24 * 7);
+constexpr kernel::Duration kMaxDuration = sim::kMaxRunDuration;  // a scenario's limit too
 
 constexpr OptionSpec kOptions[] = {
     {"--out", "DIR", "output folder (default out/<scenario name>)"},
@@ -52,7 +54,9 @@ void print_help(std::ostream& out) {
       << "probes.csv and probes/*.svg (controllers' internal state) and, for spiking controllers,\n"
       << "spikes/ (an AEDAT 2.0 file, a raster and the grown network per network task).\n"
       << "A shell needs --realtime or --speed (a virtual-time run is over before anyone could type);\n"
-      << "with --shell and neither, --speed 1 is implied.\n\n"
+      << "with --shell and neither, --speed 1 is implied.\n"
+      << "Ctrl-C stops the run early: the files are written for what was run (summary.txt says\n"
+      << "where it stopped) and the exit status is 130.\n\n"
       << "Example: symb run scenarios/maze.yaml --out out/maze\n";
 }
 
@@ -197,6 +201,10 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
   // The default folder needs the scenario's name, which only the run knows.
   if (!options.out_dir) options.out_under = std::filesystem::path("out");
 
+  // Ctrl-C (or SIGTERM) ends the run between two slices; what was run is written, as symb sim
+  // does, and the exit status says it was interrupted.
+  InterruptFlag interrupt;
+  options.stop_requested = [&interrupt] { return interrupt.raised(); };
   auto result = run_scenario(options);
   if (!result) {
     progress.finish("run: stopped");
@@ -204,7 +212,13 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
     return kExitFailure;
   }
   const RunResult& r = *result;
-  progress.finish(progress_text(RunProgress{r.simulated_seconds, r.simulated_seconds, r.wall_seconds}, r.realtime));
+  progress.finish(progress_text(RunProgress{r.simulated_seconds,
+                                            r.interrupted ? r.planned_seconds : r.simulated_seconds, r.wall_seconds},
+                                r.realtime) +
+                  (r.interrupted ? ": interrupted" : ""));
+  if (r.interrupted)
+    ctx.err << kCommand << ": interrupted at " << fixed(r.simulated_seconds, 1) << " s of "
+            << fixed(r.planned_seconds, 1) << " s; the results so far are written\n";
   if (print_hash) ctx.out << "trajectory-hash: " << hex64(r.trajectory_hash) << "\n";
   if (!quiet && !print_hash) {
     ctx.out << "run: " << r.scenario << ", seed " << r.seed << ", " << r.robots.size() << " robot"
@@ -228,7 +242,7 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
     for (const auto& f : r.files) where << "  " << f.string() << "\n";
     where << std::flush;
   }
-  return kExitOk;
+  return r.interrupted ? kExitInterrupted : kExitOk;
 }
 
 }  // namespace symb::apps::run

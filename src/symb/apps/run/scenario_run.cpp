@@ -1,6 +1,7 @@
 #include "symb/apps/run/scenario_run.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -49,8 +50,11 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
     << "seed: " << r.seed << "\n"
     << "executor: " << (r.realtime ? "threads, wall clock" : "virtual time") << "\n"
     << "control period: " << fixed(seconds(sc.control_period) * 1000, 1) << " ms\n"
-    << "simulated: " << fixed(r.simulated_seconds, 2) << " s in " << r.steps << " steps\n"
-    << "wall clock: " << fixed(r.wall_seconds, 3) << " s\n"
+    << "simulated: " << fixed(r.simulated_seconds, 2) << " s in " << r.steps << " steps\n";
+  if (r.interrupted)
+    s << "interrupted: at " << fixed(r.simulated_seconds, 2) << " s of " << fixed(r.planned_seconds, 2)
+      << " s (a stop was requested: Ctrl-C or SIGTERM)\n";
+  s << "wall clock: " << fixed(r.wall_seconds, 3) << " s\n"
     << "real-time factor: " << fixed(r.real_time_factor, 1) << "\n";
   char hash[24];
   std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(r.trajectory_hash));
@@ -160,6 +164,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
 
   // The shell's tasks live on the robot's node: closed before the session (and its nodes) go.
   std::unique_ptr<shell::TcpShellServer> tcp_shell;
+  std::atomic<bool> running{true};  // false once the run itself stops its tasks
   if (options.shell.kind != ShellRequest::Kind::kNone) {
     sim::RobotSystem* robot =
         options.shell.robot.empty() ? &session->robot(0) : session->find_robot(options.shell.robot);
@@ -176,7 +181,14 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
         options.on_notice("shell: symb shell --tcp " + tcp_shell->host() + ":" + std::to_string(tcp_shell->port()) +
                           " --token " + tcp_shell->token() + "   (robot " + robot->name() + ")");
     } else {
-      auto attached = shell::attach_shell(robot->node(), std::make_shared<io::StdioStream>(), shell::ShellOptions{});
+      // End of input (a script piped in, a closed terminal) ends the session after its last line;
+      // the run goes on to its end (docs/shell.md).
+      shell::ShellOptions so;
+      so.on_close = [&running, notice = options.on_notice, end = seconds(scenario.duration)] {
+        if (running.load() && notice)
+          notice("shell: the session ended (end of input or exit); the run goes on to " + fixed(end, 1) + " s");
+      };
+      auto attached = shell::attach_shell(robot->node(), std::make_shared<io::StdioStream>(), std::move(so));
       if (!attached) return Error{"shell: " + attached.error()};
     }
   }
@@ -190,6 +202,12 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     if (options.on_progress) options.on_progress(RunProgress{simulated, total, wall_seconds()});
   };
 
+  bool stopped = false;
+  const auto stop = [&] {
+    if (!stopped && options.stop_requested && options.stop_requested()) stopped = true;
+    return stopped;
+  };
+  result.planned_seconds = total;
   session->start();
   if (virtual_time) {
     // Slices: a progress report per slice; with a speed, the wall clock paces each slice and
@@ -198,15 +216,15 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     const kernel::Time start = virtual_time->clock().now();
     const kernel::Time end = start + scenario.duration;
     auto last_report = std::chrono::steady_clock::now();
-    for (kernel::Time t = start; t < end;) {
+    for (kernel::Time t = start; t < end && !stop();) {
       t = std::min(end, t + slice);
       virtual_time->run_until(t);
       if (!cycle_error(*session).empty()) break;
       if (options.speed > 0) {
         const auto due = wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                           std::chrono::duration<double>(seconds(t - start) / options.speed));
-        for (auto now = std::chrono::steady_clock::now(); now < due; now = std::chrono::steady_clock::now())
-          virtual_time->wait_injected(due - now);
+        for (auto now = std::chrono::steady_clock::now(); now < due && !stop(); now = std::chrono::steady_clock::now())
+          virtual_time->wait_injected(std::min<kernel::Duration>(due - now, std::chrono::milliseconds(20)));
       }
       if (std::chrono::steady_clock::now() - last_report > std::chrono::milliseconds(100) || t == end) {
         report(seconds(t - start));
@@ -214,16 +232,18 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
       }
     }
   } else {
-    for (double elapsed = wall_seconds(); elapsed < total; elapsed = wall_seconds()) {
+    for (double elapsed = wall_seconds(); elapsed < total && !stop(); elapsed = wall_seconds()) {
       std::this_thread::sleep_for(std::chrono::duration<double>(std::min(0.1, total - elapsed)));
       report(std::min(total, wall_seconds()));
       if (!cycle_error(*session).empty()) break;
     }
   }
+  running = false;
   session->stop();
   result.wall_seconds = wall_seconds();
   tcp_shell.reset();
 
+  result.interrupted = stopped;
   result.steps = recorder.steps();
   result.simulated_seconds = session->world().time();
   result.real_time_factor = result.wall_seconds > 0 ? result.simulated_seconds / result.wall_seconds : 0;

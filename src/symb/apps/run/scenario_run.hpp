@@ -60,6 +60,10 @@ struct RunOptions {
   std::uint32_t csv_every = 1;  // record every n-th step in steps.csv (the picture uses every step)
   std::function<void(const RunProgress&)> on_progress;
   std::function<void(const std::string&)> on_notice;  // "shell: ..." for the person
+  // Polled between slices of the run (at most 20 ms of wall clock apart while pacing, one
+  // simulated second otherwise): true stops the run there, and what was run is written as for a
+  // finished one (RunResult::interrupted).
+  std::function<bool()> stop_requested;
 };
 
 struct RunResult {
@@ -67,6 +71,8 @@ struct RunResult {
   std::uint64_t seed = 0;
   bool realtime = false;
   double simulated_seconds = 0;
+  double planned_seconds = 0;  // the duration asked for
+  bool interrupted = false;    // stopped by stop_requested at simulated_seconds
   double wall_seconds = 0;
   double real_time_factor = 0;
   std::uint64_t steps = 0;

@@ -1,10 +1,10 @@
-#include "symb/apps/swarm_command.hpp"
+#include "symb/apps/swarm/swarm_command.hpp"
 
 #include <cstdio>
 #include <string>
 
 #include "symb/apps/progress_line.hpp"
-#include "symb/apps/swarm_demo.hpp"
+#include "symb/apps/swarm/swarm_demo.hpp"
 
 namespace symb::apps {
 

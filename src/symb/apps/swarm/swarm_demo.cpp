@@ -1,4 +1,4 @@
-#include "symb/apps/swarm_demo.hpp"
+#include "symb/apps/swarm/swarm_demo.hpp"
 
 #include <algorithm>
 #include <chrono>
