@@ -71,7 +71,11 @@ class AhhsCompartmentTask : public os::Task {
   struct Counters {  // kernel/counter.hpp
     kernel::Counter steps, exchanges, missed_exchanges, foreign_levels, ignored;
     AhhsCompartmentStats snapshot() const {
-      return {steps.load(), exchanges.load(), missed_exchanges.load(), foreign_levels.load(), ignored.load()};
+      return {.steps = steps.load(),
+              .exchanges = exchanges.load(),
+              .missed_exchanges = missed_exchanges.load(),
+              .foreign_levels = foreign_levels.load(),
+              .ignored = ignored.load()};
     }
   } counters_;
 };

@@ -68,7 +68,7 @@ class AhhsTask : public os::Task {
   ahhs::Model model_;
   struct Counters {  // kernel/counter.hpp
     kernel::Counter steps, ignored;
-    AhhsStats snapshot() const { return {steps.load(), ignored.load()}; }
+    AhhsStats snapshot() const { return {.steps = steps.load(), .ignored = ignored.load()}; }
   } counters_;
 };
 

@@ -136,20 +136,20 @@ class Mdl2eTask : public os::Task {
     kernel::Counter steps, tick_steps, skipped_ticks, idle_ticks, sensor_messages, external_messages, ignored,
         wrong_count, not_finite, bad_external, other, task_actions, task_action_failures, clamped;
     Mdl2eStats snapshot() const {
-      return {steps.load(),
-              tick_steps.load(),
-              skipped_ticks.load(),
-              idle_ticks.load(),
-              sensor_messages.load(),
-              external_messages.load(),
-              ignored.load(),
-              wrong_count.load(),
-              not_finite.load(),
-              bad_external.load(),
-              other.load(),
-              task_actions.load(),
-              task_action_failures.load(),
-              clamped.load()};
+      return {.steps = steps.load(),
+              .tick_steps = tick_steps.load(),
+              .skipped_ticks = skipped_ticks.load(),
+              .idle_ticks = idle_ticks.load(),
+              .sensor_messages = sensor_messages.load(),
+              .external_messages = external_messages.load(),
+              .ignored = ignored.load(),
+              .wrong_count = wrong_count.load(),
+              .not_finite = not_finite.load(),
+              .bad_external = bad_external.load(),
+              .other = other.load(),
+              .task_actions = task_actions.load(),
+              .task_action_failures = task_action_failures.load(),
+              .clamped = clamped.load()};
     }
   } counters_;
   mutable std::mutex mu_;  // what state() reads besides the counters: the fields below

@@ -115,7 +115,11 @@ class NetworkTask : public os::Task {
   struct Counters {  // kernel/counter.hpp
     kernel::Counter steps, inputs, ignored, clamped, genomes;
     NetworkStats snapshot() const {
-      return {steps.load(), inputs.load(), ignored.load(), clamped.load(), genomes.load()};
+      return {.steps = steps.load(),
+              .inputs = inputs.load(),
+              .ignored = ignored.load(),
+              .clamped = clamped.load(),
+              .genomes = genomes.load()};
     }
   } counters_;
   mutable std::mutex mu_;  // the copies genome() and last_outputs() read

@@ -59,7 +59,11 @@ struct SpikeCodingStats {
 struct SpikeCodingCounters {
   kernel::Counter inputs, events, sent, ignored, clamped;
   SpikeCodingStats snapshot() const {
-    return {inputs.load(), events.load(), sent.load(), ignored.load(), clamped.load()};
+    return {.inputs = inputs.load(),
+            .events = events.load(),
+            .sent = sent.load(),
+            .ignored = ignored.load(),
+            .clamped = clamped.load()};
   }
 };
 

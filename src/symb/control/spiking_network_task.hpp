@@ -130,9 +130,16 @@ class SpikingNetworkTask : public os::Task {
     kernel::Counter steps, spikes, output_spikes, current_vectors, input_events, late_events, dropped_events, ignored,
         skipped_ms, replacements;
     SpikingNetworkStats snapshot() const {
-      return {steps.load(),        spikes.load(),      output_spikes.load(),  current_vectors.load(),
-              input_events.load(), late_events.load(), dropped_events.load(), ignored.load(),
-              skipped_ms.load(),   replacements.load()};
+      return {.steps = steps.load(),
+              .spikes = spikes.load(),
+              .output_spikes = output_spikes.load(),
+              .current_vectors = current_vectors.load(),
+              .input_events = input_events.load(),
+              .late_events = late_events.load(),
+              .dropped_events = dropped_events.load(),
+              .ignored = ignored.load(),
+              .skipped_ms = skipped_ms.load(),
+              .replacements = replacements.load()};
     }
   } counters_;
   mutable std::mutex mu_;  // neurons_

@@ -3,11 +3,11 @@
 // A task's counters are written by its own context only and read from any thread (the shell,
 // symb run's summary, tests) while it runs. Each count is a Counter; a task keeps them together in
 // a private struct whose snapshot() copies them into the plain stats struct its stats() getter
-// returns:
+// returns (designated initialisers, so a counter out of the struct's order does not compile):
 //
 //   struct Counters {
 //     kernel::Counter steps, ignored;
-//     FooStats snapshot() const { return {steps.load(), ignored.load()}; }
+//     FooStats snapshot() const { return {.steps = steps.load(), .ignored = ignored.load()}; }
 //   } counters_;
 //   ...
 //   counters_.steps.bump();                               // the task's context
