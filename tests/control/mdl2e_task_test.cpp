@@ -441,6 +441,37 @@ TEST(Mdl2eTask, AProgramWithoutSensorsStartsAtItsFirstTickAndRunsUnderTheThreadE
   node.clear();
 }
 
+// The counters have one writer (the controller's context) and are read here, on another thread,
+// while it runs: no lock (kernel/counter.hpp), so the thread sanitizer build checks the pattern.
+TEST(Mdl2eTask, StatsReadFromAnotherThreadWhileItRunsNeverGoBack) {
+  kernel::ThreadExecutor ex;
+  os::Node node(ex, {"bot"});
+  auto rec_id = *node.create("rec", std::make_unique<Recorder>(), {.queue_capacity = 64});
+  auto c = Mdl2eTask::create(compile("plan p loop { atom forward(10) for 4ms  atom turn(5) for 4ms }"));
+  ASSERT_TRUE(c);
+  Mdl2eTask* ctl = c->get();
+  auto ctl_id = *node.create("ctl", std::move(c).value(), {.period = 1ms});
+  ASSERT_TRUE(node.hook(ctl_id, rec_id));
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  Mdl2eStats last;
+  std::size_t reads = 0;
+  while (last.steps < 50 && std::chrono::steady_clock::now() < deadline) {
+    const Mdl2eStats s = ctl->stats();
+    EXPECT_GE(s.steps, last.steps);
+    EXPECT_GE(s.tick_steps, last.tick_steps);
+    EXPECT_GE(s.clamped, last.clamped);
+    EXPECT_EQ(s.ignored, 0u);
+    const Mdl2eState st = ctl->state();
+    EXPECT_GE(st.stats.steps, s.steps);
+    last = s;
+    ++reads;
+    std::this_thread::yield();
+  }
+  node.clear();
+  EXPECT_GE(last.steps, 50u);
+  EXPECT_GT(reads, 1u);
+}
+
 // --- the task type ---------------------------------------------------------------------------------
 
 std::string read_file(const std::string& path) {

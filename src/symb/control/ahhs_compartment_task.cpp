@@ -37,16 +37,10 @@ std::vector<float> AhhsCompartmentTask::levels() const {
   return shown_;
 }
 
-AhhsCompartmentStats AhhsCompartmentTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
-}
+AhhsCompartmentStats AhhsCompartmentTask::stats() const { return counters_.snapshot(); }
 
 void AhhsCompartmentTask::ignore(const std::string& why) {
-  {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
-  }
+  counters_.ignored.bump();
   if (warning_.note(now(), options_.warn_interval)) {
     const std::uint64_t n = warning_.count();
     log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
@@ -85,10 +79,7 @@ void AhhsCompartmentTask::on_message(const os::Message& m) {
         probe("actuators", shown);
       }
     }
-    {
-      std::lock_guard lock(mu_);
-      ++stats_.steps;
-    }
+    counters_.steps.bump();
     awaiting_ = true;
     try_finish();
     return;
@@ -108,8 +99,7 @@ void AhhsCompartmentTask::on_message(const os::Message& m) {
     const auto id = static_cast<std::uint32_t>(v[0]);
     const auto it = std::lower_bound(neighbours_.begin(), neighbours_.end(), id);
     if (it == neighbours_.end() || *it != id) {
-      std::lock_guard lock(mu_);
-      ++stats_.foreign_levels;
+      counters_.foreign_levels.bump();
       return;
     }
     auto& q = held_[static_cast<std::size_t>(it - neighbours_.begin())];
@@ -146,11 +136,11 @@ void AhhsCompartmentTask::finish_step(bool forced) {
   {
     std::lock_guard lock(mu_);
     shown_ = row_;
-    if (forced || missing > 0)
-      stats_.missed_exchanges += missing;
-    else
-      ++stats_.exchanges;
   }
+  if (forced || missing > 0)
+    counters_.missed_exchanges.bump(missing);
+  else
+    counters_.exchanges.bump();
   probe("hormones/c" + std::to_string(compartment_), row_);
 }
 
@@ -172,14 +162,8 @@ std::vector<float> AhhsMixerTask::last() const {
   std::lock_guard lock(mu_);
   return last_;
 }
-std::uint64_t AhhsMixerTask::sent() const {
-  std::lock_guard lock(mu_);
-  return sent_;
-}
-std::uint64_t AhhsMixerTask::flushed() const {
-  std::lock_guard lock(mu_);
-  return flushed_;
-}
+std::uint64_t AhhsMixerTask::sent() const { return sent_.load(); }
+std::uint64_t AhhsMixerTask::flushed() const { return flushed_.load(); }
 
 void AhhsMixerTask::flush() {
   out_.resize(values_.size());
@@ -187,9 +171,9 @@ void AhhsMixerTask::flush() {
   {
     std::lock_guard lock(mu_);
     last_ = values_;
-    ++sent_;
-    if (have_count_ < values_.size()) ++flushed_;
   }
+  sent_.bump();
+  if (have_count_ < values_.size()) flushed_.bump();
   std::fill(have_.begin(), have_.end(), false);
   have_count_ = 0;
   send(kAhhsActuatorPort, out_);

@@ -66,9 +66,18 @@ class AhhsCompartmentTask : public os::Task {
   std::vector<const float*> rows_;
   bool awaiting_ = false;
   os::WarningLimiter warning_;
-  mutable std::mutex mu_;  // shown_ and stats_
+  mutable std::mutex mu_;  // shown_
   std::vector<float> shown_;
-  AhhsCompartmentStats stats_;
+  struct Counters {  // kernel/counter.hpp
+    kernel::Counter steps, exchanges, missed_exchanges, foreign_levels, ignored;
+    AhhsCompartmentStats snapshot() const {
+      return {.steps = steps.load(),
+              .exchanges = exchanges.load(),
+              .missed_exchanges = missed_exchanges.load(),
+              .foreign_levels = foreign_levels.load(),
+              .ignored = ignored.load()};
+    }
+  } counters_;
 };
 
 // Gathers [index, value] pairs from compartment tasks and sends the whole actuator vector, scaled,
@@ -94,9 +103,9 @@ class AhhsMixerTask : public os::Task {
   std::size_t have_count_ = 0;
   std::vector<float> out_;
   os::WarningLimiter warning_;
-  mutable std::mutex mu_;
+  mutable std::mutex mu_;  // last_
   std::vector<float> last_;
-  std::uint64_t sent_ = 0, flushed_ = 0;
+  kernel::Counter sent_, flushed_;
 };
 
 }  // namespace symb::control

@@ -56,16 +56,10 @@ std::vector<float> AhhsTask::actuators() const {
   return {a.begin(), a.end()};
 }
 
-AhhsStats AhhsTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
-}
+AhhsStats AhhsTask::stats() const { return counters_.snapshot(); }
 
 void AhhsTask::ignore(const std::string& why) {
-  {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
-  }
+  counters_.ignored.bump();
   if (warning_.note(now(), options_.warn_interval)) {
     const std::uint64_t n = warning_.count();
     log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
@@ -85,7 +79,7 @@ void AhhsTask::on_message(const os::Message& m) {
   {
     std::lock_guard lock(mu_);
     model_.step(sensors_);
-    ++stats_.steps;
+    counters_.steps.bump();
     const auto a = model_.actuators();
     out_.resize(a.size());
     for (std::size_t k = 0; k < a.size(); ++k) out_[k] = static_cast<float>(a[k] * options_.actuator_scale);

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "symb/control/ahhs/model.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/task.hpp"
 #include "symb/os/warning_limiter.hpp"
@@ -63,9 +64,12 @@ class AhhsTask : public os::Task {
   std::vector<float> sensors_;
   std::vector<float> out_;
   os::WarningLimiter warning_;
-  mutable std::mutex mu_;  // model_ and stats_, for readers on other threads
+  mutable std::mutex mu_;  // model_, for readers on other threads
   ahhs::Model model_;
-  AhhsStats stats_;
+  struct Counters {  // kernel/counter.hpp
+    kernel::Counter steps, ignored;
+    AhhsStats snapshot() const { return {.steps = steps.load(), .ignored = ignored.load()}; }
+  } counters_;
 };
 
 // Normalises a raw sensor vector into `out` (clamp(v / range, 0, 1)); false, with `why`, when the

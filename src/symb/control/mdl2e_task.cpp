@@ -55,10 +55,7 @@ Mdl2eTask::Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOpt
   bind_parameters(options_);
 }
 
-Mdl2eStats Mdl2eTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
-}
+Mdl2eStats Mdl2eTask::stats() const { return counters_.snapshot(); }
 
 Mdl2eState Mdl2eTask::state() const {
   std::lock_guard lock(mu_);
@@ -72,16 +69,13 @@ Mdl2eState Mdl2eTask::state() const {
   s.left = left_;
   s.right = right_;
   s.external = external_;
-  s.stats = stats_;
+  s.stats = counters_.snapshot();
   return s;
 }
 
-void Mdl2eTask::ignore(std::uint64_t Mdl2eStats::*counter, const std::string& why) {
-  {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
-    ++(stats_.*counter);
-  }
+void Mdl2eTask::ignore(kernel::Counter Counters::*counter, const std::string& why) {
+  counters_.ignored.bump();
+  (counters_.*counter).bump();
   if (ignored_warning_.note(now(), options_.warn_interval)) {
     log(os::LogLevel::kWarn, count_text(ignored_warning_.count(), "message") + " ignored, latest: " + why);
   }
@@ -91,28 +85,25 @@ void Mdl2eTask::ignore(std::uint64_t Mdl2eStats::*counter, const std::string& wh
 
 void Mdl2eTask::on_message(const os::Message& m) {
   if (m.payload.blob) {
-    ignore(&Mdl2eStats::other, "a blob on port " + std::to_string(m.port) + " (numbers expected)");
+    ignore(&Counters::other, "a blob on port " + std::to_string(m.port) + " (numbers expected)");
     return;
   }
   const std::span<const float> v = m.numbers();
   if (m.port == kSensorPort) {
     if (v.size() != sensors_.size()) {
-      ignore(&Mdl2eStats::wrong_count, "a sensor vector of " + std::to_string(v.size()) +
-                                           " values; the program reads " + std::to_string(sensors_.size()));
+      ignore(&Counters::wrong_count, "a sensor vector of " + std::to_string(v.size()) + " values; the program reads " +
+                                         std::to_string(sensors_.size()));
       return;
     }
     for (std::size_t k = 0; k < v.size(); ++k)
       if (!std::isfinite(v[k])) {
-        ignore(&Mdl2eStats::not_finite, "a sensor vector with " + std::string(std::isnan(v[k]) ? "NaN" : "infinity") +
-                                            " at index " + std::to_string(k) + " (previous vector kept)");
+        ignore(&Counters::not_finite, "a sensor vector with " + std::string(std::isnan(v[k]) ? "NaN" : "infinity") +
+                                          " at index " + std::to_string(k) + " (previous vector kept)");
         return;
       }
     std::copy(v.begin(), v.end(), sensors_.begin());
     have_input_ = true;
-    {
-      std::lock_guard lock(mu_);
-      ++stats_.sensor_messages;
-    }
+    counters_.sensor_messages.bump();
     step(false);
     return;
   }
@@ -120,40 +111,37 @@ void Mdl2eTask::on_message(const os::Message& m) {
     const bool shape_ok =
         v.size() == 2 && v[0] >= 0 && v[0] <= 63 && std::floor(v[0]) == v[0] && (v[1] == 0.0f || v[1] == 1.0f);
     if (!shape_ok) {
-      ignore(&Mdl2eStats::bad_external, "an external interrupt message must be [bit 0..63, 0 or 1], got " +
-                                            std::to_string(v.size()) + " value(s)");
+      ignore(&Counters::bad_external, "an external interrupt message must be [bit 0..63, 0 or 1], got " +
+                                          std::to_string(v.size()) + " value(s)");
       return;
     }
     const std::uint64_t bit = std::uint64_t{1} << static_cast<unsigned>(v[0]);
     {
       std::lock_guard lock(mu_);
       external_ = v[1] != 0.0f ? (external_ | bit) : (external_ & ~bit);
-      ++stats_.external_messages;
     }
+    counters_.external_messages.bump();
     if (have_input_) step(false);
     return;
   }
-  ignore(&Mdl2eStats::other, "a message on port " + std::to_string(m.port) + " (sensor vectors on " +
-                                 std::to_string(kSensorPort) + ", external bits on " + std::to_string(kExternalPort) +
-                                 ")");
+  ignore(&Counters::other, "a message on port " + std::to_string(m.port) + " (sensor vectors on " +
+                               std::to_string(kSensorPort) + ", external bits on " + std::to_string(kExternalPort) +
+                               ")");
 }
 
 void Mdl2eTask::on_tick() {
   if (!have_input_) {
-    std::lock_guard lock(mu_);
-    ++stats_.idle_ticks;
+    counters_.idle_ticks.bump();
     return;
   }
   if (stepped_ && last_step_ == now()) {
-    std::lock_guard lock(mu_);
-    ++stats_.skipped_ticks;
+    counters_.skipped_ticks.bump();
     return;
   }
   if (pending_messages() > 0) {
     deferred_tick_ = true;
     deferred_at_ = now();
-    std::lock_guard lock(mu_);
-    ++stats_.skipped_ticks;
+    counters_.skipped_ticks.bump();
     return;
   }
   step(true);
@@ -179,11 +167,11 @@ void Mdl2eTask::step(bool at_tick) {
   std::uint64_t clamped = 0;
   const float left = out.running ? condition_speed(out.left, options_.speed_limit, clamped) : 0.0f;
   const float right = out.running ? condition_speed(out.right, options_.speed_limit, clamped) : 0.0f;
+  counters_.steps.bump();
+  if (at_tick) counters_.tick_steps.bump();
+  counters_.clamped.bump(clamped);
   {
     std::lock_guard lock(mu_);
-    ++stats_.steps;
-    if (at_tick) ++stats_.tick_steps;
-    stats_.clamped += clamped;
     const auto path = interpreter_.active_path();
     depth_ = out.running ? path.size() : 0;
     std::copy_n(path.begin(), depth_, path_.begin());
@@ -214,10 +202,7 @@ void Mdl2eTask::carry_out(const mdl2e::Event& e) {
   } else {
     st = Error{"no task named '" + std::string(e.name) + "' on this node"};
   }
-  {
-    std::lock_guard lock(mu_);
-    ++(st ? stats_.task_actions : stats_.task_action_failures);
-  }
+  (st ? counters_.task_actions : counters_.task_action_failures).bump();
   if (!st && action_warning_.note(now(), options_.warn_interval)) {
     log(os::LogLevel::kWarn, "task " + std::string(action) + " " + std::string(e.name) + " not done: " + st.error() +
                                  (action_warning_.count() > 1 ? " (" + count_text(action_warning_.count(), "failure") +

@@ -44,6 +44,7 @@
 
 #include "symb/control/mdl2e/bytecode.hpp"
 #include "symb/control/mdl2e/interpreter.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/task.hpp"
@@ -114,7 +115,8 @@ class Mdl2eTask : public os::Task {
   Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOptions options);
   void step(bool at_tick);
   void carry_out(const mdl2e::Event& e);
-  void ignore(std::uint64_t Mdl2eStats::*counter, const std::string& why);
+  struct Counters;
+  void ignore(kernel::Counter Counters::*counter, const std::string& why);
 
   std::shared_ptr<const mdl2e::Program> program_;
   Mdl2eTaskOptions options_;
@@ -130,8 +132,27 @@ class Mdl2eTask : public os::Task {
   os::WarningLimiter action_warning_;
   os::WarningLimiter limit_warning_;
 
-  mutable std::mutex mu_;  // what state() reads: the fields below and stats_
-  Mdl2eStats stats_;
+  struct Counters {  // kernel/counter.hpp
+    kernel::Counter steps, tick_steps, skipped_ticks, idle_ticks, sensor_messages, external_messages, ignored,
+        wrong_count, not_finite, bad_external, other, task_actions, task_action_failures, clamped;
+    Mdl2eStats snapshot() const {
+      return {.steps = steps.load(),
+              .tick_steps = tick_steps.load(),
+              .skipped_ticks = skipped_ticks.load(),
+              .idle_ticks = idle_ticks.load(),
+              .sensor_messages = sensor_messages.load(),
+              .external_messages = external_messages.load(),
+              .ignored = ignored.load(),
+              .wrong_count = wrong_count.load(),
+              .not_finite = not_finite.load(),
+              .bad_external = bad_external.load(),
+              .other = other.load(),
+              .task_actions = task_actions.load(),
+              .task_action_failures = task_action_failures.load(),
+              .clamped = clamped.load()};
+    }
+  } counters_;
+  mutable std::mutex mu_;  // what state() reads besides the counters: the fields below
   std::array<std::uint16_t, mdl2e::kMaxDepth> path_{};
   std::size_t depth_ = 0;
   float left_ = 0, right_ = 0;

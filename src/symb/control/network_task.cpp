@@ -85,10 +85,7 @@ NetworkTask::NetworkTask(network::Network net, NetworkTaskOptions options,
   for (std::size_t l = 0; l < net_.layer_count(); ++l) channels_.push_back("activations/" + net_.layer_name(l));
 }
 
-NetworkStats NetworkTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
-}
+NetworkStats NetworkTask::stats() const { return counters_.snapshot(); }
 
 std::vector<float> NetworkTask::genome() const {
   std::lock_guard lock(mu_);
@@ -101,10 +98,7 @@ std::vector<float> NetworkTask::last_outputs() const {
 }
 
 void NetworkTask::ignore(const std::string& why) {
-  {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
-  }
+  counters_.ignored.bump();
   if (!warning_.note(now(), options_.warn_interval)) return;
   const std::uint64_t n = warning_.count();
   log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
@@ -154,11 +148,11 @@ void NetworkTask::on_message(const os::Message& m) {
     left = wheel(out[0], clamped);
     right = wheel(out[1], clamped);
   }
+  counters_.inputs.bump();
+  counters_.steps.bump();
+  counters_.clamped.bump(clamped);
   {
     std::lock_guard lock(mu_);
-    ++stats_.inputs;
-    ++stats_.steps;
-    stats_.clamped += clamped;
     outputs_copy_.assign(out.begin(), out.end());
   }
   if (probing()) {
@@ -176,9 +170,11 @@ kernel::Status NetworkTask::on_parameter_changed(std::string_view name) {
     if (!weights) return Error{"weights: " + weights.error()};
     if (weights->empty()) weights.value().assign(genome_size_, 0.0f);
     if (auto st = net_.set_genome(*weights); !st) return Error{"weights: " + st.error()};
-    std::lock_guard lock(mu_);
-    genome_copy_ = *weights;
-    ++stats_.genomes;
+    {
+      std::lock_guard lock(mu_);
+      genome_copy_ = *weights;
+    }
+    counters_.genomes.bump();
     return {};
   }
   if (name == "input_scale") return check_scale(options_.input_scale, net_.input_count());

@@ -33,6 +33,7 @@
 
 #include "symb/control/control_task_types.hpp"
 #include "symb/control/network/network.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/task.hpp"
@@ -111,8 +112,17 @@ class NetworkTask : public os::Task {
   std::vector<std::string> channels_;  // "activations/<layer>", made once
   os::WarningLimiter warning_;
 
-  mutable std::mutex mu_;  // what the thread-safe getters read
-  NetworkStats stats_;
+  struct Counters {  // kernel/counter.hpp
+    kernel::Counter steps, inputs, ignored, clamped, genomes;
+    NetworkStats snapshot() const {
+      return {.steps = steps.load(),
+              .inputs = inputs.load(),
+              .ignored = ignored.load(),
+              .clamped = clamped.load(),
+              .genomes = genomes.load()};
+    }
+  } counters_;
+  mutable std::mutex mu_;  // the copies genome() and last_outputs() read
   std::vector<float> genome_copy_;
   std::vector<float> outputs_copy_;
 };

@@ -49,16 +49,10 @@ kernel::Result<std::unique_ptr<SpikeEncoderTask>> SpikeEncoderTask::create(Spike
   return std::unique_ptr<SpikeEncoderTask>(new SpikeEncoderTask(options));
 }
 
-SpikeCodingStats SpikeEncoderTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
-}
+SpikeCodingStats SpikeEncoderTask::stats() const { return counters_.snapshot(); }
 
 void SpikeEncoderTask::ignore(const std::string& why) {
-  {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
-  }
+  counters_.ignored.bump();
   warn_ignored(warning_, now(), options_.warn_interval, why, [this](os::LogLevel l, std::string_view t) { log(l, t); });
 }
 
@@ -103,10 +97,9 @@ void SpikeEncoderTask::on_message(const os::Message& m) {
     }
     send(0, snn::aer_payload(std::move(out)));
   }
-  std::lock_guard lock(mu_);
-  ++stats_.inputs;
-  ++stats_.sent;
-  stats_.events += events;
+  counters_.inputs.bump();
+  counters_.sent.bump();
+  counters_.events.bump(events);
 }
 
 kernel::Status SpikeEncoderTask::on_parameter_changed(std::string_view /*name*/) {
@@ -129,10 +122,7 @@ kernel::Result<std::unique_ptr<SpikeDecoderTask>> SpikeDecoderTask::create(Spike
   return task;
 }
 
-SpikeCodingStats SpikeDecoderTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
-}
+SpikeCodingStats SpikeDecoderTask::stats() const { return counters_.snapshot(); }
 
 std::vector<float> SpikeDecoderTask::rates() const {
   std::lock_guard lock(mu_);
@@ -140,10 +130,7 @@ std::vector<float> SpikeDecoderTask::rates() const {
 }
 
 void SpikeDecoderTask::ignore(const std::string& why) {
-  {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
-  }
+  counters_.ignored.bump();
   warn_ignored(warning_, now(), options_.warn_interval, why, [this](os::LogLevel l, std::string_view t) { log(l, t); });
 }
 
@@ -162,9 +149,8 @@ void SpikeDecoderTask::on_message(const os::Message& m) {
     ++counted;
   }
   while (recent_.size() > kMaxWindowEvents) recent_.pop_front();
-  std::lock_guard lock(mu_);
-  ++stats_.inputs;
-  stats_.events += counted;
+  counters_.inputs.bump();
+  counters_.events.bump(counted);
 }
 
 void SpikeDecoderTask::on_tick() {
@@ -192,9 +178,9 @@ void SpikeDecoderTask::on_tick() {
   }
   if (probing()) probe("rates", rates);
   send(0, std::span<const float>(out, options_.channels));
+  counters_.sent.bump();
+  counters_.clamped.bump(clamped);
   std::lock_guard lock(mu_);
-  ++stats_.sent;
-  stats_.clamped += clamped;
   rates_ = std::move(rates);
 }
 
@@ -208,16 +194,10 @@ kernel::Status SpikeDecoderTask::on_parameter_changed(std::string_view /*name*/)
 
 namespace symb::control {
 
-SpikeCodingStats AerCodecTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
-}
+SpikeCodingStats AerCodecTask::stats() const { return counters_.snapshot(); }
 
 void AerCodecTask::ignore(const std::string& why) {
-  {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
-  }
+  counters_.ignored.bump();
   warn_ignored(warning_, now(), warn_interval_, why, [this](os::LogLevel l, std::string_view t) { log(l, t); });
 }
 
@@ -225,10 +205,9 @@ void AerCodecTask::on_message(const os::Message& m) {
   if (const snn::AerPacket* packet = snn::aer_of(m)) {
     const std::vector<std::byte> wire = snn::encode_aer(packet->events);
     send(kAerBytesPort, io::bytes_payload(wire));
-    std::lock_guard lock(mu_);
-    ++stats_.inputs;
-    ++stats_.sent;
-    stats_.events += packet->events.size();
+    counters_.inputs.bump();
+    counters_.sent.bump();
+    counters_.events.bump(packet->events.size());
     return;
   }
   if (const io::Bytes* bytes = io::bytes_of(m)) {
@@ -239,10 +218,9 @@ void AerCodecTask::on_message(const os::Message& m) {
     }
     const std::size_t n = events->size();
     send(kAerPacketsPort, snn::aer_payload(std::move(events).value()));
-    std::lock_guard lock(mu_);
-    ++stats_.inputs;
-    ++stats_.sent;
-    stats_.events += n;
+    counters_.inputs.bump();
+    counters_.sent.bump();
+    counters_.events.bump(n);
     return;
   }
   ignore("neither an AER packet nor bytes");

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "symb/control/snn/aer.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/task.hpp"
 #include "symb/os/warning_limiter.hpp"
@@ -54,6 +55,18 @@ struct SpikeCodingStats {
   std::uint64_t clamped = 0;  // decoder: wheel values cut to the speed limit
 };
 
+// The counters behind SpikeCodingStats (kernel/counter.hpp).
+struct SpikeCodingCounters {
+  kernel::Counter inputs, events, sent, ignored, clamped;
+  SpikeCodingStats snapshot() const {
+    return {.inputs = inputs.load(),
+            .events = events.load(),
+            .sent = sent.load(),
+            .ignored = ignored.load(),
+            .clamped = clamped.load()};
+  }
+};
+
 class SpikeEncoderTask : public os::Task {
  public:
   static kernel::Result<std::unique_ptr<SpikeEncoderTask>> create(SpikeEncoderOptions options);
@@ -69,8 +82,7 @@ class SpikeEncoderTask : public os::Task {
 
   SpikeEncoderOptions options_;
   os::WarningLimiter warning_;
-  mutable std::mutex mu_;
-  SpikeCodingStats stats_;
+  SpikeCodingCounters counters_;
 };
 
 struct SpikeDecoderOptions {
@@ -108,8 +120,8 @@ class SpikeDecoderTask : public os::Task {
   SpikeDecoderOptions options_;
   std::deque<Counted> recent_;
   os::WarningLimiter warning_;
-  mutable std::mutex mu_;
-  SpikeCodingStats stats_;
+  SpikeCodingCounters counters_;
+  mutable std::mutex mu_;  // rates_
   std::vector<float> rates_;
 };
 
@@ -137,8 +149,7 @@ class AerCodecTask : public os::Task {
 
   kernel::Duration warn_interval_ = std::chrono::seconds(1);
   os::WarningLimiter warning_;
-  mutable std::mutex mu_;
-  SpikeCodingStats stats_;
+  SpikeCodingCounters counters_;
 };
 
 }  // namespace symb::control

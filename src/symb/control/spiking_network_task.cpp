@@ -67,10 +67,7 @@ SpikingNetworkTask::SpikingNetworkTask(Running running, SpikingNetworkTaskOption
   currents_.assign(snn::kMaxChannels, 0.0f);
 }
 
-SpikingNetworkStats SpikingNetworkTask::stats() const {
-  std::lock_guard lock(mu_);
-  return stats_;
-}
+SpikingNetworkStats SpikingNetworkTask::stats() const { return counters_.snapshot(); }
 
 std::size_t SpikingNetworkTask::neurons() const {
   std::lock_guard lock(mu_);
@@ -78,10 +75,7 @@ std::size_t SpikingNetworkTask::neurons() const {
 }
 
 void SpikingNetworkTask::ignore(const std::string& why) {
-  {
-    std::lock_guard lock(mu_);
-    ++stats_.ignored;
-  }
+  counters_.ignored.bump();
   if (!warning_.note(now(), options_.warn_interval)) return;
   const std::uint64_t n = warning_.count();
   log(os::LogLevel::kWarn, std::to_string(n) + " message" + (n == 1 ? "" : "s") + " ignored, latest: " + why);
@@ -116,10 +110,9 @@ void SpikingNetworkTask::on_message(const os::Message& m) {
       std::push_heap(queue_.begin(), queue_.end(), std::greater<>());
       ++accepted;
     }
-    std::lock_guard lock(mu_);
-    stats_.input_events += accepted;
-    stats_.late_events += late;
-    stats_.dropped_events += dropped;
+    counters_.input_events.bump(accepted);
+    counters_.late_events.bump(late);
+    counters_.dropped_events.bump(dropped);
     return;
   }
   if (m.payload.blob) {
@@ -134,8 +127,7 @@ void SpikingNetworkTask::on_message(const os::Message& m) {
     }
   std::fill(currents_.begin(), currents_.end(), 0.0f);
   std::copy_n(v.begin(), std::min(v.size(), currents_.size()), currents_.begin());
-  std::lock_guard lock(mu_);
-  ++stats_.current_vectors;
+  counters_.current_vectors.bump();
 }
 
 void SpikingNetworkTask::run_step(std::vector<snn::AerEvent>& all, std::vector<snn::AerEvent>& outputs) {
@@ -185,13 +177,10 @@ void SpikingNetworkTask::on_tick() {
   const std::int64_t first = step_;
   while (step_ < target) run_step(all, outputs);
   const std::int64_t ran = step_ - first;
-  {
-    std::lock_guard lock(mu_);
-    stats_.steps += static_cast<std::uint64_t>(ran);
-    stats_.spikes += all.size();
-    stats_.output_spikes += outputs.size();
-    stats_.skipped_ms += static_cast<std::uint64_t>(skipped);
-  }
+  counters_.steps.bump(static_cast<std::uint64_t>(ran));
+  counters_.spikes.bump(all.size());
+  counters_.output_spikes.bump(outputs.size());
+  counters_.skipped_ms.bump(static_cast<std::uint64_t>(skipped));
   if (ran > 0 && probing()) {
     if (!spike_probe_.empty()) probe("spikes", spike_probe_);
     probe("rate", {static_cast<float>(static_cast<double>(all.size()) * 1000.0 /
@@ -208,8 +197,8 @@ kernel::Status SpikingNetworkTask::replace(snn::GrownNetwork network) {
     return Error{"thalamic_excitatory exceeds the new network's size"};
   run_ = std::move(running).value();
   layout_due_ = true;
+  counters_.replacements.bump();
   std::lock_guard lock(mu_);
-  ++stats_.replacements;
   neurons_ = run_.net.size();
   return {};
 }

@@ -34,6 +34,7 @@
 #include "symb/control/snn/aer.hpp"
 #include "symb/control/snn/development.hpp"
 #include "symb/control/snn/spiking_network.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
@@ -125,8 +126,23 @@ class SpikingNetworkTask : public os::Task {
   std::vector<float> spike_probe_;
   os::WarningLimiter warning_;
 
-  mutable std::mutex mu_;
-  SpikingNetworkStats stats_;
+  struct Counters {  // kernel/counter.hpp
+    kernel::Counter steps, spikes, output_spikes, current_vectors, input_events, late_events, dropped_events, ignored,
+        skipped_ms, replacements;
+    SpikingNetworkStats snapshot() const {
+      return {.steps = steps.load(),
+              .spikes = spikes.load(),
+              .output_spikes = output_spikes.load(),
+              .current_vectors = current_vectors.load(),
+              .input_events = input_events.load(),
+              .late_events = late_events.load(),
+              .dropped_events = dropped_events.load(),
+              .ignored = ignored.load(),
+              .skipped_ms = skipped_ms.load(),
+              .replacements = replacements.load()};
+    }
+  } counters_;
+  mutable std::mutex mu_;  // neurons_
   std::size_t neurons_ = 0;
 };
 

@@ -9,8 +9,7 @@
 namespace symb::evo {
 
 FitnessStats FitnessTask::stats() const {
-  return {sum_.load(std::memory_order_relaxed), steps_.load(std::memory_order_relaxed),
-          commands_.load(std::memory_order_relaxed), ignored_.load(std::memory_order_relaxed)};
+  return {sum_.load(std::memory_order_relaxed), steps_.load(), commands_.load(), ignored_.load()};
 }
 
 double FitnessTask::mean() const {
@@ -21,22 +20,22 @@ double FitnessTask::mean() const {
 void FitnessTask::on_message(const os::Message& m) {
   const auto values = m.numbers();
   if (m.port != 0 || m.payload.blob || values.size() < 2) {
-    kernel::bump(ignored_);
+    ignored_.bump();
     return;
   }
   if (values.size() == 2) {
     left_ = values[0], right_ = values[1];
     command_time_ = now();
     have_command_ = true;
-    kernel::bump(commands_);
+    commands_.bump();
     return;
   }
   const bool fresh = have_command_ && now() - command_time_ <= options_.command_timeout;
   const double step = fitness_step(options_.formula, fresh ? left_ : 0.0, fresh ? right_ : 0.0, values);
   const double sum = sum_.load(std::memory_order_relaxed) + step;
-  const std::uint64_t steps = steps_.load(std::memory_order_relaxed) + 1;
+  const std::uint64_t steps = steps_.load() + 1;
   sum_.store(sum, std::memory_order_relaxed);
-  steps_.store(steps, std::memory_order_relaxed);
+  steps_.bump();
   float out[4] = {static_cast<float>(sum), static_cast<float>(steps), static_cast<float>(step), 0.0f};
   probe("fitness", std::span<const float>(out, 3));
   window_sum_ += step;
@@ -57,7 +56,7 @@ void FitnessTask::on_message(const os::Message& m) {
 kernel::Status FitnessTask::on_parameter_changed(std::string_view name) {
   if (name == "reset" && options_.reset) {
     sum_.store(0, std::memory_order_relaxed);
-    steps_.store(0, std::memory_order_relaxed);
+    steps_.reset();
     window_sum_ = 0;
     window_steps_ = 0;
     options_.reset = false;

@@ -29,6 +29,7 @@
 #include <mutex>
 
 #include "symb/evo/fitness.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/os/task.hpp"
 
@@ -73,7 +74,7 @@ class FitnessTask : public os::Task {
   // Written by the task's own context only, read by stats() from anywhere: atomics, not a lock
   // (two per control step otherwise).
   std::atomic<double> sum_{0};
-  std::atomic<std::uint64_t> steps_{0}, commands_{0}, ignored_{0};
+  kernel::Counter steps_, commands_, ignored_;
 };
 
 }  // namespace symb::evo

@@ -119,9 +119,7 @@ ActuatorSinkTask::ActuatorSinkTask(std::shared_ptr<Actuator> actuator, Options o
 }
 
 ActuatorSinkStats ActuatorSinkTask::stats() const {
-  constexpr auto kRelaxed = std::memory_order_relaxed;
-  return {received_.load(kRelaxed), applied_.load(kRelaxed), failed_.load(kRelaxed), ignored_.load(kRelaxed),
-          timeouts_.load(kRelaxed)};
+  return {received_.load(), applied_.load(), failed_.load(), ignored_.load(), timeouts_.load()};
 }
 
 std::vector<float> ActuatorSinkTask::safe_output() const {
@@ -149,9 +147,9 @@ void ActuatorSinkTask::on_start() {
 }
 
 void ActuatorSinkTask::on_message(const os::Message& m) {
-  kernel::bump(received_);
+  received_.bump();
   if (m.payload.blob) {
-    kernel::bump(ignored_);
+    ignored_.bump();
     return;
   }
   std::span<const float> values = m.numbers();
@@ -166,13 +164,13 @@ void ActuatorSinkTask::on_message(const os::Message& m) {
   }
   auto r = actuator_->set(values);
   if (!r) {
-    kernel::bump(failed_);
+    failed_.bump();
     if (fail_warning_.note(now()))
       log(os::LogLevel::kWarn, std::to_string(fail_warning_.count()) + " command(s) refused, latest: " + r.error() +
                                    " (previous output kept)");
     return;
   }
-  kernel::bump(applied_);
+  applied_.bump();
   last_applied_ = now();
   timed_out_ = false;
   const std::size_t clamped = *r + narrowed_clamps;
@@ -185,7 +183,7 @@ void ActuatorSinkTask::on_tick() {
   if (options_.timeout.count() <= 0 || timed_out_ || now() - last_applied_ < options_.timeout) return;
   // Once per silence: re-applying every tick would bury the log and fight the shell's ioctls.
   timed_out_ = true;
-  kernel::bump(timeouts_);
+  timeouts_.bump();
   const std::vector<float> safe = safe_output();
   auto r = actuator_->set(safe);
   if (timeout_warning_.note(now()))

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "symb/io/device.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/task.hpp"
@@ -129,7 +130,7 @@ class ActuatorSinkTask : public os::Task {
   os::WarningLimiter timeout_warning_;
   kernel::Time last_applied_{0};  // the watchdog's reference: start, last applied command
   bool timed_out_ = false;        // the safe output is on since the last expiry
-  std::atomic<std::uint64_t> received_{0}, applied_{0}, failed_{0}, ignored_{0}, timeouts_{0};
+  kernel::Counter received_, applied_, failed_, ignored_, timeouts_;  // kernel/counter.hpp
 };
 
 }  // namespace symb::robot

@@ -53,14 +53,14 @@ kernel::Status ActuatorTask::stop(os::Node& node, os::TaskId task) { return comm
 ActuatorTaskStats ActuatorTask::stats() const {
   constexpr auto kRelaxed = std::memory_order_relaxed;
   ActuatorTaskStats s;
-  s.accepted = accepted_.load(kRelaxed);
-  s.completed = completed_.load(kRelaxed);
-  s.aborted = aborted_.load(kRelaxed);
-  s.rejected = rejected_.load(kRelaxed);
-  s.timeouts = timeouts_.load(kRelaxed);
-  s.odometry = odometry_.load(kRelaxed);
-  s.odometry_rejected = odometry_rejected_.load(kRelaxed);
-  s.drive_errors = drive_errors_.load(kRelaxed);
+  s.accepted = accepted_.load();
+  s.completed = completed_.load();
+  s.aborted = aborted_.load();
+  s.rejected = rejected_.load();
+  s.timeouts = timeouts_.load();
+  s.odometry = odometry_.load();
+  s.odometry_rejected = odometry_rejected_.load();
+  s.drive_errors = drive_errors_.load();
   s.busy = busy_.load(kRelaxed);
   return s;
 }
@@ -101,7 +101,7 @@ void ActuatorTask::report(GoalEvent event, const DriveGoal& goal, double achieve
 void ActuatorTask::handle_goal(const os::Message& m) {
   auto decoded = decode_goal(m.numbers());
   const auto reject = [&](const DriveGoal& g, const std::string& why) {
-    rejected_.fetch_add(1, std::memory_order_relaxed);
+    rejected_.bump();
     warn(goal_warning_, "goal rejected: " + why);
     report(GoalEvent::kRejected, g, 0, GoalReason::kBadGoal);
   };
@@ -158,7 +158,7 @@ void ActuatorTask::handle_goal(const os::Message& m) {
   goal_ = a;
   busy_.store(true, std::memory_order_relaxed);
   if (!a.started) halt();  // whatever the wheels did before, they wait for a pose now
-  accepted_.fetch_add(1, std::memory_order_relaxed);
+  accepted_.bump();
   report(GoalEvent::kAccepted, g, 0, GoalReason::kNone);
 }
 
@@ -168,7 +168,7 @@ void ActuatorTask::handle_odometry(std::span<const float> v) {
   for (std::size_t i = 0; ok && i < needed; ++i) ok = std::isfinite(v[i]);
   if (!ok) {
     // Not counted as odometry: persistent garbage lets the silence timeout stop the wheels.
-    odometry_rejected_.fetch_add(1, std::memory_order_relaxed);
+    odometry_rejected_.bump();
     warn(odometry_warning_, std::string("odometry rejected: expected ") +
                                 (needed == 3 ? "[x, y, theta]" : "[left, right]") + " as finite numbers");
     return;
@@ -199,7 +199,7 @@ void ActuatorTask::handle_odometry(std::span<const float> v) {
   }
   have_pose_ = true;
   last_odometry_ = now();
-  odometry_.fetch_add(1, std::memory_order_relaxed);
+  odometry_.bump();
   if (goal_ && !goal_->started) {
     goal_->started = true;
     goal_->start = pose_;
@@ -226,14 +226,14 @@ void ActuatorTask::finish(GoalEvent event, GoalReason reason) {
   const double done = achieved();
   goal_.reset();
   busy_.store(false, std::memory_order_relaxed);
-  if (event == GoalEvent::kCompleted) completed_.fetch_add(1, std::memory_order_relaxed);
-  if (event == GoalEvent::kAborted) aborted_.fetch_add(1, std::memory_order_relaxed);
+  if (event == GoalEvent::kCompleted) completed_.bump();
+  if (event == GoalEvent::kAborted) aborted_.bump();
   report(event, g, done, reason);
 }
 
 void ActuatorTask::wheels(double left, double right) {
   if (auto st = drive_->set_wheel_speeds(left, right); !st) {
-    drive_errors_.fetch_add(1, std::memory_order_relaxed);
+    drive_errors_.bump();
     warn(drive_warning_, st.error());
     // A goal cannot be reached through a drive that refuses commands; the sender may retry.
     if (goal_) finish(GoalEvent::kAborted, GoalReason::kDriveError);
@@ -245,7 +245,7 @@ void ActuatorTask::on_tick() {
   const kernel::Time t = now();
   const kernel::Time heard = std::max(last_odometry_, goal_->accepted_at);
   if (t - heard > options_.odometry_timeout) {
-    timeouts_.fetch_add(1, std::memory_order_relaxed);
+    timeouts_.bump();
     char text[128];
     std::snprintf(text, sizeof text, "%s goal %u aborted: no odometry for %.3f s, wheels stopped",
                   to_string(goal_->goal.kind), goal_->goal.id, kernel::to_seconds(t - heard));

@@ -32,6 +32,7 @@
 #include <optional>
 #include <string_view>
 
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/task.hpp"
@@ -134,8 +135,8 @@ class ActuatorTask : public os::Task {
   os::WarningLimiter goal_warning_;
   os::WarningLimiter odometry_warning_;
   os::WarningLimiter drive_warning_;
-  std::atomic<std::uint64_t> accepted_{0}, completed_{0}, aborted_{0}, rejected_{0}, timeouts_{0}, odometry_{0},
-      odometry_rejected_{0}, drive_errors_{0};
+  kernel::Counter accepted_, completed_, aborted_, rejected_, timeouts_, odometry_, odometry_rejected_,
+      drive_errors_;  // kernel/counter.hpp
   std::atomic<bool> busy_{false};
 };
 

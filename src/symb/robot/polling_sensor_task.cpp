@@ -44,9 +44,7 @@ PollingSensorTask::PollingSensorTask(std::shared_ptr<PollingSensor> sensor, Opti
 }
 
 PollingStats PollingSensorTask::stats() const {
-  constexpr auto kRelaxed = std::memory_order_relaxed;
-  return {ticks_.load(kRelaxed),    sent_.load(kRelaxed),    failed_.load(kRelaxed),
-          rejected_.load(kRelaxed), clamped_.load(kRelaxed), consecutive_.load(kRelaxed)};
+  return {ticks_.load(), sent_.load(), failed_.load(), rejected_.load(), clamped_.load(), consecutive_.load()};
 }
 
 void PollingSensorTask::on_start() {
@@ -56,15 +54,15 @@ void PollingSensorTask::on_start() {
 }
 
 void PollingSensorTask::failed(const std::string& why) {
-  failed_.fetch_add(1, std::memory_order_relaxed);
-  consecutive_.fetch_add(1, std::memory_order_relaxed);
+  failed_.bump();
+  consecutive_.bump();
   if (fail_warning_.note(now()))
     log(os::LogLevel::kWarn, std::to_string(fail_warning_.count()) + " failed poll(s) of '" + sensor_->name() +
                                  "', latest: " + why + " (nothing sent)");
 }
 
 void PollingSensorTask::on_tick() {
-  ticks_.fetch_add(1, std::memory_order_relaxed);
+  ticks_.bump();
   if (!sensor_->is_open()) return failed("device closed");
   const std::size_t n = specs_.size();
   const std::span<float> raw(raw_.data(), n);
@@ -80,22 +78,22 @@ void PollingSensorTask::on_tick() {
   if (!st) return failed(st.error());
   const Conditioned c = condition_sample(specs_, raw, out_);
   if (!c.ok()) {
-    rejected_.fetch_add(1, std::memory_order_relaxed);
-    consecutive_.fetch_add(1, std::memory_order_relaxed);
+    rejected_.bump();
+    consecutive_.bump();
     if (reject_warning_.note(now()))
       log(os::LogLevel::kWarn, std::to_string(reject_warning_.count()) + " sample(s) of '" + sensor_->name() +
                                    "' rejected: NaN in channel '" + specs_[c.channel].name + "' (nothing sent)");
     return;
   }
-  consecutive_.store(0, std::memory_order_relaxed);
+  consecutive_.reset();
   if (c.clamped > 0) {
-    clamped_.fetch_add(c.clamped, std::memory_order_relaxed);
+    clamped_.bump(c.clamped);
     if (clamp_warning_.note(now(), c.clamped))
       log(os::LogLevel::kWarn, std::to_string(clamp_warning_.count()) + " value(s) of '" + sensor_->name() +
                                    "' outside their channel range, clamped");
   }
   send(kDataPort, std::span<const float>(out_.data(), n));
-  sent_.fetch_add(1, std::memory_order_relaxed);
+  sent_.bump();
 }
 
 kernel::Status PollingSensorTask::on_parameter_changed(std::string_view /*name: warn_interval*/) {

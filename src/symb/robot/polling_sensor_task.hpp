@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "symb/io/device.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/os/message.hpp"
@@ -97,7 +98,7 @@ class PollingSensorTask : public os::Task {
   os::WarningLimiter fail_warning_;
   os::WarningLimiter reject_warning_;
   os::WarningLimiter clamp_warning_;
-  std::atomic<std::uint64_t> ticks_{0}, sent_{0}, failed_{0}, rejected_{0}, clamped_{0}, consecutive_{0};
+  kernel::Counter ticks_, sent_, failed_, rejected_, clamped_, consecutive_;  // kernel/counter.hpp
 };
 
 }  // namespace symb::robot

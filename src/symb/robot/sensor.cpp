@@ -167,10 +167,7 @@ SensorTask::~SensorTask() {
   if (attached_) sensor_->detach();
 }
 
-SensorTaskStats SensorTask::stats() const {
-  return {forwarded_.load(std::memory_order_relaxed), clamped_.load(std::memory_order_relaxed),
-          rejected_.load(std::memory_order_relaxed)};
-}
+SensorTaskStats SensorTask::stats() const { return {forwarded_.load(), clamped_.load(), rejected_.load()}; }
 
 void SensorTask::on_start() {
   link_->node = &node();
@@ -229,13 +226,13 @@ void SensorTask::drain() {
     } else {
       const Conditioned c = condition_sample(options_.ranges, s.numbers(), narrowed);
       if (!c.ok()) {
-        kernel::bump(rejected_);
+        rejected_.bump();
         continue;
       }
-      if (c.clamped > 0) kernel::bump(clamped_, c.clamped);
+      if (c.clamped > 0) clamped_.bump(c.clamped);
       send(kDataPort, std::span<const float>(narrowed.data(), s.count));
     }
-    kernel::bump(forwarded_);
+    forwarded_.bump();
   }
   report(after);
 }

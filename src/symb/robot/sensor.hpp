@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "symb/io/device.hpp"
+#include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/ring_buffer.hpp"
 #include "symb/kernel/time.hpp"
@@ -186,9 +187,7 @@ class SensorTask : public os::Task {
   os::WarningLimiter clamp_warning_;
   os::WarningLimiter reject_warning_;
   os::WarningLimiter overwrite_warning_;
-  std::atomic<std::uint64_t> forwarded_{0};
-  std::atomic<std::uint64_t> clamped_{0};
-  std::atomic<std::uint64_t> rejected_{0};
+  kernel::Counter forwarded_, clamped_, rejected_;  // kernel/counter.hpp
 };
 
 }  // namespace symb::robot
