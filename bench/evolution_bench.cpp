@@ -33,10 +33,10 @@
 #include <enki/PhysicalEngine.h>
 #include <enki/robots/thymio2/Thymio2.h>
 
-#include "symb/evo/fitness.hpp"
-#include "symb/evo/fitness_task.hpp"
-#include "symb/evo/one_plus_one.hpp"
-#include "symb/evo/one_plus_one_task.hpp"
+#include "symb/evo/fitness/fitness.hpp"
+#include "symb/evo/fitness/fitness_task.hpp"
+#include "symb/evo/one_plus_one/one_plus_one.hpp"
+#include "symb/evo/one_plus_one/one_plus_one_task.hpp"
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"

@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-#include "symb/control/behaviour/waypoints.hpp"
+#include "symb/control/schemas/waypoints.hpp"
 
 using namespace symb::control::behaviour;
 

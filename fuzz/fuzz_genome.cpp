@@ -1,4 +1,4 @@
-// Fuzzes the unified genome text (src/symb/evo/genome.hpp): any text must give a genome or an error
+// Fuzzes the unified genome text (src/symb/evo/genome/genome.hpp): any text must give a genome or an error
 // "LINE:COLUMN: message", never a crash or a hang. An accepted genome must pass check(), survive
 // to_text exactly (and diff nothing against its reparse); a mutant and a crossover of it must pass
 // check() and round-trip too, and diff must describe the mutant without crashing.
@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "symb/evo/genome.hpp"
+#include "symb/evo/genome/genome.hpp"
 
 #include "located_error.hpp"
 

@@ -1,4 +1,4 @@
-// Fuzzes the task-graph genome text (src/symb/evo/task_graph_genome.hpp): any text must give a
+// Fuzzes the task-graph genome text (src/symb/evo/embryogenesis/task_graph_genome.hpp): any text must give a
 // genome or an error "LINE:COLUMN: message", never a crash or a hang. An accepted genome must
 // survive to_text exactly; its mutants must too; and checking it against a node (which runs every
 // named type's factory on the parameters) must answer without changing the node.
@@ -9,9 +9,9 @@
 #include <string_view>
 
 #include "symb/control/control_task_types.hpp"
-#include "symb/evo/embryogenesis.hpp"
+#include "symb/evo/embryogenesis/embryogenesis.hpp"
 #include "symb/evo/evo_task_types.hpp"
-#include "symb/evo/task_graph_genome.hpp"
+#include "symb/evo/embryogenesis/task_graph_genome.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

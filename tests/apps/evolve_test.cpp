@@ -24,7 +24,7 @@
 #include "symb/apps/evolve/evolve_checkpoint.hpp"
 #include "symb/apps/evolve/evolve_run.hpp"
 #include "symb/apps/symb_cli.hpp"
-#include "symb/evo/genome.hpp"
+#include "symb/evo/genome/genome.hpp"
 
 namespace symb::apps::evolve {
 namespace {

@@ -3,7 +3,7 @@
 // commands; two nodes (two robots) whose compartments diffuse into each other through a bridge
 // task on each node give the levels of the joined network in one task; the task types, their
 // parameters and located creation errors; bad messages are ignored.
-#include "symb/control/ahhs_task.hpp"
+#include "symb/control/ahhs/ahhs_task.hpp"
 
 #include <cmath>
 #include <fstream>
@@ -15,8 +15,8 @@
 #include <gtest/gtest.h>
 
 #include "symb/control/ahhs/parser.hpp"
-#include "symb/control/ahhs_compartment_task.hpp"
-#include "symb/control/ahhs_task_types.hpp"
+#include "symb/control/ahhs/ahhs_compartment_task.hpp"
+#include "symb/control/ahhs/ahhs_task_types.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "symb/control/control_task_types.hpp"
-#include "symb/control/schema_tasks.hpp"
+#include "symb/control/schemas/schema_tasks.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/robot/thymio_ir.hpp"

@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 
 #include "symb/control/control_task_types.hpp"
-#include "symb/control/subsumption_layers.hpp"
-#include "symb/control/subsumption_rewiring.hpp"
+#include "symb/control/subsumption/subsumption_layers.hpp"
+#include "symb/control/subsumption/subsumption_rewiring.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/control/behaviour/waypoints.hpp"
+#include "symb/control/schemas/waypoints.hpp"
 
 namespace symb::control::behaviour {
 namespace {

@@ -3,7 +3,7 @@
 // reaction at the instant of a new vector, the fixed rate without new data, what happens when a
 // tick and a vector meet at one instant, task actions, bad input, plan end, suspend/resume,
 // replacing the controller at runtime, the task type and the shipped obstacle-avoidance program.
-#include "symb/control/mdl2e_task.hpp"
+#include "symb/control/mdl2e/mdl2e_task.hpp"
 
 #include <atomic>
 #include <fstream>

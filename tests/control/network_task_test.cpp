@@ -3,7 +3,7 @@
 // values, clamping and bad input, runtime genomes (inline and weight files), parameters and
 // descriptions rejected with located errors, probes, a two-network circuit, and replacing the
 // network while inputs keep coming.
-#include "symb/control/network_task.hpp"
+#include "symb/control/network/network_task.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -14,9 +14,9 @@
 
 #include "symb/control/control_task_types.hpp"
 #include "symb/control/snn/network_layout.hpp"
-#include "symb/control/snn_task_types.hpp"
-#include "symb/control/spike_coding_tasks.hpp"
-#include "symb/control/spiking_network_task.hpp"
+#include "symb/control/snn/snn_task_types.hpp"
+#include "symb/control/snn/spike_coding_tasks.hpp"
+#include "symb/control/snn/spiking_network_task.hpp"
 #include "symb/io/bytes.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"

@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/evo/arbiter_task.hpp"
+#include "symb/evo/arbiter/arbiter_task.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

@@ -2,7 +2,7 @@
 // operators, and development onto a running node: a valid genome becomes a running graph that
 // drives; 1,000 seeded malformed genomes and a set of hand-written bad ones are all rejected
 // without touching the node, which keeps running its controller throughout.
-#include "symb/evo/embryogenesis.hpp"
+#include "symb/evo/embryogenesis/embryogenesis.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -15,7 +15,7 @@
 
 #include "symb/control/control_task_types.hpp"
 #include "symb/evo/evo_task_types.hpp"
-#include "symb/evo/task_graph_genome.hpp"
+#include "symb/evo/embryogenesis/task_graph_genome.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

@@ -1,7 +1,7 @@
 // The fitness formulas (fitness.hpp) against values computed by hand, and the `fitness` task in a
 // node: classification by vector length, one step per IR reading with the latest command, the
 // [sum, steps, step] output, reset, a stale command, bad messages.
-#include "symb/evo/fitness.hpp"
+#include "symb/evo/fitness/fitness.hpp"
 
 #include <cmath>
 #include <memory>
@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "symb/evo/evo_task_types.hpp"
-#include "symb/evo/fitness_task.hpp"
+#include "symb/evo/fitness/fitness_task.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

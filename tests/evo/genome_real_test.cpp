@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "symb/control/network/description.hpp"
-#include "symb/evo/real_genome.hpp"
+#include "symb/evo/genome/real_genome.hpp"
 #include "symb/kernel/random_stream.hpp"
 
 namespace symb::evo {

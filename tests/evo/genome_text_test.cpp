@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "symb/control/ahhs/parser.hpp"
-#include "symb/evo/genome.hpp"
+#include "symb/evo/genome/genome.hpp"
 #include "symb/kernel/random_stream.hpp"
 
 namespace symb::evo {

@@ -1,6 +1,6 @@
 // mEDEA's pure algorithm (evo/medea.hpp): the list of received genomes (one per sender, latest),
 // the uniform pick, the emptied list, the inactive state, the sigma rule, malformed input.
-#include "symb/evo/medea.hpp"
+#include "symb/evo/medea/medea.hpp"
 
 #include <array>
 #include <chrono>
@@ -15,8 +15,8 @@
 
 #include "symb/control/control_task_types.hpp"
 #include "symb/evo/evo_task_types.hpp"
-#include "symb/evo/genome.hpp"
-#include "symb/evo/medea_task.hpp"
+#include "symb/evo/genome/genome.hpp"
+#include "symb/evo/medea/medea_task.hpp"
 #include "symb/io/bytes.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"

@@ -4,7 +4,7 @@
 // only when strictly better; same stream, same run) and the mu_plus_one task in a node with a
 // scripted sensor: it replaces the controller TASK per candidate and improves a fitness it can
 // only reach through the controllers it evolves.
-#include "symb/evo/mu_plus_one.hpp"
+#include "symb/evo/mu_plus_one/mu_plus_one.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,7 +17,7 @@
 
 #include "symb/control/control_task_types.hpp"
 #include "symb/evo/evo_task_types.hpp"
-#include "symb/evo/mu_plus_one_task.hpp"
+#include "symb/evo/mu_plus_one/mu_plus_one_task.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

@@ -4,7 +4,7 @@
 // sensor: it REPLACES the controller task per candidate through the registry, hooks it in,
 // counts only after the recovery time, and improves a fitness it can only reach through the
 // controller it evolves.
-#include "symb/evo/one_plus_one.hpp"
+#include "symb/evo/one_plus_one/one_plus_one.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -18,7 +18,7 @@
 
 #include "symb/control/control_task_types.hpp"
 #include "symb/evo/evo_task_types.hpp"
-#include "symb/evo/one_plus_one_task.hpp"
+#include "symb/evo/one_plus_one/one_plus_one_task.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

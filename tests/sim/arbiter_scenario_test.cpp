@@ -13,9 +13,9 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/evo/arbiter_task.hpp"
-#include "symb/evo/embryogenesis.hpp"
-#include "symb/evo/task_graph_genome.hpp"
+#include "symb/evo/arbiter/arbiter_task.hpp"
+#include "symb/evo/embryogenesis/embryogenesis.hpp"
+#include "symb/evo/embryogenesis/task_graph_genome.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"

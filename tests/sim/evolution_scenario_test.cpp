@@ -13,8 +13,8 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/evo/fitness_task.hpp"
-#include "symb/evo/one_plus_one_task.hpp"
+#include "symb/evo/fitness/fitness_task.hpp"
+#include "symb/evo/one_plus_one/one_plus_one_task.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"

@@ -14,7 +14,7 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/evo/medea_task.hpp"
+#include "symb/evo/medea/medea_task.hpp"
 #include "symb/io/bytes.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"

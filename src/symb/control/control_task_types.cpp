@@ -1,68 +1,27 @@
 #include "symb/control/control_task_types.hpp"
 
-#include <memory>
-
-#include "symb/control/ahhs_task_types.hpp"
-#include "symb/control/behaviour_task_types.hpp"
-#include "symb/control/mdl2e/compiler.hpp"
-#include "symb/control/mdl2e_task.hpp"
-#include "symb/control/network_task_types.hpp"
-#include "symb/control/snn_task_types.hpp"
-#include "symb/robot/ports.hpp"
+#include "symb/control/ahhs/ahhs_task_types.hpp"
+#include "symb/control/mdl2e/mdl2e_task_types.hpp"
+#include "symb/control/network/network_task_types.hpp"
+#include "symb/control/schemas/schema_task_types.hpp"
+#include "symb/control/snn/snn_task_types.hpp"
+#include "symb/control/subsumption/subsumption_task_types.hpp"
 
 namespace symb::control {
 
-namespace {
-
-using namespace std::chrono_literals;
-
-// Reference texts are echoed in errors; a reference longer than this is cut there.
-constexpr std::size_t kShownReference = 120;
-
-std::string shown(const std::string& reference) {
-  if (reference.size() <= kShownReference) return reference;
-  return reference.substr(0, kShownReference) + "...";
+std::string shown_reference(const std::string& reference) {
+  constexpr std::size_t kShown = 120;
+  if (reference.size() <= kShown) return reference;
+  return reference.substr(0, kShown) + "...";
 }
 
-}  // namespace
-
 kernel::Status register_control_task_types(os::TaskTypeRegistry& registry, ControlResources resources) {
-  auto shared = std::make_shared<const ControlResources>(std::move(resources));
-
-  os::ParamTable<Mdl2eParams> p;
-  p.add("program", &Mdl2eParams::program).range(0, 1024).doc("the program to run (a reference the node resolves)");
-  p.add("speed_limit", &Mdl2eParams::speed_limit).range(0.001, 1e6).doc("wheel speeds are clamped to +-this").live();
-  p.add("warn_interval", &Mdl2eParams::warn_interval)
-      .range(0.0, 3600.0)
-      .doc("at most one warning of a kind per interval (counts say how many it stands for)")
-      .live();
-  auto mdl2e_type = os::declare_task_type(
-      "mdl2e",
-      "runs an MDL2e program: sensor vectors in on port 0, external interrupt bits on port 1, [left, right] "
-      "wheel speeds out on port 0 at every step",
-      std::move(p), [shared](const Mdl2eParams& o) -> kernel::Result<std::unique_ptr<Mdl2eTask>> {
-        if (o.program.empty()) return kernel::Error{"name the program to run: program=REFERENCE"};
-        if (!shared->read_program) return kernel::Error{"this node cannot read programs (no read_program)"};
-        auto text = shared->read_program(o.program);
-        if (!text) return kernel::Error{"program '" + shown(o.program) + "': " + text.error()};
-        auto compiled = mdl2e::compile_source(*text);
-        if (!compiled) return kernel::Error{"program '" + shown(o.program) + "': " + compiled.error()};
-        auto task = Mdl2eTask::create(std::make_shared<const mdl2e::Program>(std::move(compiled).value()), o);
-        if (!task) return kernel::Error{"program '" + shown(o.program) + "': " + task.error()};
-        return task;
-      });
-  mdl2e_type.defaults.priority = 2;
-  mdl2e_type.defaults.period = 30ms;
-  mdl2e_type.defaults.queue_capacity = 4;
-  mdl2e_type.inputs = {{kSensorPort, "sensors", robot::layout::kSensorVector},
-                       {kExternalPort, "external", robot::layout::kExternalBit}};
-  mdl2e_type.outputs = {{kWheelPort, "wheels", robot::layout::kWheelCommand}};
-
-  if (auto st = registry.add(std::move(mdl2e_type)); !st) return st;
-  if (auto st = register_ahhs_task_types(registry, *shared); !st) return st;
-  if (auto st = register_network_task_types(registry, *shared); !st) return st;
-  if (auto st = register_behaviour_task_types(registry, *shared); !st) return st;
-  return register_snn_task_types(registry, *shared);
+  if (auto st = register_mdl2e_task_types(registry, resources); !st) return st;
+  if (auto st = register_ahhs_task_types(registry, resources); !st) return st;
+  if (auto st = register_network_task_types(registry, resources); !st) return st;
+  if (auto st = register_subsumption_task_types(registry, resources); !st) return st;
+  if (auto st = register_schema_task_types(registry, resources); !st) return st;
+  return register_snn_task_types(registry, resources);
 }
 
 }  // namespace symb::control

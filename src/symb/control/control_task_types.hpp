@@ -1,8 +1,7 @@
 // Control task types: the control layer's entries in a TaskTypeRegistry, so the shell, scenario
-// files and genomes can create controllers by name:
-//
-//   mdl2e   runs an MDL2e program (docs/mdl2e.md)     program, speed_limit, warn_interval
-//           defaults: priority 2, period 30 ms (the paper's 33.33 Hz), queue 4
+// files and genomes can create controllers by name. Each family registers its own types from its
+// folder (mdl2e/, ahhs/, network/, subsumption/, schemas/, snn/: `<family>_task_types`, with the
+// types and parameters in the family's doc); register_control_task_types() adds them all.
 //
 // Programs are named, not inlined: `program=obstacle_avoidance.mdl2e` is a reference that
 // ControlResources::read_program turns into program text. The control layer opens no files (it
@@ -24,6 +23,10 @@ struct ControlResources {
   // created, on the creating thread. Missing: every creation fails with an error saying so.
   std::function<kernel::Result<std::string>(std::string_view reference)> read_program;
 };
+
+// A reference as errors quote it: cut after 120 characters, so a program pasted whole into a
+// parameter does not flood the reply.
+std::string shown_reference(const std::string& reference);
 
 // Adds the types above. Fails (adding nothing more) when a name is already taken. A program that
 // cannot be read or compiled makes creation fail with an error naming the reference and, for a

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "symb/evo/real_genome.hpp"
+#include "symb/evo/genome/real_genome.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/os/ids.hpp"

@@ -4,12 +4,12 @@
 #include <string>
 
 #include "symb/control/network/network.hpp"
-#include "symb/evo/arbiter_task.hpp"
+#include "symb/evo/arbiter/arbiter_task.hpp"
 #include "symb/evo/controller_swap.hpp"
-#include "symb/evo/fitness_task.hpp"
-#include "symb/evo/medea_task.hpp"
-#include "symb/evo/mu_plus_one_task.hpp"
-#include "symb/evo/one_plus_one_task.hpp"
+#include "symb/evo/fitness/fitness_task.hpp"
+#include "symb/evo/medea/medea_task.hpp"
+#include "symb/evo/mu_plus_one/mu_plus_one_task.hpp"
+#include "symb/evo/one_plus_one/one_plus_one_task.hpp"
 
 namespace symb::evo {
 

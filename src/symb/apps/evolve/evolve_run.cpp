@@ -17,7 +17,7 @@
 #include "symb/apps/cli_args.hpp"
 #include "symb/apps/evolve/evolve_checkpoint.hpp"
 #include "symb/apps/run/probe_plot.hpp"
-#include "symb/evo/genome.hpp"
+#include "symb/evo/genome/genome.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"

@@ -11,7 +11,7 @@
 #include "symb/apps/interrupt_flag.hpp"
 #include "symb/apps/progress_line.hpp"
 #include "symb/apps/run/scenario_run.hpp"
-#include "symb/evo/genome.hpp"
+#include "symb/evo/genome/genome.hpp"
 #include "symb/os/param.hpp"
 #include "symb/sim/scenario.hpp"
 

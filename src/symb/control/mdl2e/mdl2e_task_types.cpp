@@ -1,0 +1,47 @@
+#include "symb/control/mdl2e/mdl2e_task_types.hpp"
+
+#include <memory>
+
+#include "symb/control/mdl2e/compiler.hpp"
+#include "symb/control/mdl2e/mdl2e_task.hpp"
+#include "symb/robot/ports.hpp"
+
+namespace symb::control {
+
+using namespace std::chrono_literals;
+
+kernel::Status register_mdl2e_task_types(os::TaskTypeRegistry& registry, const ControlResources& resources) {
+  os::ParamTable<Mdl2eParams> p;
+  p.add("program", &Mdl2eParams::program).range(0, 1024).doc("the program to run (a reference the node resolves)");
+  p.add("speed_limit", &Mdl2eParams::speed_limit).range(0.001, 1e6).doc("wheel speeds are clamped to +-this").live();
+  p.add("warn_interval", &Mdl2eParams::warn_interval)
+      .range(0.0, 3600.0)
+      .doc("at most one warning of a kind per interval (counts say how many it stands for)")
+      .live();
+  auto mdl2e_type = os::declare_task_type(
+      "mdl2e",
+      "runs an MDL2e program: sensor vectors in on port 0, external interrupt bits on port 1, [left, right] "
+      "wheel speeds out on port 0 at every step",
+      std::move(p),
+      [read_program = resources.read_program](const Mdl2eParams& o) -> kernel::Result<std::unique_ptr<Mdl2eTask>> {
+        if (o.program.empty()) return kernel::Error{"name the program to run: program=REFERENCE"};
+        if (!read_program) return kernel::Error{"this node cannot read programs (no read_program)"};
+        auto text = read_program(o.program);
+        if (!text) return kernel::Error{"program '" + shown_reference(o.program) + "': " + text.error()};
+        auto compiled = mdl2e::compile_source(*text);
+        if (!compiled) return kernel::Error{"program '" + shown_reference(o.program) + "': " + compiled.error()};
+        auto task = Mdl2eTask::create(std::make_shared<const mdl2e::Program>(std::move(compiled).value()), o);
+        if (!task) return kernel::Error{"program '" + shown_reference(o.program) + "': " + task.error()};
+        return task;
+      });
+  mdl2e_type.defaults.priority = 2;
+  mdl2e_type.defaults.period = 30ms;
+  mdl2e_type.defaults.queue_capacity = 4;
+  mdl2e_type.inputs = {{kSensorPort, "sensors", robot::layout::kSensorVector},
+                       {kExternalPort, "external", robot::layout::kExternalBit}};
+  mdl2e_type.outputs = {{kWheelPort, "wheels", robot::layout::kWheelCommand}};
+
+  return registry.add(std::move(mdl2e_type));
+}
+
+}  // namespace symb::control
