@@ -349,8 +349,9 @@ TEST(ShellBadInput, BadBytesThroughTheShellTaskAreErrorsToo) {
   os::TaskTypeRegistry types;
   testing::add_test_types(types);
   os::Node node(ex, {"board", 3, 256, &types});
-  auto [ours, theirs] = io::make_loopback_pair("link");
-  auto session = attach_shell(node, std::move(ours), ShellOptions{}, "sh");
+  auto link = io::make_loopback_pair("link");
+  auto session = attach_shell(node, std::move(link.first), ShellOptions{}, "sh");
+  const std::unique_ptr<io::IOStream> theirs = std::move(link.second);
   ASSERT_TRUE(session) << session.error();
   ASSERT_TRUE(node.create("sink", "s1", {}));
   ex.run_for(1ms);
