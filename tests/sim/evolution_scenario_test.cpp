@@ -102,8 +102,9 @@ constexpr kernel::Duration kBudget = 120min;
 // Each seed's replay as a share of Braitenberg's fitness, measured (release; docs/evolution.md's
 // table quotes these). A seed's run is deterministic (same seed, same champion), so each is held
 // to its own figure within 10 points either way: the spread over seeds (95-163% for 12 seeds)
-// would hide a loss that one fixed seed shows. Ten points is a tenth of Braitenberg's fitness,
-// and leaves room for the ASan build (clang), whose floating point need not match bit for bit.
+// would hide a loss that one fixed seed shows. Ten points is a tenth of Braitenberg's fitness:
+// a loss that size on any seed fails. (The release build, g++, and the ASan build, clang, measure
+// the same figures.)
 constexpr double kMeasuredPercent[] = {148, 161, 134, 154, 158};
 constexpr double kMarginPoints = 10;
 // The Braitenberg perceptron's own replay, measured: fitness 0.4653 (0.465 in docs/evolution.md).
