@@ -1,9 +1,12 @@
 // Bad input never hurts a node: 10,000 random and malformed lines (seeded, so a failure replays)
 // each give an error with a message, the node's tasks keep running, and its tasks and hooks are
 // exactly as they were.
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "symb/io/bytes.hpp"
+#include "symb/io/loopback_stream.hpp"
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
@@ -337,26 +340,74 @@ TEST(ShellBadInput, TenThousandBadLinesChangeNothing) {
 }
 
 TEST(ShellBadInput, BadBytesThroughTheShellTaskAreErrorsToo) {
-  // The same over a session: a plain-mode shell task fed garbage chunks keeps answering.
+  // The same over a session: a plain-mode shell fed 300 lines of random bytes, cut into chunks at
+  // random places (so lines straddle chunks), answers each line with one error line, and its node
+  // is as it was. The lines hold any byte but the line ends (CR, LF, NUL), telnet's IAC (which
+  // would switch the editor to terminal mode) and '#' (a comment) at the start; each has a control
+  // byte somewhere, so none is a command.
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry types;
   testing::add_test_types(types);
   os::Node node(ex, {"board", 3, 256, &types});
-  ShellOptions o;
-  auto shell_id = node.create("sh", std::make_unique<CommandShellTask>(o), {.period = 100ms, .queue_capacity = 256});
-  ASSERT_TRUE(shell_id);
+  auto link = io::make_loopback_pair("link");
+  auto session = attach_shell(node, std::move(link.first), ShellOptions{}, "sh");
+  const std::unique_ptr<io::IOStream> theirs = std::move(link.second);
+  ASSERT_TRUE(session) << session.error();
+  ASSERT_TRUE(node.create("sink", "s1", {}));
   ex.run_for(1ms);
+  const Snapshot before = snapshot(node);
+
   kernel::RandomStream rng(99, 1);
-  for (int i = 0; i < 300; ++i) {
-    std::string chunk(rng.below(600), '\0');
-    for (char& c : chunk) c = static_cast<char>(rng.below(256));
-    os::Message m;
-    m.payload = io::text_payload(chunk);
-    ASSERT_TRUE(node.post(*shell_id, m));
-    ex.run_for(1ms);
+  constexpr int kLines = 300;
+  std::string input;
+  for (int i = 0; i < kLines; ++i) {
+    std::string line(1 + rng.below(600), '\0');
+    for (char& c : line) {
+      unsigned char b = 0;
+      while (b == 0 || b == '\r' || b == '\n' || b == 0xff) b = static_cast<unsigned char>(rng.below(256));
+      c = static_cast<char>(b);
+    }
+    if (line[0] == '#') line[0] = 'x';
+    line[rng.below(line.size())] = static_cast<char>(1 + rng.below(8));  // a control byte, never a line end
+    input += line + "\n";
   }
-  EXPECT_EQ(node.info(*shell_id)->state, os::TaskState::kRunning);
-  EXPECT_EQ(node.task_count(), 1u);
+
+  std::string replies;
+  auto read_replies = [&] {
+    std::byte buf[4096];
+    for (;;) {
+      auto n = theirs->read_some(buf, kernel::Duration{0});
+      if (!n || *n == 0) return;
+      replies.append(reinterpret_cast<const char*>(buf), *n);
+    }
+  };
+  for (std::size_t at = 0; at < input.size();) {
+    const std::size_t n = std::min<std::size_t>(input.size() - at, 1 + rng.below(700));
+    ASSERT_TRUE(theirs->write_all(io::as_bytes(std::string_view(input).substr(at, n))));
+    at += n;
+    ex.run_for(1ms);
+    read_replies();
+  }
+  for (int i = 0; i < 100 && std::count(replies.begin(), replies.end(), '\n') < kLines; ++i) {
+    ex.run_for(1ms);
+    read_replies();
+  }
+
+  std::vector<std::string> lines;
+  for (std::size_t at = 0; at < replies.size();) {
+    const std::size_t end = replies.find('\n', at);
+    ASSERT_NE(end, std::string::npos) << "a reply without its line end: " << replies.substr(at);
+    lines.push_back(replies.substr(at, end - at));
+    at = end + 1;
+  }
+  ASSERT_EQ(lines.size(), static_cast<std::size_t>(kLines)) << "one reply per line sent";
+  for (const std::string& r : lines) {
+    EXPECT_TRUE(r.starts_with("error: ")) << r;
+    EXPECT_GT(r.size(), 12u) << "no message: " << r;
+    EXPECT_LE(r.size(), 1024u) << "an error does not echo a whole line back";
+  }
+  EXPECT_EQ(node.info(session->shell)->state, os::TaskState::kRunning);
+  EXPECT_EQ(snapshot(node), before);
 }
 
 }  // namespace

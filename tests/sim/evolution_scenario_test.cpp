@@ -20,6 +20,7 @@
 #include "symb/sim/scenario_session.hpp"
 
 #include "support/maze_evolution.hpp"
+#include "support/measured.hpp"
 #include "support/tsan_skip.hpp"
 
 namespace symb::sim {
@@ -85,7 +86,8 @@ Evolved evolve(std::uint64_t seed, kernel::Duration budget, const evo::OnePlusOn
 // 0-103% of Braitenberg, 2 of 8 with contacts; docs/evolution.md). With sigma_min = 0.05 and 20 s
 // evaluations (tau is "the most influential parameter", 6.2):
 //   120 min budget, seeds 1..12: 95-163% of Braitenberg; 11 of 12 without a contact in the replay
-//   (seed 6: 95%, 4499 contact steps); seeds 1..5: 136, 155, 151, 154, 158%, no contact.
+//   (seed 6: 95%, 4499 contact steps); seeds 1..5 (fitness reported every 5 steps): 148, 161, 134,
+//   154, 158%, no contact (kMeasuredPercent, docs/evolution.md).
 //   60 min budget, seeds 1..12: 8 of 12 at >= 80%.
 // The whole test (5 x 2 h of evolution, 6 replays of 10 min) takes about 3.5 s in release.
 evo::OnePlusOneTaskOptions run_options() {
@@ -97,12 +99,23 @@ evo::OnePlusOneTaskOptions run_options() {
 }
 constexpr kernel::Duration kBudget = 120min;
 
+// Each seed's replay as a share of Braitenberg's fitness, measured (release; docs/evolution.md's
+// table quotes these). A seed's run is deterministic (same seed, same champion), so each is held
+// to its own figure within 10 points either way: the spread over seeds (95-163% for 12 seeds)
+// would hide a loss that one fixed seed shows. Ten points is a tenth of Braitenberg's fitness:
+// a loss that size on any seed fails. (The release build, g++, and the ASan build, clang, measure
+// the same figures.)
+constexpr double kMeasuredPercent[] = {148, 161, 134, 154, 158};
+constexpr double kMarginPoints = 10;
+// The Braitenberg perceptron's own replay, measured: fitness 0.4653 (0.465 in docs/evolution.md).
+constexpr double kBraitenbergFitness = 0.4653;
+
 TEST(EvolutionScenario, OnePlusOneOnlineReachesBraitenbergInTheMazeWithFiveSeeds) {
   SYMB_SKIP_UNDER_TSAN();
   const Replay baseline = replay(maze_with_perceptron("network/braitenberg.w"), 10min);
   std::printf("braitenberg: fitness %.4f, %llu contact steps, %.0f cm\n", baseline.fitness,
               static_cast<unsigned long long>(baseline.contact_steps), baseline.distance);
-  ASSERT_GT(baseline.fitness, 0.3);  // measured 0.465
+  ASSERT_TRUE(testing::near_measured(baseline.fitness, kBraitenbergFitness, 0.005));
   EXPECT_EQ(baseline.contact_steps, 0u);
   for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
@@ -115,7 +128,7 @@ TEST(EvolutionScenario, OnePlusOneOnlineReachesBraitenbergInTheMazeWithFiveSeeds
         static_cast<unsigned long long>(seed), static_cast<unsigned long long>(e.evaluations),
         static_cast<unsigned long long>(e.successes), e.champion_fitness, r.fitness, 100 * r.fitness / baseline.fitness,
         static_cast<unsigned long long>(r.contact_steps), r.distance);
-    EXPECT_GE(r.fitness, 0.8 * baseline.fitness);
+    EXPECT_TRUE(testing::near_measured(100 * r.fitness / baseline.fitness, kMeasuredPercent[seed - 1], kMarginPoints));
     EXPECT_EQ(r.contact_steps, 0u);
   }
 }

@@ -21,6 +21,7 @@
 #include "symb/sim/scenario_session.hpp"
 
 #include "support/maze_evolution.hpp"
+#include "support/measured.hpp"
 #include "support/tsan_skip.hpp"
 
 namespace symb::sim {
@@ -99,12 +100,22 @@ evo::MuPlusOneTaskOptions run_options() {
 }
 constexpr kernel::Duration kBudget = 240min;
 
+// Each seed's replay as a share of Braitenberg's fitness, measured (release; the bold figures of
+// docs/evolution.md's (mu+1) table). A seed's run is deterministic (same seed, same best), so each
+// is held to its own figure within 10 points either way: the spread over 12 seeds (79-174%) would
+// hide a loss that one fixed seed shows. Ten points is a tenth of Braitenberg's fitness: a
+// loss that size on any seed fails. (The release build, g++, and the ASan build, clang, measure the
+// same figures.)
+constexpr double kMeasuredPercent[] = {169, 163, 167};
+constexpr double kMarginPoints = 10;
+constexpr double kBraitenbergFitness = 0.4653;  // measured; 0.465 in docs/evolution.md
+
 TEST(MuPlusOneScenario, ReachesBraitenbergInTheMazeWithThreeSeedsIn4Hours) {
   SYMB_SKIP_UNDER_TSAN();
   const Replay baseline = replay(maze_with_perceptron("network/braitenberg.w"), 10min);
   std::printf("braitenberg: fitness %.4f, %llu contact steps, %.0f cm\n", baseline.fitness,
               static_cast<unsigned long long>(baseline.contact_steps), baseline.distance);
-  ASSERT_GT(baseline.fitness, 0.3);  // measured 0.465
+  ASSERT_TRUE(testing::near_measured(baseline.fitness, kBraitenbergFitness, 0.005));
   for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     const Evolved e = evolve(seed, kBudget, run_options());
@@ -118,7 +129,7 @@ TEST(MuPlusOneScenario, ReachesBraitenbergInTheMazeWithThreeSeedsIn4Hours) {
         static_cast<unsigned long long>(e.counts.reevaluations), static_cast<unsigned long long>(e.counts.replacements),
         e.best.fitness, static_cast<unsigned long long>(e.best.measurements), e.mean_fitness, r.fitness,
         100 * r.fitness / baseline.fitness, static_cast<unsigned long long>(r.contact_steps), r.distance);
-    EXPECT_GE(r.fitness, 0.8 * baseline.fitness);
+    EXPECT_TRUE(testing::near_measured(100 * r.fitness / baseline.fitness, kMeasuredPercent[seed - 1], kMarginPoints));
     EXPECT_EQ(r.contact_steps, 0u);
   }
 }
