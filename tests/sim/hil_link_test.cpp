@@ -279,8 +279,11 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
   auto pty = io::PtyPair::open("hil");
   ASSERT_TRUE(pty.ok()) << pty.error();
   HilSimulatorOptions o;
-  o.period = 30ms;
-  o.hold = 150ms;  // 5 steps
+  // Each answer must arrive within its step for every one of the ten to be applied: a period of
+  // 100 ms leaves the board thread that much scheduling slack on a loaded 2-core box (at 30 ms,
+  // ctest -j2 beside the sanitizer builds delayed answers until several bunched into one step).
+  o.period = 100ms;
+  o.hold = 500ms;  // 5 steps
   std::vector<std::string> events;
   o.on_event = [&](const std::string& e) { events.push_back(e); };
   HilSimulator simulator(world, {pty->master}, o);
@@ -302,7 +305,7 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
     }
   });
   ASSERT_TRUE(simulator.wait_for_boards(2s).ok());
-  auto steps = simulator.run_for(900ms);  // 30 steps
+  auto steps = simulator.run_for(3000ms);  // 30 steps
   stop = true;
   board.join();
   ASSERT_TRUE(steps.ok()) << steps.error();
