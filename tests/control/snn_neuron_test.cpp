@@ -34,7 +34,7 @@ std::vector<int> intervals(const std::vector<int>& spikes) {
 }
 
 std::map<std::string, std::vector<int>> read_golden() {
-  const auto path = std::filesystem::path(__FILE__).parent_path() / "data" / "snn_rs_spikes.txt";
+  const auto path = std::filesystem::path(SYMB_SCENARIO_DIR) / "snn_rs_spikes.txt";
   std::ifstream in(path);
   EXPECT_TRUE(in.good()) << path;
   std::map<std::string, std::vector<int>> out;
