@@ -13,6 +13,7 @@
 #include "symb/apps/progress_line.hpp"
 #include "symb/apps/run/maze_svg.hpp"
 #include "symb/apps/run/run_recorder.hpp"
+#include "symb/apps/text_file.hpp"
 #include "symb/io/serial_port.hpp"
 #include "symb/sim/enki_world.hpp"
 #include "symb/sim/hil_simulator.hpp"
@@ -53,14 +54,6 @@ void print_help(std::ostream& out) {
       << "output folder. Ctrl-C stops early and still writes them. A line whose device goes away is\n"
       << "reopened with backoff (100 ms doubling to 2 s); the run exits 1 when a line was still down\n"
       << "at its end (a dead link), and summary.txt says how long each line was down.\n";
-}
-
-kernel::Status write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) return kernel::Error{"cannot write " + path.string()};
-  return {};
 }
 
 }  // namespace
