@@ -114,8 +114,8 @@ symb::kernel::Status make_evolving(FrameworkSide& side, std::uint64_t seed) {
   if (!fitness || !node.hook(*node.find("ir"), *fitness)) return symb::kernel::Error{"cannot add the fitness task"};
   symb::evo::OnePlusOneTaskOptions eo;
   eo.algorithm = algorithm_options();
-  eo.evaluation = kEvaluation;
-  eo.recovery = kRecovery;
+  eo.swap.evaluation = kEvaluation;
+  eo.swap.recovery = kRecovery;
   auto made = symb::evo::OnePlusOneTask::create(eo);
   if (!made) return symb::kernel::Error{made.error()};
   side.evolution = made->get();

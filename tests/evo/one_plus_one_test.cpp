@@ -292,8 +292,8 @@ OpenSpaceRun run_in_open_space(const std::vector<os::ParamAssignment>& fitness_p
   const auto f = *node.create("fitness", "fitness", fitness_params);
   EXPECT_TRUE(node.hook(ir, f).ok());
   OnePlusOneTaskOptions o;
-  o.evaluation = 300ms;
-  o.recovery = 90ms;
+  o.swap.evaluation = 300ms;
+  o.swap.recovery = 90ms;
   auto made = OnePlusOneTask::create(o);
   EXPECT_TRUE(made.ok()) << (made ? "" : made.error());
   if (!made) return {};

@@ -93,8 +93,8 @@ Evolved evolve(std::uint64_t seed, kernel::Duration budget, const evo::OnePlusOn
 evo::OnePlusOneTaskOptions run_options() {
   evo::OnePlusOneTaskOptions o;
   o.algorithm.sigma_min = 0.05;
-  o.evaluation = 20s;
-  o.recovery = 1s;
+  o.swap.evaluation = 20s;
+  o.swap.recovery = 1s;
   return o;
 }
 constexpr kernel::Duration kBudget = 120min;

@@ -5,6 +5,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <utility>
 
 #include "symb/os/param.hpp"
 
@@ -123,6 +125,24 @@ std::variant<kernel::Duration, UsageError> parse_duration(std::string_view what,
   return *d;
 }
 
+std::variant<double, UsageError> parse_speed(std::string_view what, std::string_view text) {
+  const std::string copy(text);
+  char* end = nullptr;
+  const double v = std::strtod(copy.c_str(), &end);
+  if (copy.empty() || end != copy.c_str() + copy.size() || !std::isfinite(v) || v <= 0 || v > 1e6)
+    return UsageError{std::string(what) + ": expected a number above 0 and at most 1e6, not " + quote_arg(text)};
+  return v;
+}
+
+std::variant<double, UsageError> parse_fraction(std::string_view what, std::string_view text) {
+  const std::string copy(text);
+  char* end = nullptr;
+  const double v = std::strtod(copy.c_str(), &end);
+  if (copy.empty() || end != copy.c_str() + copy.size() || !(v >= 0 && v <= 1))
+    return UsageError{std::string(what) + ": expected a fraction in [0, 1], not " + quote_arg(text)};
+  return v;
+}
+
 int usage_error(const CliContext& ctx, std::string_view command, const UsageError& e) {
   ctx.err << command << ": " << e.message << "\n(run '" << command << " --help' for usage)\n";
   return kExitUsage;
@@ -152,6 +172,20 @@ std::variant<SplitArgs, UsageError> split_args(std::span<const std::string_view>
   if (!out.help && out.positional.size() > max_positional)
     return UsageError{"unexpected argument " + quote_arg(out.positional[max_positional])};
   return out;
+}
+
+std::variant<SplitArgs, int> scenario_command_args(std::span<const std::string_view> args,
+                                                   std::span<const OptionSpec> specs, const CliContext& ctx,
+                                                   std::string_view command, void (*print_help)(std::ostream&)) {
+  auto split = split_args(args, specs, 1);
+  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, command, *e);
+  SplitArgs& a = std::get<SplitArgs>(split);
+  if (a.help) {
+    print_help(ctx.out);
+    return kExitOk;
+  }
+  if (a.positional.empty()) return usage_error(ctx, command, UsageError{"missing SCENARIO (a .yaml file)"});
+  return std::move(a);
 }
 
 std::string fixed(double v, int decimals) {

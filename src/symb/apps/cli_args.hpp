@@ -53,6 +53,19 @@ struct SplitArgs {
 std::variant<SplitArgs, UsageError> split_args(std::span<const std::string_view> args,
                                                std::span<const OptionSpec> specs, std::size_t max_positional);
 
+// Where a command writes: results on `out`, progress and errors on `err`.
+struct CliContext {
+  std::ostream& out;
+  std::ostream& err;
+  bool err_is_terminal = false;  // progress lines redraw in place only on a terminal
+};
+
+// The arguments of a command `COMMAND SCENARIO [options]`: the split, or the exit status when the
+// command is answered already (its help printed, or the usage error reported).
+std::variant<SplitArgs, int> scenario_command_args(std::span<const std::string_view> args,
+                                                   std::span<const OptionSpec> specs, const CliContext& ctx,
+                                                   std::string_view command, void (*print_help)(std::ostream&));
+
 // "  --nodes N      how many robots" lines for a help text.
 std::string describe_options(std::span<const OptionSpec> specs);
 
@@ -64,6 +77,10 @@ std::variant<std::uint64_t, UsageError> parse_u64(std::string_view what, std::st
 // A number with a unit: ns, us, ms, s, min, h (e.g. 60s, 500ms, 1.5min); within (0, max].
 std::variant<kernel::Duration, UsageError> parse_duration(std::string_view what, std::string_view text,
                                                           kernel::Duration max);
+// A virtual-time pace (--speed): a number above 0 and at most 1e6.
+std::variant<double, UsageError> parse_speed(std::string_view what, std::string_view text);
+// A fraction in [0, 1].
+std::variant<double, UsageError> parse_fraction(std::string_view what, std::string_view text);
 
 // `v` with `decimals` digits after the point, for people ("12.35").
 std::string fixed(double v, int decimals);
@@ -71,13 +88,6 @@ std::string fixed(double v, int decimals);
 std::string quote_arg(std::string_view text);
 // " (did you mean 'x'?)" or "".
 std::string did_you_mean(std::string_view given, std::span<const std::string_view> candidates);
-
-// Where a command writes: results on `out`, progress and errors on `err`.
-struct CliContext {
-  std::ostream& out;
-  std::ostream& err;
-  bool err_is_terminal = false;  // progress lines redraw in place only on a terminal
-};
 
 // Writes "<command>: <message>" and a pointer to the help, and returns kExitUsage.
 int usage_error(const CliContext& ctx, std::string_view command, const UsageError& e);

@@ -46,6 +46,20 @@ kernel::Result<std::size_t> mlp_genome_size(std::int64_t inputs, const std::stri
   return net::genome_size(topology);
 }
 
+kernel::Status check_mlp_genes(std::size_t genes, std::int64_t inputs, const std::string& layers,
+                               const std::string& activation) {
+  auto needed = mlp_genome_size(inputs, layers, activation);
+  if (!needed) return kernel::Error{needed.error()};
+  if (genes != *needed)
+    return kernel::Error{"genes: " + std::to_string(genes) + " genes, but the mlp (inputs=" + std::to_string(inputs) +
+                         " layers=\"" + layers + "\") has " + std::to_string(*needed) + " weights and biases"};
+  return {};
+}
+
+std::string mlp_params_text(std::int64_t inputs, const std::string& layers, const std::string& activation) {
+  return "inputs=" + std::to_string(inputs) + " layers=\"" + layers + "\" activation=" + activation;
+}
+
 ControllerSwap::ControllerSwap(ControllerSwapOptions options, std::string who)
     : options_(std::move(options)), who_(std::move(who)) {
   // check() has accepted them; an unparseable text leaves no extra parameters.

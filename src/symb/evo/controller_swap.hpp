@@ -52,6 +52,11 @@ kernel::Status check(const ControllerSwapOptions& o, const std::string& who);
 // layer sizes "h1 h2 .. out", activation name): what `genes` must equal.
 kernel::Result<std::size_t> mlp_genome_size(std::int64_t inputs, const std::string& layers,
                                             const std::string& activation);
+// `genes` is that genome size; the message says both when it is not.
+kernel::Status check_mlp_genes(std::size_t genes, std::int64_t inputs, const std::string& layers,
+                               const std::string& activation);
+// The candidate mlp's parameters besides `weights` (ControllerSwapOptions::controller_params).
+std::string mlp_params_text(std::int64_t inputs, const std::string& layers, const std::string& activation);
 
 class ControllerSwap {
  public:

@@ -65,9 +65,10 @@ struct OnePlusOneParams : OnePlusOneTaskOptions {
 os::TaskType one_plus_one_type() {
   using P = OnePlusOneParams;
   using A = OnePlusOneOptions;
+  using S = ControllerSwapOptions;
   os::ParamTable<P> p;
-  p.add("evaluation", &P::evaluation).range(0.001, 86400.0).doc("counted time per candidate");
-  p.add("recovery", &P::recovery).range(0.0, 3600.0).doc("uncounted time before it, after a swap");
+  p.add("evaluation", &P::swap, &S::evaluation).range(0.001, 86400.0).doc("counted time per candidate");
+  p.add("recovery", &P::swap, &S::recovery).range(0.0, 3600.0).doc("uncounted time before it, after a swap");
   p.add("genes", &P::algorithm, &A::genes)
       .range(1.0, 20000.0)
       .doc("genome length: must be the mlp's genome size ((inputs + 1) x outputs for a perceptron)");
@@ -84,25 +85,20 @@ os::TaskType one_plus_one_type() {
   p.add("reevaluation", &P::algorithm, &A::reevaluation)
       .range(0.0, 1.0)
       .doc("probability of re-running the champion after a failed challenger");
-  p.add("controller", &P::controller).range(1.0, 63.0).doc("the name of the controller task it replaces");
-  p.add("sensor", &P::sensor).range(1.0, 63.0).doc("the task hooked into each candidate");
-  p.add("actuator", &P::actuator).range(1.0, 63.0).doc("the task each candidate drives");
-  p.add("fitness", &P::fitness).range(1.0, 63.0).doc("the fitness task it reads");
+  p.add("controller", &P::swap, &S::controller).range(1.0, 63.0).doc("the name of the controller task it replaces");
+  p.add("sensor", &P::swap, &S::sensor).range(1.0, 63.0).doc("the task hooked into each candidate");
+  p.add("actuator", &P::swap, &S::actuator).range(1.0, 63.0).doc("the task each candidate drives");
+  p.add("fitness", &P::swap, &S::fitness).range(1.0, 63.0).doc("the fitness task it reads");
   auto t = os::declare_task_type(
       "one_plus_one",
       "(1+1)-ONLINE evolution: replaces the controller task by a new mlp per candidate, reads the "
       "fitness task's [sum, steps, step]",
       std::move(p), [](const P& c) -> Result<std::unique_ptr<OnePlusOneTask>> {
-        auto needed = evo::mlp_genome_size(c.inputs, c.layers, c.activation);
-        if (!needed) return Error{needed.error()};
-        if (c.algorithm.genes != *needed)
-          return Error{"genes: " + std::to_string(c.algorithm.genes) +
-                       " genes, but the mlp (inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers +
-                       "\") has " + std::to_string(*needed) + " weights and biases"};
+        if (auto st = check_mlp_genes(c.algorithm.genes, c.inputs, c.layers, c.activation); !st)
+          return Error{st.error()};
         OnePlusOneTaskOptions o = c;
-        o.controller_type = "mlp";
-        o.controller_params =
-            "inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers + "\" activation=" + c.activation;
+        o.swap.controller_type = "mlp";
+        o.swap.controller_params = mlp_params_text(c.inputs, c.layers, c.activation);
         return OnePlusOneTask::create(std::move(o));
       });
   t.defaults.priority = 1;

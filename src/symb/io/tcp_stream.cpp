@@ -47,6 +47,13 @@ kernel::Status resolve(const std::string& host, std::uint16_t port, bool passive
   return {};
 }
 
+// A non-blocking, close-on-exec socket for the address `a`, or -1 with the reason in `last`.
+int open_socket(const addrinfo& a, std::string& last) {
+  const int fd = ::socket(a.ai_family, a.ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a.ai_protocol);
+  if (fd < 0) last = std::strerror(errno);
+  return fd;
+}
+
 }  // namespace
 
 // --- TcpStream -----------------------------------------------------------------------------------
@@ -65,11 +72,8 @@ kernel::Result<int> TcpStream::dial(const std::string& host, std::uint16_t port,
   const auto deadline = std::chrono::steady_clock::now() + std::min<kernel::Duration>(timeout, std::chrono::hours(24));
   std::string last = "no address";
   for (addrinfo* a = ai.list; a != nullptr; a = a->ai_next) {
-    const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol);
-    if (fd < 0) {
-      last = std::strerror(errno);
-      continue;
-    }
+    const int fd = open_socket(*a, last);
+    if (fd < 0) continue;
     int rc = ::connect(fd, a->ai_addr, a->ai_addrlen);
     int err = rc == 0 ? 0 : errno;
     if (err == EINPROGRESS) {
@@ -148,11 +152,8 @@ kernel::Result<std::unique_ptr<TcpListener>> TcpListener::bind(const std::string
   if (auto st = resolve(host, port, true, ai); !st) return kernel::Error{st.error()};
   std::string last = "no address";
   for (addrinfo* a = ai.list; a != nullptr; a = a->ai_next) {
-    const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol);
-    if (fd < 0) {
-      last = std::strerror(errno);
-      continue;
-    }
+    const int fd = open_socket(*a, last);
+    if (fd < 0) continue;
     // A board restarted right after a crash must get its port back, not wait out TIME_WAIT.
     const int one = 1;
     (void)::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);

@@ -164,28 +164,13 @@ VirtualTimeExecutor::Event VirtualTimeExecutor::pop_event() {
 }
 
 std::uint64_t VirtualTimeExecutor::run_until(Time until) {
-  assert(!running_ && "run_until is not reentrant");
-  running_ = true;
-  runner_.store(std::this_thread::get_id(), std::memory_order_relaxed);
-  stop_requested_ = false;
-  std::uint64_t handled = 0;
-  for (;;) {
-    if (inbox_pending_.load(std::memory_order_relaxed)) run_injected();
-    if (events_.empty() || events_.front().time > until || stop_requested_) break;
-    const Event e = pop_event();
-    clock_.advance_to(e.time);
-    handle(e);
-    ++handled;
-    if (!to_finalize_.empty()) finalize_pending();
-  }
-  running_ = false;
-  runner_.store(std::thread::id(), std::memory_order_relaxed);
+  const std::uint64_t handled = run_until_idle(until);
   if (!stop_requested_ && until != kTimeNever) clock_.advance_to(until);
   return handled;
 }
 
 std::uint64_t VirtualTimeExecutor::run_until_idle(Time limit) {
-  assert(!running_ && "run_until_idle is not reentrant");
+  assert(!running_ && "run_until and run_until_idle are not reentrant");
   running_ = true;
   runner_.store(std::this_thread::get_id(), std::memory_order_relaxed);
   stop_requested_ = false;

@@ -24,6 +24,20 @@ std::uint64_t fnv1a(std::string_view s) {
 
 std::string id_text(TaskId id) { return "#" + std::to_string(id.index) + "." + std::to_string(id.generation); }
 
+// A task that can run again (started, resumed) is woken for the messages queued meanwhile, unless
+// a wake-up is pending already. Wakes outside the inbox lock.
+void wake_if_queued(detail::TaskRecord& r) {
+  kernel::ActivitySlot* wake = nullptr;
+  {
+    std::lock_guard in(r.in_mu);
+    if (!r.queue.empty() && !r.wake_pending) {
+      r.wake_pending = true;
+      wake = r.slot;
+    }
+  }
+  if (wake != nullptr) wake->wake();
+}
+
 }  // namespace
 
 const char* to_string(TaskState s) {
@@ -405,15 +419,7 @@ Status Node::start(TaskId id) {
     return Error{"task '" + r->name + "' is " + to_string(r->state.load()) + ", not created"};
   if (auto st = start_locked(*r); !st) return st;
   // Messages may have been queued before it started.
-  kernel::ActivitySlot* wake = nullptr;
-  {
-    std::lock_guard in(r->in_mu);
-    if (!r->queue.empty() && !r->wake_pending) {
-      r->wake_pending = true;
-      wake = r->slot;
-    }
-  }
-  if (wake != nullptr) wake->wake();
+  wake_if_queued(*r);
   return {};
 }
 
@@ -436,15 +442,7 @@ Status Node::resume(TaskId id) {
   if (!r->state.compare_exchange_strong(expected, TaskState::kRunning))
     return Error{"task '" + r->name + "' is " + to_string(expected) + ", not suspended"};
   r->slot->resume();
-  kernel::ActivitySlot* wake = nullptr;
-  {
-    std::lock_guard in(r->in_mu);
-    if (!r->queue.empty() && !r->wake_pending) {
-      r->wake_pending = true;
-      wake = r->slot;
-    }
-  }
-  if (wake != nullptr) wake->wake();
+  wake_if_queued(*r);
   return {};
 }
 

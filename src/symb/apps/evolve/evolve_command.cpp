@@ -56,14 +56,9 @@ std::string progress_text(const EvolveProgress& p) {
 
 int run_evolve_command(std::span<const std::string_view> args, const CliContext& ctx) {
   EvolveOptions options;
-  auto split = split_args(args, kOptions, 1);
-  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
+  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_help);
+  if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& parsed = std::get<SplitArgs>(split);
-  if (parsed.help) {
-    print_help(ctx.out);
-    return kExitOk;
-  }
-  if (parsed.positional.empty()) return usage_error(ctx, kCommand, UsageError{"missing SCENARIO (a .yaml file)"});
   options.scenario_path = std::string(parsed.positional.front());
   bool quiet = false;
   for (const ParsedOption& o : parsed.options) {
@@ -91,13 +86,9 @@ int run_evolve_command(std::span<const std::string_view> args, const CliContext&
     } else if (o.name == "--resume") {
       options.resume = true;
     } else if (o.name == "--speed") {
-      char* end = nullptr;
-      const std::string text(o.value);
-      const double v = std::strtod(text.c_str(), &end);
-      if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v) || v <= 0 || v > 1e6)
-        return usage_error(ctx, kCommand,
-                           UsageError{"--speed: expected a number above 0 and at most 1e6, not " + quote_arg(text)});
-      options.speed = v;
+      auto v = parse_speed("--speed", o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.speed = std::get<double>(v);
     } else if (o.name == "--quiet") {
       quiet = true;
     }

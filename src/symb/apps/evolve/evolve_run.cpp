@@ -17,6 +17,7 @@
 #include "symb/apps/cli_args.hpp"
 #include "symb/apps/evolve/evolve_checkpoint.hpp"
 #include "symb/apps/run/probe_plot.hpp"
+#include "symb/apps/text_file.hpp"
 #include "symb/evo/genome/genome.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
@@ -46,22 +47,6 @@ std::string exact(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.9g", v);
   return buf;
-}
-
-kernel::Result<std::string> read_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{"cannot read " + path.string()};
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-kernel::Status write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) return Error{"cannot write " + path.string()};
-  return {};
 }
 
 // Written beside, then renamed over: a kill never leaves half a checkpoint.

@@ -49,14 +49,9 @@ void print_help(std::ostream& out) {
 }  // namespace
 
 int run_board_command(std::span<const std::string_view> args, const CliContext& ctx) {
-  auto split = split_args(args, kOptions, 1);
-  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
+  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_help);
+  if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& a = std::get<SplitArgs>(split);
-  if (a.help) {
-    print_help(ctx.out);
-    return kExitOk;
-  }
-  if (a.positional.empty()) return usage_error(ctx, kCommand, UsageError{"missing SCENARIO (a .yaml file)"});
   std::string serial, shell_path, robot_name;
   std::optional<kernel::Duration> duration;
   std::optional<std::uint64_t> seed;

@@ -99,11 +99,9 @@ int run_link_command(std::span<const std::string_view> args, const CliContext& c
       if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--dir: empty folder name"});
       dir = o.value;
     } else if (o.name == "--corrupt") {
-      char* end = nullptr;
-      corrupt = std::strtod(o.value.c_str(), &end);
-      if (o.value.empty() || end != o.value.c_str() + o.value.size() || !(corrupt >= 0 && corrupt <= 1))
-        return usage_error(ctx, kCommand,
-                           UsageError{"--corrupt: expected a fraction in [0, 1], not " + quote_arg(o.value)});
+      auto v = parse_fraction("--corrupt", o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      corrupt = std::get<double>(v);
     } else if (o.name == "--seed") {
       auto v = parse_u64("--seed", o.value);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);

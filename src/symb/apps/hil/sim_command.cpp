@@ -13,6 +13,7 @@
 #include "symb/apps/progress_line.hpp"
 #include "symb/apps/run/maze_svg.hpp"
 #include "symb/apps/run/run_recorder.hpp"
+#include "symb/apps/text_file.hpp"
 #include "symb/io/serial_port.hpp"
 #include "symb/sim/enki_world.hpp"
 #include "symb/sim/hil_simulator.hpp"
@@ -55,33 +56,12 @@ void print_help(std::ostream& out) {
       << "at its end (a dead link), and summary.txt says how long each line was down.\n";
 }
 
-kernel::Status write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) return kernel::Error{"cannot write " + path.string()};
-  return {};
-}
-
-std::variant<double, UsageError> parse_fraction(std::string_view what, const std::string& text) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || !(v >= 0 && v <= 1))
-    return UsageError{std::string(what) + ": expected a fraction in [0, 1], not " + quote_arg(text)};
-  return v;
-}
-
 }  // namespace
 
 int run_sim_command(std::span<const std::string_view> args, const CliContext& ctx) {
-  auto split = split_args(args, kOptions, 1);
-  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
+  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_help);
+  if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& a = std::get<SplitArgs>(split);
-  if (a.help) {
-    print_help(ctx.out);
-    return kExitOk;
-  }
-  if (a.positional.empty()) return usage_error(ctx, kCommand, UsageError{"missing SCENARIO (a .yaml file)"});
   std::vector<std::string> serial;
   std::optional<kernel::Duration> duration;
   std::optional<fs::path> out_dir;

@@ -27,12 +27,7 @@ void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<co
   const double stroke = robots.size() > 30 ? 1.0 : 1.8;
   char buf[200];
 
-  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  std::snprintf(buf, sizeof buf,
-                "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"%.0f\" height=\"%.0f\" "
-                "viewBox=\"0 0 %.0f %.0f\">\n",
-                w + 2 * kMargin, h + 2 * kMargin + kCaption, w + 2 * kMargin, h + 2 * kMargin + kCaption);
-  out << buf << "<rect x=\"0\" y=\"0\" width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  out << svg_picture_open(w + 2 * kMargin, h + 2 * kMargin + kCaption);
   std::snprintf(buf, sizeof buf,
                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f7f7f2\" stroke=\"#333\" "
                 "stroke-width=\"%.1f\"/>\n",

@@ -16,21 +16,6 @@ constexpr double kWidth = 900, kHeight = 360;
 constexpr double kLeft = 70, kRight = 150, kTop = 36, kBottom = 44;  // room for axes and legend
 constexpr std::size_t kMaxLegend = 16;
 
-// A "nice" tick step (1, 2 or 5 times a power of ten) giving about `count` ticks over `span`.
-double tick_step(double span, int count) {
-  const double raw = span / count;
-  const double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * p >= raw) return m * p;
-  return 10 * p;
-}
-
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", std::fabs(v) < 1e-12 ? 0.0 : v);
-  return buf;
-}
-
 }  // namespace
 
 std::string probe_file_name(const ProbeSeries& series) {
@@ -62,33 +47,28 @@ void write_probe_svg(std::ostream& out, const ProbeSeries& s) {
   const auto py = [&](double v) { return kTop + (hi - v) / (hi - lo) * ph; };
   char buf[256];
 
-  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  std::snprintf(buf, sizeof buf,
-                "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"%.0f\" height=\"%.0f\" "
-                "viewBox=\"0 0 %.0f %.0f\" font-family=\"sans-serif\" font-size=\"12\">\n",
-                kWidth, kHeight, kWidth, kHeight);
-  out << buf << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  out << svg_plot_open(kWidth, kHeight);
   out << "<text x=\"" << kLeft << "\" y=\"22\" font-size=\"14\" fill=\"#222\">"
       << svg_escape(s.robot + " / " + s.task + " / " + s.channel) << " (" << s.samples << " samples)</text>\n";
   // Grid and ticks.
   out << "<g stroke=\"#ddd\" fill=\"#444\">\n";
-  const double vstep = tick_step(hi - lo, 5);
+  const double vstep = svg_tick_step(hi - lo, 5);
   for (double v = std::ceil(lo / vstep) * vstep; v <= hi; v += vstep) {
     std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>", kLeft, py(v), kLeft + pw,
                   py(v));
     out << buf;
     std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\" stroke=\"none\">", kLeft - 6,
                   py(v) + 4);
-    out << buf << number(v) << "</text>\n";
+    out << buf << svg_number(v) << "</text>\n";
   }
-  const double tstep = tick_step(t1 - t0, 8);
+  const double tstep = svg_tick_step(t1 - t0, 8);
   for (double t = std::ceil(t0 / tstep) * tstep; t <= t1; t += tstep) {
     std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>", px(t), kTop, px(t),
                   kTop + ph);
     out << buf;
     std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" stroke=\"none\">", px(t),
                   kTop + ph + 16);
-    out << buf << number(t) << "</text>\n";
+    out << buf << svg_number(t) << "</text>\n";
   }
   out << "</g>\n";
   std::snprintf(buf, sizeof buf,

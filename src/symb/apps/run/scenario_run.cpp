@@ -17,6 +17,7 @@
 #include "symb/apps/run/probe_recorder.hpp"
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/apps/run/spike_recorder.hpp"
+#include "symb/apps/text_file.hpp"
 #include "symb/io/stdio_stream.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
@@ -35,14 +36,6 @@ using kernel::Error;
 constexpr std::size_t kMaxProbePlots = 48;
 
 double seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
-
-kernel::Status write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) return Error{"cannot write " + path.string()};
-  return {};
-}
 
 std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
   std::ostringstream s;

@@ -17,32 +17,6 @@ namespace {
 using control::snn::GrownNetwork;
 using control::snn::NeuronClass;
 
-// A "nice" tick step (1, 2 or 5 times a power of ten) giving about `count` ticks over `span`.
-double tick_step(double span, int count) {
-  const double raw = span / count;
-  const double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * p >= raw) return m * p;
-  return 10 * p;
-}
-
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", std::fabs(v) < 1e-12 ? 0.0 : v);
-  return buf;
-}
-
-void svg_open(std::string& out, double w, double h) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf,
-                "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-                "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"%.0f\" height=\"%.0f\" "
-                "viewBox=\"0 0 %.0f %.0f\" font-family=\"sans-serif\" font-size=\"12\">\n"
-                "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
-                w, h, w, h);
-  out += buf;
-}
-
 // Class colours chosen away from the synapses' blue and red and the channels' green and orange.
 constexpr const char* kClassColour[] = {"#e6c229", "#8c6bb1", "#c51b7d", "#35b5a6", "#f4a6c8", "#8c564b", "#b8b8b8"};
 static_assert(std::size(kClassColour) == control::snn::kNeuronClassCount);
@@ -83,26 +57,26 @@ std::string raster_svg(std::span<const SpikeDot> spikes, std::size_t neurons, st
 
   std::string out;
   out.reserve(4096 + 40 * std::min(finite, kMaxRasterDots));
-  svg_open(out, kWidth, kHeight);
-  out += "<text x=\"" + number(kLeft) + "\" y=\"22\" font-size=\"14\" fill=\"#222\">" + svg_escape(title) + " (" +
+  out += svg_plot_open(kWidth, kHeight);
+  out += "<text x=\"" + svg_number(kLeft) + "\" y=\"22\" font-size=\"14\" fill=\"#222\">" + svg_escape(title) + " (" +
          std::to_string(finite) + " spikes";
   if (step > 1) out += ", thinned: 1 in " + std::to_string(step) + " shown";
   out += ")</text>\n";
   // Grid and ticks.
   out += "<g stroke=\"#ddd\" fill=\"#444\">\n";
-  const double nstep = std::max(1.0, tick_step(static_cast<double>(rows), 6));
+  const double nstep = std::max(1.0, svg_tick_step(static_cast<double>(rows), 6));
   for (double n = 0; n < static_cast<double>(rows); n += nstep) {
     std::snprintf(buf, sizeof buf,
                   "<path d=\"M%.1f %.1fH%.1f\"/><text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\" stroke=\"none\">",
                   kLeft, py(n), kLeft + pw, kLeft - 6, py(n) + 4);
-    out += buf + number(n) + "</text>\n";
+    out += buf + svg_number(n) + "</text>\n";
   }
-  const double tstep = tick_step(t1 - t0, 8);
+  const double tstep = svg_tick_step(t1 - t0, 8);
   for (double t = std::ceil(t0 / tstep) * tstep; t <= t1; t += tstep) {
     std::snprintf(buf, sizeof buf,
                   "<path d=\"M%.1f %.1fV%.1f\"/><text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" stroke=\"none\">",
                   px(t), kTop, kTop + ph, px(t), kTop + ph + 16);
-    out += buf + number(t) + "</text>\n";
+    out += buf + svg_number(t) + "</text>\n";
   }
   out += "</g>\n";
   std::snprintf(
@@ -158,8 +132,9 @@ std::string network_svg(const GrownNetwork& net, std::string_view title) {
   if (!(max_w > 0)) max_w = 1;
 
   std::string out;
-  svg_open(out, width, height);
-  out += "<text x=\"" + number(kLeft) + "\" y=\"22\" font-size=\"14\" fill=\"#222\">" + svg_escape(title) + "</text>\n";
+  out += svg_plot_open(width, height);
+  out += "<text x=\"" + svg_number(kLeft) + "\" y=\"22\" font-size=\"14\" fill=\"#222\">" + svg_escape(title) +
+         "</text>\n";
   std::snprintf(buf, sizeof buf,
                 "<text x=\"%.0f\" y=\"40\" fill=\"#444\">%zu neurons, %zu synapses, %dx%d grid, %zu input and %zu "
                 "output channels</text>\n",

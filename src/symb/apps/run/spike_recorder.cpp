@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "symb/apps/text_file.hpp"
 #include "symb/control/snn/aedat.hpp"
 #include "symb/control/snn/network_layout.hpp"
 
@@ -15,14 +16,6 @@ namespace fs = std::filesystem;
 using kernel::Error;
 
 namespace {
-
-kernel::Status write_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) return Error{"cannot write " + path.string()};
-  return {};
-}
 
 std::string safe(std::string s) {
   for (char& c : s)

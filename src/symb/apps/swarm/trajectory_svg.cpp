@@ -29,13 +29,7 @@ void write_trajectory_svg(std::ostream& out, double arena, std::span<const Traje
   const double opacity = robots.size() > 200 ? 0.5 : 0.8;
   char buf[160];
 
-  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  std::snprintf(buf, sizeof buf,
-                "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"%.0f\" height=\"%.0f\" "
-                "viewBox=\"0 0 %.0f %.0f\">\n",
-                width, height, width, height);
-  out << buf;
-  out << "<rect x=\"0\" y=\"0\" width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  out << svg_picture_open(width, height);
   std::snprintf(buf, sizeof buf,
                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f7f7f2\" stroke=\"#222\" "
                 "stroke-width=\"3\"/>\n",

@@ -237,8 +237,7 @@ os::TaskType medea_type() {
                               MedeaTaskOptions o = c;
                               o.algorithm.genes = *genes;
                               o.controller_type = "mlp";
-                              o.controller_params = "inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers +
-                                                    "\" activation=" + c.activation;
+                              o.controller_params = mlp_params_text(c.inputs, c.layers, c.activation);
                               return MedeaTask::create(std::move(o));
                             });
   t.defaults.priority = 1;

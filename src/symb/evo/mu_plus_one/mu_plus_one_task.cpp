@@ -198,16 +198,11 @@ os::TaskType mu_plus_one_type() {
       "encapsulated (mu+1)-ONLINE evolution: a population of mu genomes on the robot; replaces the "
       "controller task by a new mlp per candidate, reads the fitness task's [sum, steps, step]",
       std::move(p), [](const P& c) -> kernel::Result<std::unique_ptr<MuPlusOneTask>> {
-        auto needed = mlp_genome_size(c.inputs, c.layers, c.activation);
-        if (!needed) return kernel::Error{needed.error()};
-        if (c.algorithm.genes != *needed)
-          return kernel::Error{"genes: " + std::to_string(c.algorithm.genes) +
-                               " genes, but the mlp (inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers +
-                               "\") has " + std::to_string(*needed) + " weights and biases"};
+        if (auto st = check_mlp_genes(c.algorithm.genes, c.inputs, c.layers, c.activation); !st)
+          return kernel::Error{st.error()};
         MuPlusOneTaskOptions o = c;
         o.swap.controller_type = "mlp";
-        o.swap.controller_params =
-            "inputs=" + std::to_string(c.inputs) + " layers=\"" + c.layers + "\" activation=" + c.activation;
+        o.swap.controller_params = mlp_params_text(c.inputs, c.layers, c.activation);
         return MuPlusOneTask::create(std::move(o));
       });
   t.defaults.priority = 1;

@@ -14,23 +14,14 @@ constexpr std::size_t kHistoryLimit = 1 << 16;  // evaluations kept for history(
 
 }  // namespace
 
-namespace {
-
-ControllerSwapOptions swap_options(const OnePlusOneTaskOptions& o) {
-  return {o.evaluation,        o.recovery, o.controller_type, o.controller,
-          o.controller_params, o.sensor,   o.actuator,        o.fitness};
-}
-
-}  // namespace
-
 kernel::Result<std::unique_ptr<OnePlusOneTask>> OnePlusOneTask::create(OnePlusOneTaskOptions options) {
   if (auto st = check(options.algorithm); !st) return kernel::Error{st.error()};
-  if (auto st = check(swap_options(options), "one_plus_one"); !st) return kernel::Error{st.error()};
+  if (auto st = check(options.swap, "one_plus_one"); !st) return kernel::Error{st.error()};
   return std::unique_ptr<OnePlusOneTask>(new OnePlusOneTask(std::move(options)));
 }
 
 OnePlusOneTask::OnePlusOneTask(OnePlusOneTaskOptions options)
-    : options_(std::move(options)), swap_(swap_options(options_), "one_plus_one") {}
+    : options_(std::move(options)), swap_(options_.swap, "one_plus_one") {}
 
 EvolutionState OnePlusOneTask::state() const {
   std::lock_guard lock(mu_);
@@ -94,8 +85,8 @@ bool OnePlusOneTask::set_up() {
   }
   if (!*ready) {
     if (!warned_missing_)
-      log(os::LogLevel::kWarn, "one_plus_one: waiting for the tasks '" + options_.sensor + "', '" + options_.actuator +
-                                   "' and '" + options_.fitness + "'");
+      log(os::LogLevel::kWarn, "one_plus_one: waiting for the tasks '" + options_.swap.sensor + "', '" +
+                                   options_.swap.actuator + "' and '" + options_.swap.fitness + "'");
     warned_missing_ = true;
     return false;
   }

@@ -47,13 +47,7 @@ namespace symb::evo {
 
 struct OnePlusOneTaskOptions {
   OnePlusOneOptions algorithm;
-  kernel::Duration evaluation = std::chrono::seconds(10);
-  kernel::Duration recovery = std::chrono::seconds(1);
-  // The candidate controllers: task type, name and the parameters besides `weights`.
-  std::string controller_type = "mlp";
-  std::string controller = "controller";
-  std::string controller_params = "inputs=7 layers=2 activation=tanh";
-  std::string sensor = "ir", actuator = "wheels", fitness = "fitness";
+  ControllerSwapOptions swap;
 };
 
 enum class EvolutionState : std::uint8_t { kWaiting, kRunning, kFailed };
