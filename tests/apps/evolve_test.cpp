@@ -238,6 +238,31 @@ TEST(Evolve, ResumeRefusesAnotherScenarioFile) {
   fs::remove_all(dir);
 }
 
+// Two tasks that answer each other's every message: the node cuts the cycle (os/message.hpp,
+// kMaxHops) and the evolution run stops with the error naming it, not 20 minutes later.
+TEST(Evolve, AHookCycleStopsTheRunWithAnErrorNamingIt) {
+  const fs::path dir = scratch("cycle");
+  fs::create_directories(dir);
+  const fs::path copy = dir / "evolve_maze.yaml";
+  std::string text = read(kScenario);
+  const std::string hooks = "    hooks:\n      - ir -> fitness\n";
+  ASSERT_NE(text.find(hooks), std::string::npos);
+  text.replace(text.find(hooks), hooks.size(),
+               "      - {name: c, type: mlp, params: {inputs: 7, layers: \"2\"}}\n"
+               "      - {name: a, type: mlp, params: {inputs: 2, layers: \"2\"}}\n"
+               "      - {name: b, type: mlp, params: {inputs: 2, layers: \"2\"}}\n" +
+                   hooks + "      - ir -> c\n      - c -> a\n      - a -> b\n      - b -> a\n");
+  write(copy, text);
+  EvolveOptions o = options(dir / "run", 20min);
+  o.scenario_path = copy.string();
+  auto r = run_evolution(o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().find("message cycle "), std::string::npos) << r.error();
+  EXPECT_TRUE(r.error().find("a -> b -> a") != std::string::npos || r.error().find("b -> a -> b") != std::string::npos)
+      << r.error();
+  fs::remove_all(dir);
+}
+
 // The binary, killed with SIGKILL in the middle of a run (paced at 300x real time so that there
 // is a middle to kill it in), then resumed: the same files as a run never interrupted.
 TEST(Evolve, BinaryKilledWithSigkillResumesToTheSameResult) {

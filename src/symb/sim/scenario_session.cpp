@@ -67,6 +67,12 @@ void ScenarioSession::stop() {
   if (runner_) runner_->stop();
 }
 
+std::string ScenarioSession::cycle_error() const {
+  for (const auto& r : robots_)
+    if (auto e = r->node().cycle_error(); !e.empty()) return e;
+  return {};
+}
+
 RobotSystem* ScenarioSession::find_robot(std::string_view name) {
   for (auto& r : robots_)
     if (r->name() == name) return r.get();

@@ -11,6 +11,7 @@
 
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "symb/kernel/executor.hpp"
@@ -49,6 +50,9 @@ class ScenarioSession {
   RobotSystem& robot(std::size_t i) { return *robots_.at(i); }
   // The robot named `name`, or null.
   RobotSystem* find_robot(std::string_view name);
+  // The first cycle of answers a robot's node cut (os/message.hpp, kMaxHops), empty when there was
+  // none: a command running the session stops on it and fails with it.
+  std::string cycle_error() const;
   // The world's radio medium (world.radio in the scenario), or null.
   LocalRadio* radio() { return radio_.get(); }
 

@@ -286,6 +286,7 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
     executor.run_until(next);
     t = next;
     if (auto st = flush(); !st) return Error{st.error()};
+    if (auto e = session->cycle_error(); !e.empty()) return Error{e};
     if (resume_at && t == *resume_at) {
       if (history.size() != checkpoint->evaluations || history.hash() != checkpoint->history_hash)
         return Error{"--resume: this run does not reproduce the checkpoint: at " + fixed(seconds(t - start), 1) +

@@ -157,8 +157,10 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   InterruptFlag interrupt;
   const auto start = std::chrono::steady_clock::now();
   auto next_stats = start + stats_every;
+  std::string cycle;
   while (!interrupt.raised() && (!duration || std::chrono::steady_clock::now() - start < *duration)) {
     std::this_thread::sleep_for(20ms);
+    if (cycle = system->node().cycle_error(); !cycle.empty()) break;
     if (std::chrono::steady_clock::now() >= next_stats) {
       next_stats += stats_every;
       ctx.err << "board: " << sim::describe(link->stats()) << "\n" << std::flush;
@@ -177,6 +179,10 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
           << " line_open=" << (s.line_open ? 1 : 0) << "\n";
   port->close();
   if (shell_port) shell_port->close();
+  if (!cycle.empty()) {
+    ctx.err << kCommand << ": " << cycle << "\n";
+    return kExitFailure;
+  }
   // A dead link is a failed run: the serial line was down when the board stopped.
   if (!s.line_open) {
     ctx.err << kCommand << ": the serial line " << serial << " was down when the board stopped (down "

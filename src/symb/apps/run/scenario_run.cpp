@@ -60,14 +60,6 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
   return s.str();
 }
 
-// The first cycle of answers a robot's node cut (os/message.hpp, kMaxHops): the run stops there
-// and fails with it. Empty when there was none.
-std::string cycle_error(sim::ScenarioSession& session) {
-  for (std::size_t i = 0; i < session.robot_count(); ++i)
-    if (auto e = session.robot(i).node().cycle_error(); !e.empty()) return e;
-  return {};
-}
-
 }  // namespace
 
 kernel::Result<RunResult> run_scenario(const RunOptions& options) {
@@ -212,7 +204,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     for (kernel::Time t = start; t < end && !stop();) {
       t = std::min(end, t + slice);
       virtual_time->run_until(t);
-      if (!cycle_error(*session).empty()) break;
+      if (!session->cycle_error().empty()) break;
       if (options.speed > 0) {
         const auto due = wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                           std::chrono::duration<double>(seconds(t - start) / options.speed));
@@ -228,7 +220,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     for (double elapsed = wall_seconds(); elapsed < total && !stop(); elapsed = wall_seconds()) {
       std::this_thread::sleep_for(std::chrono::duration<double>(std::min(0.1, total - elapsed)));
       report(std::min(total, wall_seconds()));
-      if (!cycle_error(*session).empty()) break;
+      if (!session->cycle_error().empty()) break;
     }
   }
   running = false;
@@ -296,7 +288,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
       result.files.push_back(file);
     }
   }
-  if (auto e = cycle_error(*session); !e.empty())
+  if (auto e = session->cycle_error(); !e.empty())
     return Error{e + (write_files ? "; the run so far is in " + result.out_dir.string() : std::string())};
   return result;
 }
