@@ -14,10 +14,11 @@
 #include <gtest/gtest.h>
 
 #include "symb/control/control_task_types.hpp"
-#include "symb/evo/evo_task_types.hpp"
 #include "symb/evo/embryogenesis/task_graph_genome.hpp"
+#include "symb/evo/evo_task_types.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
+#include "symb/robot/ports.hpp"
 
 namespace symb::evo {
 namespace {
@@ -54,7 +55,8 @@ class CountingWheels final : public os::Task {
 constexpr const char* kBraitenberg = "1.5 2.0 2.5 -2.0 -1.5 0.5 0.5 0.6 -1.5 -2.0 -2.5 2.0 1.5 0.5 0.5 0.6";
 
 // A node with a registry (control and evo types), a ticking `ir`, a counting `wheels` and an mlp
-// `controller` between them, running.
+// `controller` between them, running. ir and wheels are made in code and declare the device
+// tasks' layouts (sensor vector out, wheel command in), as a robot's do.
 struct PlainRobot {
   kernel::VirtualTimeExecutor executor;
   os::TaskTypeRegistry registry;
@@ -71,10 +73,14 @@ struct PlainRobot {
     EXPECT_TRUE(control::register_control_task_types(registry, resources).ok());
     EXPECT_TRUE(register_evo_task_types(registry, resources).ok());
     node = std::make_unique<os::Node>(executor, os::NodeConfig{.name = "robot", .seed = 7, .types = &registry});
-    auto ir = node->create("ir", std::make_unique<TickingIr>(), {.priority = 3, .period = 30ms});
+    const os::PortSpec ir_out{0, "ir", robot::layout::kSensorVector};
+    const os::PortSpec wheels_in{0, "wheels", robot::layout::kWheelCommand};
+    auto ir = node->create("ir", std::make_unique<TickingIr>(),
+                           {.priority = 3, .period = 30ms, .ports = os::PortDeclaration{{}, {ir_out}}});
     auto w = std::make_unique<CountingWheels>();
     wheels = w.get();
-    auto wid = node->create("wheels", std::move(w), {.queue_capacity = 32});
+    auto wid =
+        node->create("wheels", std::move(w), {.queue_capacity = 32, .ports = os::PortDeclaration{{wheels_in}, {}}});
     const std::vector<os::ParamAssignment> params = {{"weights", kBraitenberg, 1}, {"output_scale", "500", 1}};
     auto c = node->create("mlp", "controller", params);
     EXPECT_TRUE(ir && wid && c);
@@ -108,7 +114,6 @@ TaskGraphGenome parse(const std::string& text) {
 TEST(TaskGraphGenome, ParsesAndRoundTrips) {
   const std::string text =
       "# an avoider and its judge\n"
-      "ports judge_t in=any out=score,any\n"
       "task net mlp weights=\"1 2 3\" output_scale=500\n"
       "  task fit fitness formula=one_plus_one   \n"
       "\n"
@@ -119,14 +124,12 @@ TEST(TaskGraphGenome, ParsesAndRoundTrips) {
   EXPECT_EQ(g.tasks[0].type, "mlp");
   EXPECT_EQ(g.tasks[0].params[0].value, "1 2 3");
   EXPECT_EQ(g.tasks[0].params[1].column, 30u);  // where output_scale starts on its line
-  EXPECT_EQ(g.tasks[1].line, 4u);
+  EXPECT_EQ(g.tasks[1].line, 3u);
   ASSERT_EQ(g.hooks.size(), 2u);
   EXPECT_EQ(g.hooks[1].from, "net");
   EXPECT_EQ(g.hooks[1].to, "wheels");
   EXPECT_EQ(g.hooks[1].port, 0);
   EXPECT_EQ(g.hooks[1].priority, -3);
-  ASSERT_EQ(g.ports.size(), 1u);
-  EXPECT_EQ(g.ports[0].outputs, (std::vector<std::string>{"score", "any"}));
   const TaskGraphGenome again = parse(to_text(g));
   EXPECT_EQ(again, g);
   EXPECT_EQ(to_text(again), to_text(g));
@@ -146,9 +149,8 @@ TEST(TaskGraphGenome, ErrorsHaveLineAndColumn) {
       {"hook a -> b priority 1 priority 2\n", "1:24: 'priority' given twice"},
       {"hook a -> b colour red\n", "1:13: unknown hook option 'colour'"},
       {"hook -> b\n", "1:6: expected sender task name"},
-      {"ports t in=a\n", "1:13: ports needs both"},
-      {"ports t in=a,b out=c\n", "1:9: a task type has one input kind"},
-      {"ports t in=a out=c,,d\n", "1:20: '' is not a valid port kind"},
+      // Ports come from the task types, never from a genome.
+      {"task a mlp\n  ports t in=a out=b\n", "2:3: a genome declares no ports: each task's port layouts come from"},
   };
   for (const auto& [text, expected] : bad) {
     auto r = parse_task_graph(text);
@@ -208,7 +210,7 @@ constexpr const char* kValid =
     "hook ir -> judge\n"
     "hook net -> fit\n";
 
-// One of 14 ways to break a genome, each certain to be rejected whatever mutations came before.
+// One of 13 ways to break a genome, each certain to be rejected whatever mutations came before.
 void corrupt(TaskGraphGenome& g, int how, kernel::RandomStream& random) {
   const std::string fresh = "bad" + std::to_string(random.below(1000000));
   const auto task = [&](std::string type, std::vector<os::ParamAssignment> params = {}) {
@@ -231,15 +233,12 @@ void corrupt(TaskGraphGenome& g, int how, kernel::RandomStream& random) {
       task("arbiter");
       break;
     case 9: hook("ir", "ghost" + fresh); break;  // missing task
-    case 10:                                     // port out of range
+    case 10:                                     // a port ir does not send on
       task("fitness");
       hook("ir", fresh, static_cast<std::int32_t>(1 + random.below(100)));
       break;
-    case 11: hook("ir", "wheels"); break;      // ir into wheels
+    case 11: hook("ir", "wheels"); break;      // a sensor vector into the wheels
     case 12: hook("ir", "controller"); break;  // the node has it
-    case 13:                                   // declared ports clash
-      g.ports.push_back({"mdl2e", "any", {"any"}, 0});
-      break;
     default: break;
   }
 }
@@ -256,7 +255,7 @@ TEST(Embryogenesis, ThousandMalformedGenomesLeaveTheRunningNodeUntouched) {
   std::size_t rejected = 0;
   // What each fault's error says; the operators before it may break the genome first (a hook
   // from a fitness task into the wheels), so most, not all, are refused for the fault's reason.
-  const char* const kReason[14] = {"unknown task type",
+  const char* const kReason[13] = {"unknown task type",
                                    "outside",
                                    "has no parameter 'wieghts'",
                                    "command_timeout",
@@ -266,27 +265,27 @@ TEST(Embryogenesis, ThousandMalformedGenomesLeaveTheRunningNodeUntouched) {
                                    "already has a task",
                                    "twice",
                                    "no task 'ghost",
-                                   "is not an output",
-                                   "'wheels' takes wheels",
-                                   "already has this hook",
-                                   "differ from"};
-  int tried[14] = {}, for_its_reason[14] = {};
+                                   "'ir' sends on port 0 (sensor-vector) only",
+                                   "port 0 carries sensor-vector (one number per sensor channel) out of 'ir', but "
+                                   "'wheels' reads wheel-command",
+                                   "already has this hook"};
+  int tried[13] = {}, for_its_reason[13] = {};
   for (std::uint64_t seed = 0; seed < 1000; ++seed) {
     kernel::RandomStream random(seed);
     TaskGraphGenome g = base;
     for (std::uint64_t k = random.below(4); k > 0; --k) mutate(g, robot.registry, random, options);
-    corrupt(g, static_cast<int>(seed % 14), random);
+    corrupt(g, static_cast<int>(seed % 13), random);
     const auto before = snapshot(*robot.node);
     auto made = develop(g, *robot.node);
     ASSERT_FALSE(made.ok()) << "seed " << seed << ":\n" << to_text(g);
     ASSERT_EQ(snapshot(*robot.node), before) << "seed " << seed;
     ++rejected;
-    ++tried[seed % 14];
-    if (made.error().find(kReason[seed % 14]) != std::string::npos) ++for_its_reason[seed % 14];
+    ++tried[seed % 13];
+    if (made.error().find(kReason[seed % 13]) != std::string::npos) ++for_its_reason[seed % 13];
     if (seed % 50 == 0) robot.executor.run_for(30ms);  // the node runs on between attempts
   }
   int own = 0;
-  for (int k = 0; k < 14; ++k) {
+  for (int k = 0; k < 13; ++k) {
     EXPECT_GT(for_its_reason[k] * 2, tried[k]) << "fault " << k << ": " << kReason[k];
     own += for_its_reason[k];
   }
@@ -294,11 +293,11 @@ TEST(Embryogenesis, ThousandMalformedGenomesLeaveTheRunningNodeUntouched) {
   // Hand-written: texts the parser refuses, and graphs only the node can refuse.
   const std::vector<std::string> hand = {
       "task a mlp\nhook a -> a\n",                     // self-hook
-      "task a fitness\nhook a -> wheels port 0\n",     // fitness sends fitness, wheels takes wheels
-      "task a arbiter\nhook ir -> a port 1\n",         // ir has one output
+      "task a arbiter\nhook a -> wheels port 1\n",     // the arbiter sends on port 0 only
+      "task a arbiter\nhook ir -> a port 1\n",         // ir sends on port 0 only
       "task a arbiter\nhook a -> b\n",                 // no b
       "task a arbiter\nhook ir -> a\nhook ir -> a\n",  // hooked twice
-      "ports t in=x out=y\ntask a t\n",                // type t is not registered
+      "task a t\n",                                    // type t is not registered
       "task a arbiter window=0s\n",                    // below the range
       "task a arbiter margin=3\n",                     // above the range
       "task a arbiter margin=\n",                      // empty number

@@ -283,11 +283,55 @@ TEST(TaskTypeRegistry, HooksBetweenIncompatibleLayoutsAreRefused) {
   EXPECT_NE(wrong.error().find("wheels"), std::string::npos) << wrong.error();
   EXPECT_NE(wrong.error().find("ir"), std::string::npos) << wrong.error();
   HookOptions other_port;
-  other_port.port = 1;  // carries nothing the receiver reads on port 0
-  EXPECT_TRUE(node.hook(c1, c2, other_port));
+  other_port.port = 1;  // c1 declares no output there: the hook would carry nothing
+  auto nothing = node.hook(c1, c2, other_port);
+  ASSERT_FALSE(nothing);
+  EXPECT_NE(nothing.error().find("'c1' sends on port 0 (wheels) only"), std::string::npos) << nothing.error();
   EXPECT_TRUE(node.hook(s, c1));     // "any" matches
-  EXPECT_TRUE(node.hook(code, c1));  // made in code: unchecked
+  EXPECT_TRUE(node.hook(code, c1));  // made in code without ports: unchecked
   EXPECT_TRUE(node.hook(c1, code));
+}
+
+// A task made in code, or a task of a type whose layout says only `any`, may declare its own ports
+// when it is created (TaskOptions::ports); every hook it takes part in is then checked like a
+// type's. A declaration that contradicts the type's is refused at creation.
+TEST(TaskTypeRegistry, ATasksOwnPortDeclarationIsCheckedLikeAType) {
+  constexpr PortLayout kIr{"ir", "seven IR readings"};
+  constexpr PortLayout kWheels{"wheels", "[left, right]"};
+  TaskTypeRegistry reg;
+  auto make = [] { return std::make_unique<Task>(); };
+  TaskType sink = declare_task_type("sink", "d", ParamTable<NoParams>{}, [&](const NoParams&) { return make(); });
+  sink.inputs = {{0, "command", kAnyLayout}};
+  TaskType ctrl = declare_task_type("ctrl", "d", ParamTable<NoParams>{}, [&](const NoParams&) { return make(); });
+  ctrl.inputs = {{0, "ir", kIr}};
+  ASSERT_TRUE(reg.add(std::move(sink)));
+  ASSERT_TRUE(reg.add(std::move(ctrl)));
+  kernel::VirtualTimeExecutor ex;
+  Node node(ex, {"n", 1, 64, &reg});
+  TaskOptions ir_options;
+  ir_options.ports = PortDeclaration{{}, {{0, "ir", kIr}}};
+  auto ir = *node.create("ir", std::make_unique<Task>(), ir_options);
+  TaskOptions wheel_options = reg.find("sink")->defaults;
+  wheel_options.ports = PortDeclaration{{{0, "wheels", kWheels}}, {}};
+  auto wheels = *node.create("sink", "wheels", {}, wheel_options);
+  ASSERT_EQ(node.ports(wheels)->inputs.at(0).layout.name, "wheels");
+  auto plain = *node.create("sink", "plain", {});  // the type's own: any
+  auto c = *node.create("ctrl", "c", {});
+  auto wrong = node.hook(ir, wheels);
+  ASSERT_FALSE(wrong);
+  for (const char* part : {"'ir' (-)", "'wheels' (sink)", "carries ir (seven IR readings)", "reads wheels"})
+    EXPECT_NE(wrong.error().find(part), std::string::npos) << part << " in " << wrong.error();
+  EXPECT_TRUE(node.hook(ir, plain));
+  EXPECT_TRUE(node.hook(ir, c));
+  EXPECT_TRUE(node.hooks().size() == 2);
+  // ctrl reads ir on port 0: a task of it cannot claim to read wheels there.
+  TaskOptions contradicting;
+  contradicting.ports = PortDeclaration{{{0, "wheels", kWheels}}, {}};
+  auto bad = node.create("ctrl", "c2", {}, contradicting);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().find("input port 0 declared wheels, but type 'ctrl' declares ir"), std::string::npos)
+      << bad.error();
+  EXPECT_FALSE(node.find("c2"));
 }
 
 }  // namespace

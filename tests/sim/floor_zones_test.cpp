@@ -120,11 +120,12 @@ TEST(FloorZones, PoseAndGroundDeviceTasksAreMadeWhenHookedAndReportEveryPeriod) 
                            "    start: {x: 30, y: 50, heading: 0}\n"
                            "    tasks:\n"
                            "      - {name: drive, type: mdl2e, params: {program: p.mdl2e}}\n"
+                           "      - {name: goal, type: move_to_goal}\n"
                            "    hooks:\n"
                            "      - drive -> wheels\n"
                            "      - ir -> drive\n"
-                           "      - pose -> drive\n"  // the controller ignores both (wrong length):
-                           "      - ground -> drive\n"
+                           "      - pose -> goal\n"     // a pose into a task that reads one
+                           "      - ground -> drive\n"  // ignored by the controller (wrong length)
                            "  - name: plain\n"
                            "    start: {x: 30, y: 20, heading: 0}\n"
                            "    tasks:\n"

@@ -10,10 +10,12 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "symb/evo/embryogenesis/embryogenesis.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/shell/shell.hpp"
 
@@ -110,6 +112,28 @@ TEST(MazeDemo, AHookBetweenIncompatibleLayoutsIsAnError) {
     EXPECT_NE(session.error().find(part), std::string::npos) << part << " in " << session.error();
 }
 
+// The device tasks declare their layouts (sim::device_task_ports): the IR ring's sensor vector
+// into the wheels, or the pose into a controller that reads IR, is refused by the scenario's hook.
+TEST(MazeDemo, ADeviceHookBetweenIncompatibleLayoutsIsAnError) {
+  const std::vector<std::tuple<std::string, std::string, std::vector<const char*>>> cases = {
+      {"ir", "wheels", {"'ir' (sensor)", "'wheels' (actuator_sink)", "sensor-vector", "wheel-command"}},
+      {"pose", "controller", {"'pose' (sensor)", "'controller' (mdl2e)", "carries pose"}},
+  };
+  for (const auto& [from, to, parts] : cases) {
+    Scenario s = load("maze.yaml");
+    ASSERT_FALSE(s.robots.empty());
+    HookSpec hook;
+    hook.from = from;
+    hook.to = to;
+    s.robots[0].hooks.push_back(hook);
+    kernel::VirtualTimeExecutor executor;
+    auto session = ScenarioSession::create(s, executor);
+    ASSERT_FALSE(session) << hook.from << " -> " << hook.to;
+    for (const char* part : parts)
+      EXPECT_NE(session.error().find(part), std::string::npos) << part << " in " << session.error();
+  }
+}
+
 TEST(MazeDemo, SameSeedSameRunDifferentSeedDifferentRun) {
   Scenario sc = load("maze.yaml");
   const Outcome a = run(sc, 60s), b = run(sc, 60s);
@@ -185,6 +209,26 @@ class ShellOnRunningRobot : public ::testing::Test {
   std::unique_ptr<shell::Shell> shell_;
   std::vector<RobotState> speeds_;  // wheel speeds used in each step
 };
+
+// The shell and a genome meet the same rule as a scenario file: Node::hook refuses the IR ring's
+// sensor vector into the wheels, naming both ends and both layouts, and the robot drives on.
+TEST_F(ShellOnRunningRobot, TheIrIntoTheWheelsIsRefusedFromTheShellAndFromAGenome) {
+  os::Node& node = session_->robot(0).node();
+  const std::size_t hooks = node.hooks().size();
+  const auto reply = shell_->execute("hook ir wheels");
+  EXPECT_FALSE(reply.ok);
+  auto genome = evo::parse_task_graph("hook ir -> wheels\n");
+  ASSERT_TRUE(genome.ok()) << genome.error();
+  auto developed = evo::develop(*genome, node);
+  ASSERT_FALSE(developed.ok());
+  EXPECT_EQ(developed.error().rfind("line 1: hook ir -> wheels: ", 0), 0u) << developed.error();
+  for (const std::string& error : {reply.text, developed.error()})
+    for (const char* part : {"'ir' (sensor)", "'wheels' (actuator_sink)", "sensor-vector", "wheel-command"})
+      EXPECT_NE(error.find(part), std::string::npos) << part << " in " << error;
+  EXPECT_EQ(node.hooks().size(), hooks);
+  executor_.run_for(1s);
+  EXPECT_TRUE(moving(speeds_.back()));
+}
 
 TEST_F(ShellOnRunningRobot, SuspendingTheControllerStopsTheWheelsWithinTwoPeriodsAndResumeRestarts) {
   ASSERT_TRUE(moving(speeds_.back()));

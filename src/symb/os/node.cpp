@@ -76,6 +76,7 @@ TaskRecord::TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> 
       task(std::move(t)),
       priority(o.priority),
       period_ns(o.period.count()),
+      ports(o.ports.value_or(PortDeclaration{})),
       random(n.seed(), fnv1a(name)),
       out_mu(concurrent),
       in_mu(concurrent),
@@ -382,6 +383,13 @@ Result<TaskId> Node::create(std::string_view type_name, std::string name, std::s
   // Parameters must be in place before the task can start, so create it unstarted first.
   TaskOptions unstarted = o;
   unstarted.autostart = false;
+  const PortEnd declared{name, type->name, type->inputs, type->outputs};
+  if (unstarted.ports) {
+    if (auto st = check_declaration_fits(*unstarted.ports, declared); !st)
+      return Error{"task '" + name + "' (" + type->name + "): " + st.error()};
+  } else {
+    unstarted.ports = PortDeclaration{type->inputs, type->outputs};
+  }
   auto id = create(std::move(name), std::move(task), unstarted);
   if (!id) return id;
   {
@@ -607,6 +615,13 @@ TaskInfo describe(TaskRecord& r) {
 
 }  // namespace
 
+std::optional<PortDeclaration> Node::ports(TaskId id) const {
+  std::lock_guard lock(mu_);
+  const TaskRecord* r = lookup_locked(id);
+  if (r == nullptr) return std::nullopt;
+  return r->ports;
+}
+
 std::optional<TaskInfo> Node::info(TaskId id) const {
   std::lock_guard lock(mu_);
   TaskRecord* r = lookup_locked(id);
@@ -632,22 +647,10 @@ std::size_t Node::task_count() const {
 
 namespace {
 
-// The port layouts of both ends' types must agree on every port the hook carries (types that
-// declare no ports, and tasks made in code, are not checked).
-Status check_layouts(const TaskRecord& s, const TaskRecord& r, int port_filter) {
-  if (!s.params || !r.params) return {};
-  const TaskType& st = *s.params->type;
-  const TaskType& rt = *r.params->type;
-  for (const PortSpec& out : st.outputs) {
-    if (port_filter >= 0 && out.port != port_filter) continue;
-    const PortSpec* in = find_port(rt.inputs, out.port);
-    if (in == nullptr || compatible(out.layout, in->layout)) continue;
-    return Error{"cannot hook '" + s.name + "' (" + st.name + ") to '" + r.name + "' (" + rt.name + "): port " +
-                 std::to_string(out.port) + " carries " + std::string(out.layout.name) + " (" +
-                 std::string(out.layout.doc) + ") out of '" + s.name + "', but '" + r.name + "' reads " +
-                 std::string(in->layout.name) + " (" + std::string(in->layout.doc) + ") there"};
-  }
-  return {};
+// The declared ports of a hook's end, for check_layouts.
+PortEnd port_end(const TaskRecord& t) {
+  return {t.name, t.params ? std::string_view(t.params->type->name) : std::string_view("-"), t.ports.inputs,
+          t.ports.outputs};
 }
 
 }  // namespace
@@ -662,7 +665,7 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   if (s == r) return Error{"task '" + s->name + "' is hooked to itself"};
   if (options.port > 0xffff) return Error{"hook port must be -1 (any) or 0..65535"};
   if (options.suppress_window.count() < 0) return Error{"negative suppression window"};
-  if (auto st = check_layouts(*s, *r, options.port); !st) return Error{st.error()};
+  if (auto st = check_layouts(port_end(*s), port_end(*r), options.port); !st) return Error{st.error()};
   detail::Hook h;
   h.priority = options.priority;
   h.port = options.port < 0 ? -1 : options.port;

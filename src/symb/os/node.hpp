@@ -100,6 +100,8 @@ class Node {
 
   std::optional<TaskId> find(std::string_view task_name) const;
   std::optional<TaskInfo> info(TaskId id) const;
+  // The port layouts every hook of the task is checked against (TaskOptions::ports).
+  std::optional<PortDeclaration> ports(TaskId id) const;
   std::vector<TaskInfo> tasks() const;
   std::size_t task_count() const;
   // Deletes every task and waits until each has stopped: the node is empty but still usable.

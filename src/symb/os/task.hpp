@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <initializer_list>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -19,6 +20,7 @@
 #include "symb/os/message.hpp"
 #include "symb/os/param.hpp"
 #include "symb/os/param_table.hpp"
+#include "symb/os/port_layout.hpp"
 #include "symb/os/syslog.hpp"
 
 namespace symb::os {
@@ -36,6 +38,11 @@ struct TaskOptions {
   kernel::Duration period{0};  // 0: never ticked
   std::size_t queue_capacity = 16;
   bool autostart = true;  // false: stays `created` until Node::start()
+  // This task's own port layouts (see port_layout.hpp), checked by every hook it takes part in.
+  // Unset: a task of a registered type has its type's, a task made in code none. A task of a type
+  // may only narrow the type's declaration (a sensor task that reads the IR ring sends a sensor
+  // vector where its type says any), never contradict it.
+  std::optional<PortDeclaration> ports = std::nullopt;
 };
 
 // Message accounting for one receiver. For every receiver, at every moment:

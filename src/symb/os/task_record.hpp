@@ -103,6 +103,7 @@ struct TaskRecord final : kernel::Activity {
   std::atomic<std::int64_t> period_ns;
   kernel::ActivitySlot* slot = nullptr;  // set under in_mu
   std::unique_ptr<ParamState> params;
+  const PortDeclaration ports;  // checked by every hook (port_layout.hpp); empty: unchecked
   kernel::RandomStream random;
 
   // Output side: the hooks of this task as a sender.

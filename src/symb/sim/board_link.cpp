@@ -13,6 +13,7 @@
 #include "symb/robot/channel_spec.hpp"
 #include "symb/robot/ports.hpp"
 #include "symb/sim/hil_protocol.hpp"
+#include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 #include "symb/sim/sim_drivers.hpp"
 
@@ -337,10 +338,14 @@ kernel::Status BoardLink::make_device_tasks(os::Node& node) {
   auto link =
       node.create(std::string(kLinkTaskName), std::make_unique<HilLinkTask>(port_, shared_, options_), link_options);
   if (!link) return kernel::Error{"link: " + link.error()};
-  auto ir = node.create(std::string(kIrTaskName), std::make_unique<HilIrTask>(shared_, options_), device_options);
+  os::TaskOptions ir_options = device_options;
+  ir_options.ports = device_task_ports(kIrTaskName);
+  auto ir = node.create(std::string(kIrTaskName), std::make_unique<HilIrTask>(shared_, options_), ir_options);
   if (!ir) return kernel::Error{"ir: " + ir.error()};
+  os::TaskOptions wheel_options = device_options;
+  wheel_options.ports = device_task_ports(kWheelsTaskName);
   auto wheels =
-      node.create(std::string(kWheelsTaskName), std::make_unique<HilWheelsTask>(shared_, options_), device_options);
+      node.create(std::string(kWheelsTaskName), std::make_unique<HilWheelsTask>(shared_, options_), wheel_options);
   if (!wheels) return kernel::Error{"wheels: " + wheels.error()};
   // Sensor data keeps the newest; wheel commands too: a stale speed is worth less than a new one.
   if (auto h = node.hook(*link, *ir); !h) return kernel::Error{"hook link -> ir: " + h.error()};

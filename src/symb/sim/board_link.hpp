@@ -23,7 +23,9 @@
 //
 // Use: make a BoardLink over an open (or openable) stream and pass make_device_tasks() as
 // RobotSystemOptions::make_device_tasks. The three tasks are made in code (type "-"): their
-// devices are not a registry's to hand out. stats() may be read from any thread.
+// devices are not a registry's to hand out. ir and wheels declare the in-process device tasks'
+// layouts (device_task_ports), so the board refuses the same hooks a simulated robot does. stats() may be read from any
+// thread.
 #pragma once
 
 #include <cstdint>

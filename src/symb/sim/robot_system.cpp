@@ -8,6 +8,7 @@
 
 #include "symb/control/control_task_types.hpp"
 #include "symb/evo/evo_task_types.hpp"
+#include "symb/robot/ports.hpp"
 #include "symb/robot/robot_task_types.hpp"
 #include "symb/sim/local_radio.hpp"
 
@@ -20,6 +21,17 @@ constexpr std::uintmax_t kMaxProgramBytes = 1 << 20;
 kernel::Error at(const SourceLocation& where, const std::string& what) { return {where.str() + ": " + what}; }
 
 }  // namespace
+
+os::PortDeclaration device_task_ports(std::string_view task) {
+  namespace layout = robot::layout;
+  // A sensor reads nothing from hooks (a board's link feeds its ir task, but declares no outputs).
+  const std::vector<os::PortSpec> reads_nothing{{robot::kDataPort, "none", os::kNoMessages}};
+  if (task == kIrTaskName) return {reads_nothing, {{robot::kDataPort, "ir", layout::kSensorVector}}};
+  if (task == kGroundTaskName) return {reads_nothing, {{robot::kDataPort, "ground", layout::kSensorVector}}};
+  if (task == kPoseTaskName) return {reads_nothing, {{robot::kDataPort, "pose", layout::kPose}}};
+  if (task == kWheelsTaskName) return {{{robot::kDataPort, "wheels", layout::kWheelCommand}}, {}};
+  return {};
+}
 
 std::uint64_t robot_node_seed(std::uint64_t seed, std::size_t index) {
   std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (index + 1);
@@ -82,7 +94,9 @@ kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor
       return kernel::Error{"robot '" + spec.name + "': device tasks: " + s.error()};
   } else {
     const std::vector<os::ParamAssignment> ir_params{{"device", std::string(kIrTaskName), 1}};
-    if (auto r = node.create("sensor", std::string(kIrTaskName), ir_params); !r)
+    os::TaskOptions ir_options = sys->types_->find("sensor")->defaults;
+    ir_options.ports = device_task_ports(kIrTaskName);
+    if (auto r = node.create("sensor", std::string(kIrTaskName), ir_params, ir_options); !r)
       return kernel::Error{"robot '" + spec.name + "': ir: " + r.error()};
     // The watchdog: a controller that stops talking (suspended from the shell, deleted, faulted)
     // must not leave the robot driving on its last command.
@@ -92,6 +106,7 @@ kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor
         {"timeout", std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(timeout).count()) + "us", 1}};
     os::TaskOptions wheel_options = sys->types_->find("actuator_sink")->defaults;
     wheel_options.period = options.control_period;
+    wheel_options.ports = device_task_ports(kWheelsTaskName);
     if (auto r = node.create("actuator_sink", std::string(kWheelsTaskName), wheel_params, wheel_options); !r)
       return kernel::Error{"robot '" + spec.name + "': wheels: " + r.error()};
     // Pose and ground only when used: each is a task woken every period. (A shell can still make
@@ -101,7 +116,9 @@ kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor
                                     [&](const HookSpec& h) { return h.from == device || h.to == device; });
       if (!used) continue;
       const std::vector<os::ParamAssignment> params{{"device", std::string(device), 1}};
-      if (auto r = node.create("sensor", std::string(device), params); !r)
+      os::TaskOptions device_options = sys->types_->find("sensor")->defaults;
+      device_options.ports = device_task_ports(device);
+      if (auto r = node.create("sensor", std::string(device), params, device_options); !r)
         return kernel::Error{"robot '" + spec.name + "': " + std::string(device) + ": " + r.error()};
     }
   }

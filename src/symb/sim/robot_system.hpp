@@ -64,6 +64,14 @@ struct RobotSystemOptions {
   std::function<kernel::Status(os::Node&)> make_device_tasks;
 };
 
+// The port layouts of device task `task` (kIrTaskName and kGroundTaskName send a sensor vector,
+// kPoseTaskName a pose, and the three read no messages; kWheelsTaskName takes a wheel command;
+// other names declare nothing). The
+// device tasks are made with these (TaskOptions::ports), however they are made (the default
+// `sensor` and `actuator_sink` tasks, whose types say only `any`, or a board's tasks made in
+// code), so that Node::hook refuses `ir -> wheels` from the shell, a scenario or a genome alike.
+os::PortDeclaration device_task_ports(std::string_view task);
+
 // Registers every task type a scenario may name: the robot layer's (bound to `devices`, which
 // may be empty for checking only), the control layer's (mdl2e, ...) and the evo layer's (fitness,
 // one_plus_one).

@@ -14,67 +14,36 @@ using kernel::Error;
 
 std::string at(std::size_t line) { return line ? "line " + std::to_string(line) + ": " : std::string(); }
 
-bool compatible(std::string_view sent, std::string_view taken) {
-  return sent == "any" || taken == "any" || sent == taken;
-}
+// The declared ports of a hook's end, as Node::hook will see them: a genome task has its type's
+// (develop() creates it with the type's options), a task the node runs has its own.
+struct HookEnd {
+  std::string type = "-";
+  os::PortDeclaration ports;
 
-// The signature of a task the genome or the node has, by name then type; null when unknown.
-struct SignatureLookup {
-  const PortSignatures& table;
-  const TaskGraphGenome& genome;
-  const os::Node& node;
-
-  const PortSignature* of_type(std::string_view type, PortSignature& scratch) const {
-    if (auto it = table.by_type.find(type); it != table.by_type.end()) return &it->second;
-    for (const PortsGene& p : genome.ports)
-      if (p.type == type) {
-        scratch.input = p.input;
-        scratch.outputs = p.outputs;
-        return &scratch;
-      }
-    return nullptr;
-  }
-  const PortSignature* of_task(std::string_view name, PortSignature& scratch) const {
-    if (const TaskGene* t = genome.find_task(name)) return of_type(t->type, scratch);
-    if (auto it = table.by_task.find(name); it != table.by_task.end()) return &it->second;
-    if (auto id = node.find(name))
-      if (auto info = node.info(*id)) return of_type(info->type, scratch);
-    return nullptr;
-  }
+  os::PortEnd view(std::string_view task) const { return {task, type, ports.inputs, ports.outputs}; }
 };
+
+HookEnd hook_end(std::string_view name, const TaskGraphGenome& genome, const os::Node& node,
+                 const os::TaskTypeRegistry& registry) {
+  HookEnd end;
+  if (const TaskGene* t = genome.find_task(name)) {
+    const os::TaskType* type = registry.find(t->type);  // checked before the hooks are
+    end.type = type->name;
+    end.ports = {type->inputs, type->outputs};
+  } else if (auto id = node.find(name)) {
+    if (auto info = node.info(*id)) end.type = info->type;
+    if (auto ports = node.ports(*id)) end.ports = std::move(*ports);
+  }
+  return end;
+}
 
 }  // namespace
 
-PortSignatures robot_port_signatures() {
-  PortSignatures s;
-  s.by_task["ir"] = {"none", {"ir"}};
-  s.by_task["wheels"] = {"wheels", {"none"}};
-  s.by_type["mdl2e"] = {"ir", {"wheels"}};
-  s.by_type["arbiter"] = {"any", {"wheels"}};
-  s.by_type["fitness"] = {"any", {"fitness"}};
-  return s;
-}
-
-kernel::Status check_development(const TaskGraphGenome& genome, const os::Node& node,
-                                 const PortSignatures& signatures) {
+kernel::Status check_development(const TaskGraphGenome& genome, const os::Node& node) {
   const os::TaskTypeRegistry* registry = node.types();
   if (!registry) return Error{"the node has no task-type registry"};
   if (genome.tasks.size() > kMaxGraphTasks || genome.hooks.size() > kMaxGraphHooks)
     return Error{"the genome is larger than the text form allows"};
-
-  std::set<std::string_view> types_declared;
-  for (const PortsGene& p : genome.ports) {
-    if (!os::is_valid_name(p.type)) return Error{at(p.line) + "'" + p.type + "' is not a valid type name"};
-    if (!types_declared.insert(p.type).second) return Error{at(p.line) + "ports of '" + p.type + "' given twice"};
-    if (p.outputs.empty() || p.outputs.size() > kMaxPortsPerType || !os::is_valid_name(p.input))
-      return Error{at(p.line) + "ports of '" + p.type + "': one input kind and 1 to " +
-                   std::to_string(kMaxPortsPerType) + " output kinds"};
-    for (const std::string& k : p.outputs)
-      if (!os::is_valid_name(k)) return Error{at(p.line) + "'" + k + "' is not a valid port kind"};
-    if (auto it = signatures.by_type.find(p.type); it != signatures.by_type.end())
-      if (it->second.input != p.input || it->second.outputs != p.outputs)
-        return Error{at(p.line) + "ports of '" + p.type + "' differ from the type's known signature"};
-  }
 
   std::set<std::string_view> names;
   for (const TaskGene& t : genome.tasks) {
@@ -100,7 +69,6 @@ kernel::Status check_development(const TaskGraphGenome& genome, const os::Node& 
     }
   }
 
-  const SignatureLookup lookup{signatures, genome, node};
   const std::vector<os::HookInfo> existing = node.hooks();
   std::set<std::tuple<std::string_view, std::string_view, std::int32_t>> hooked;
   for (const HookGene& h : genome.hooks) {
@@ -116,27 +84,17 @@ kernel::Status check_development(const TaskGraphGenome& genome, const os::Node& 
     for (const os::HookInfo& e : existing)
       if (e.sender_name == h.from && e.receiver_name == h.to && e.options.port == port)
         return Error{where + "the node already has this hook"};
-    PortSignature s1, s2;
-    const PortSignature* sender = lookup.of_task(h.from, s1);
-    const PortSignature* receiver = lookup.of_task(h.to, s2);
-    if (sender && h.port && static_cast<std::size_t>(*h.port) >= sender->outputs.size())
-      return Error{where + "port " + std::to_string(*h.port) + " is not an output of '" + h.from + "' (it has " +
-                   std::to_string(sender->outputs.size()) + ")"};
-    if (sender && receiver) {
-      for (std::size_t p = 0; p < sender->outputs.size(); ++p) {
-        if (h.port && static_cast<std::size_t>(*h.port) != p) continue;
-        if (!compatible(sender->outputs[p], receiver->input))
-          return Error{where + "'" + h.from + "' sends " + sender->outputs[p] + " on port " + std::to_string(p) +
-                       ", '" + h.to + "' takes " + receiver->input};
-      }
-    }
+    // The rule Node::hook applies, asked before anything is made.
+    const HookEnd sender = hook_end(h.from, genome, node, *registry);
+    const HookEnd receiver = hook_end(h.to, genome, node, *registry);
+    if (auto st = os::check_layouts(sender.view(h.from), receiver.view(h.to), port); !st)
+      return Error{where + st.error()};
   }
   return {};
 }
 
-kernel::Result<DevelopedGraph> develop(const TaskGraphGenome& genome, os::Node& node,
-                                       const PortSignatures& signatures) {
-  if (auto st = check_development(genome, node, signatures); !st) return Error{st.error()};
+kernel::Result<DevelopedGraph> develop(const TaskGraphGenome& genome, os::Node& node) {
+  if (auto st = check_development(genome, node); !st) return Error{st.error()};
   DevelopedGraph made;
   const auto fail = [&](const std::string& what) -> kernel::Result<DevelopedGraph> {
     undevelop(made, node);

@@ -152,53 +152,6 @@ kernel::Status parse_hook(LineCursor& c, TaskGraphGenome& g) {
   return {};
 }
 
-kernel::Status parse_ports(LineCursor& c, TaskGraphGenome& g) {
-  PortsGene p;
-  p.line = c.number;
-  auto type = name_at(c, "task type");
-  if (!type) return Error{type.error()};
-  p.type = *type;
-  for (const PortsGene& q : g.ports)
-    if (q.type == p.type)
-      return Error{c.error(1, "ports of '" + p.type + "' given twice (line " + std::to_string(q.line) + ")")};
-  bool have_in = false, have_out = false;
-  while (!c.at_end()) {
-    const std::size_t col = c.column();
-    const std::string_view w = c.word();
-    const std::size_t eq = w.find('=');
-    const std::string_view key = w.substr(0, eq);
-    if (eq == std::string_view::npos || (key != "in" && key != "out"))
-      return Error{c.error(col, "expected in=KIND or out=KIND,KIND..., got '" + shorten(w) + "'")};
-    if ((key == "in" && have_in) || (key == "out" && have_out))
-      return Error{c.error(col, "'" + std::string(key) + "' given twice")};
-    std::string_view list = w.substr(eq + 1);
-    std::vector<std::string> kinds;
-    std::size_t kcol = col + eq + 1;
-    for (;;) {
-      const std::size_t comma = list.find(',');
-      const std::string_view kind = list.substr(0, comma);
-      if (!os::is_valid_name(kind)) return Error{c.error(kcol, "'" + shorten(kind) + "' is not a valid port kind")};
-      if (kinds.size() >= kMaxPortsPerType)
-        return Error{c.error(kcol, "more than " + std::to_string(kMaxPortsPerType) + " ports")};
-      kinds.emplace_back(kind);
-      if (comma == std::string_view::npos) break;
-      list = list.substr(comma + 1);
-      kcol += comma + 1;
-    }
-    if (key == "in") {
-      if (kinds.size() != 1) return Error{c.error(col, "a task type has one input kind")};
-      p.input = kinds[0];
-      have_in = true;
-    } else {
-      p.outputs = std::move(kinds);
-      have_out = true;
-    }
-  }
-  if (!have_in || !have_out) return Error{c.error(c.column(), "ports needs both in=KIND and out=KIND,...")};
-  g.ports.push_back(std::move(p));
-  return {};
-}
-
 bool needs_quotes(std::string_view v) {
   if (v.empty()) return true;
   return std::any_of(v.begin(), v.end(), [](char ch) { return is_space(ch) || ch == '"' || ch == '\\' || ch == '\n'; });
@@ -304,9 +257,11 @@ kernel::Result<TaskGraphGenome> parse_task_graph(std::string_view text) {
     else if (keyword == "hook")
       st = parse_hook(c, g);
     else if (keyword == "ports")
-      st = parse_ports(c, g);
+      st = Error{c.error(col,
+                         "a genome declares no ports: each task's port layouts come from its task type "
+                         "(and a device task's from the node), and every hook is checked against them")};
     else
-      st = Error{c.error(col, "unknown statement '" + shorten(keyword) + "' (task, hook, ports)")};
+      st = Error{c.error(col, "unknown statement '" + shorten(keyword) + "' (task, hook)")};
     if (!st) return Error{st.error()};
     if (text.empty()) break;
   }
@@ -315,11 +270,6 @@ kernel::Result<TaskGraphGenome> parse_task_graph(std::string_view text) {
 
 std::string to_text(const TaskGraphGenome& genome) {
   std::string out;
-  for (const PortsGene& p : genome.ports) {
-    out += "ports " + p.type + " in=" + p.input + " out=";
-    for (std::size_t i = 0; i < p.outputs.size(); ++i) out += (i ? "," : "") + p.outputs[i];
-    out += '\n';
-  }
   for (const TaskGene& t : genome.tasks) {
     out += "task " + t.name + " " + t.type;
     for (const os::ParamAssignment& a : t.params) out += " " + a.name + "=" + quoted(a.value);

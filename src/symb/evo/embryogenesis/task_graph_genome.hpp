@@ -8,13 +8,13 @@
 //   task net mlp inputs=7 layers="2" weights="1 2 3 ..."
 //   hook ir -> controller
 //   hook controller -> wheels port 0 priority 2
-//   ports mytype in=ir out=wheels,any
 //
 // `task NAME TYPE key=value ...` names a task of a registered type (the values go through the
 // type's ParamSpec schema at development); `hook FROM -> TO [port N] [priority P]` hooks two
-// tasks, each either the genome's own or one the node already runs (`ir`, `wheels`); `ports TYPE
-// in=KIND out=KIND,...` declares the port signature of a type that the developer's table does not
-// know (kinds are names such as ir, wheels or any; see embryogenesis.hpp). The operators below
+// tasks, each either the genome's own or one the node already runs (`ir`, `wheels`). A genome
+// declares no ports: each task's port layouts come from its task type (TaskType::inputs,
+// outputs), a device task's from the node, and development checks every hook against them (see
+// embryogenesis.hpp). The operators below
 // change a parameter within its schema range, add or remove a task of a registered type, and add
 // or remove a hook; they never make a text the parser rejects, but may make a graph develop()
 // rejects (that is the selection's business).
@@ -54,21 +54,11 @@ struct HookGene {
   }
 };
 
-struct PortsGene {
-  std::string type;
-  std::string input;                 // the kind of message the type takes in
-  std::vector<std::string> outputs;  // the kind sent on port 0, 1, ...
-  std::size_t line = 0;
-
-  bool operator==(const PortsGene& o) const { return type == o.type && input == o.input && outputs == o.outputs; }
-};
-
 struct TaskGraphGenome {
   std::vector<TaskGene> tasks;
   std::vector<HookGene> hooks;
-  std::vector<PortsGene> ports;
 
-  bool operator==(const TaskGraphGenome& o) const { return tasks == o.tasks && hooks == o.hooks && ports == o.ports; }
+  bool operator==(const TaskGraphGenome& o) const { return tasks == o.tasks && hooks == o.hooks; }
   const TaskGene* find_task(std::string_view name) const;
 };
 
@@ -76,7 +66,6 @@ struct TaskGraphGenome {
 inline constexpr std::size_t kMaxGraphText = 1 << 20;
 inline constexpr std::size_t kMaxGraphTasks = 256;
 inline constexpr std::size_t kMaxGraphHooks = 1024;
-inline constexpr std::size_t kMaxPortsPerType = 16;
 
 // Parses the text form; errors are "LINE:COLUMN: message". Checks only what the text alone
 // decides (syntax, names, numbers, limits); develop() checks the rest against a node.
