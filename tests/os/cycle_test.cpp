@@ -177,7 +177,7 @@ TEST(HookCycle, ThreadExecutorCutsTheCycleAndThenStaysQuiet) {
   ASSERT_TRUE(node.post(a, Message{}));
   // Waits for what is asserted: the cut, then both tasks idle (a faulted, b with nothing to answer).
   const auto deadline = std::chrono::steady_clock::now() + 30s;
-  auto quiet = [&] {
+  auto quiet = [&node, a = a, b = b] {
     const auto ia = node.info(a);
     const auto ib = node.info(b);
     return !node.cycle_error().empty() && (ia->state == TaskState::kFaulted || ib->state == TaskState::kFaulted) &&
