@@ -14,6 +14,7 @@
 #include "symb/evo/fitness/fitness_task.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
+#include "symb/robot/ports.hpp"
 
 namespace symb::evo {
 namespace {
@@ -238,6 +239,20 @@ TEST(FitnessTask, BadParametersAreRefusedAtCreation) {
   auto id = node.create("fitness", "f", bad);
   ASSERT_FALSE(id.ok());
   EXPECT_NE(id.error().find("nolfi"), std::string::npos) << id.error();
+}
+
+// The fitness report has a layout of its own: hooking it into a task that reads wheel commands is
+// refused at hook time, naming both ends.
+TEST(FitnessTaskOnNode, ItsReportIntoTheWheelsIsRefused) {
+  Rig rig("formula=one_plus_one");
+  os::TaskOptions o;
+  o.ports = os::PortDeclaration{{{0, "wheels", robot::layout::kWheelCommand}}, {}};
+  auto wheels = rig.node->create("wheels", std::make_unique<Recorder>(), o);
+  ASSERT_TRUE(wheels.ok()) << wheels.error();
+  auto h = rig.node->hook(rig.fitness, *wheels);
+  ASSERT_FALSE(h.ok());
+  EXPECT_NE(h.error().find("fitness-report"), std::string::npos) << h.error();
+  EXPECT_NE(h.error().find("wheels"), std::string::npos) << h.error();
 }
 
 }  // namespace

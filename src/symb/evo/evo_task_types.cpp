@@ -52,6 +52,7 @@ os::TaskType fitness_type() {
                             std::move(p), [](const P& o) { return std::make_unique<FitnessTask>(o); });
   t.defaults.priority = 1;
   t.defaults.queue_capacity = 8;
+  t.outputs = {{0, "fitness", kFitnessReport}};
   return t;
 }
 

@@ -31,9 +31,14 @@
 #include "symb/evo/fitness/fitness.hpp"
 #include "symb/kernel/counter.hpp"
 #include "symb/kernel/time.hpp"
+#include "symb/os/port_layout.hpp"
 #include "symb/os/task.hpp"
 
 namespace symb::evo {
+
+// What the fitness task sends on port 0 ([sum, steps, step], or [sum, steps, window sum, N] with
+// `every`), declared on its type so that a hook carrying it into wheels is refused.
+inline constexpr os::PortLayout kFitnessReport{"fitness-report", "[sum, steps, step] or [sum, steps, window sum, N]"};
 
 struct FitnessTaskOptions {
   FitnessFormula formula = FitnessFormula::kOnePlusOne;
