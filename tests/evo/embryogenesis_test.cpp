@@ -266,8 +266,7 @@ TEST(Embryogenesis, ThousandMalformedGenomesLeaveTheRunningNodeUntouched) {
                                    "twice",
                                    "no task 'ghost",
                                    "'ir' sends on port 0 (sensor-vector) only",
-                                   "port 0 carries sensor-vector (one number per sensor channel) out of 'ir', but "
-                                   "'wheels' reads wheel-command",
+                                   "out of 'ir', but 'wheels' reads wheel-command",
                                    "already has this hook"};
   int tried[13] = {}, for_its_reason[13] = {};
   for (std::uint64_t seed = 0; seed < 1000; ++seed) {
