@@ -250,9 +250,17 @@ TEST(TaskTypeRegistry, AFactoryThatThrowsIsAnErrorNotACrash) {
   auto b = node.create("throwing", "b", *parse_param_assignments("kind=1"));
   ASSERT_FALSE(b);
   EXPECT_NE(b.error().find("task type 'throwing'"), std::string::npos) << b.error();
-  auto c = node.create("sized", "c", *parse_param_assignments("size=100000000000000000"));
+  // More than a vector can hold: std::length_error from the constructor.
+  auto c = node.create("sized", "c", *parse_param_assignments("size=9000000000000000000"));
   ASSERT_FALSE(c);
   EXPECT_NE(c.error().find("task type 'sized'"), std::string::npos) << c.error();
+#ifndef SYMB_SANITIZER
+  // More than the system gives: std::bad_alloc. The sanitizers' allocators abort on such a
+  // request instead of throwing, so this case runs in the release build only.
+  c = node.create("sized", "c", *parse_param_assignments("size=100000000000000000"));
+  ASSERT_FALSE(c);
+  EXPECT_NE(c.error().find("task type 'sized'"), std::string::npos) << c.error();
+#endif
   EXPECT_FALSE(node.find("a") || node.find("b") || node.find("c"));
   EXPECT_TRUE(node.create("sized", "d", *parse_param_assignments("size=10")));
 }

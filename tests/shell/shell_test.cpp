@@ -155,7 +155,13 @@ TEST_F(ShellTest, CreateOfATypeWhoseConstructorFailsIsAnError) {
   EXPECT_NE(error("create fragile a kind=0").find("task type 'fragile' could not make a task: fragile by request"),
             std::string::npos);
   EXPECT_NE(error("create fragile b kind=1").find("task type 'fragile'"), std::string::npos);
+  // More than a vector can hold: std::length_error. Under the sanitizers an allocation that the
+  // system refuses aborts the process (their allocators report it instead of throwing
+  // std::bad_alloc), so the bad_alloc case runs in the release build only.
+  EXPECT_NE(error("create fragile c size=9000000000000000000").find("task type 'fragile'"), std::string::npos);
+#ifndef SYMB_SANITIZER
   EXPECT_NE(error("create fragile c size=100000000000000000").find("task type 'fragile'"), std::string::npos);
+#endif
   EXPECT_FALSE(node_->find("a") || node_->find("b") || node_->find("c"));
   ok("create fragile d size=16");
   ok("create emitter e value=2");
