@@ -10,8 +10,8 @@
 
 #include "symb/control/control_task_types.hpp"
 #include "symb/evo/embryogenesis/embryogenesis.hpp"
-#include "symb/evo/evo_task_types.hpp"
 #include "symb/evo/embryogenesis/task_graph_genome.hpp"
+#include "symb/evo/evo_task_types.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

@@ -14,9 +14,9 @@
 
 #include <gtest/gtest.h>
 
-#include "symb/control/ahhs/parser.hpp"
 #include "symb/control/ahhs/ahhs_compartment_task.hpp"
 #include "symb/control/ahhs/ahhs_task_types.hpp"
+#include "symb/control/ahhs/parser.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 

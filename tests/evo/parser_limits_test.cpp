@@ -12,8 +12,8 @@
 #include "symb/control/ahhs/parser.hpp"
 #include "symb/control/network/description.hpp"
 #include "symb/control/snn/genome.hpp"
-#include "symb/evo/genome/genome.hpp"
 #include "symb/evo/embryogenesis/task_graph_genome.hpp"
+#include "symb/evo/genome/genome.hpp"
 #include "symb/kernel/source_text.hpp"
 
 #include "support/small_stack.hpp"
