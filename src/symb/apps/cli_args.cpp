@@ -194,4 +194,10 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
+std::string hex64(std::uint64_t v) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
 }  // namespace symb::apps

@@ -84,6 +84,8 @@ std::variant<double, UsageError> parse_fraction(std::string_view what, std::stri
 
 // `v` with `decimals` digits after the point, for people ("12.35").
 std::string fixed(double v, int decimals);
+// `v` as 16 hexadecimal digits, the way hashes are shown ("00c0ffee00c0ffee").
+std::string hex64(std::uint64_t v);
 // `text` cut to a readable length with control characters replaced, for quoting in a message.
 std::string quote_arg(std::string_view text);
 // " (did you mean 'x'?)" or "".

@@ -15,5 +15,9 @@ using Time = std::chrono::nanoseconds;
 inline constexpr Time kTimeNever = Time::max();
 
 inline double to_seconds(Duration d) { return static_cast<double>(d.count()) * 1e-9; }
+// Whole milliseconds (truncated), for messages.
+inline std::int64_t to_milliseconds(Duration d) {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(d).count();
+}
 
 }  // namespace symb::kernel

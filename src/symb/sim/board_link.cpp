@@ -23,8 +23,6 @@ namespace {
 
 using LinkShared = BoardLink::Shared;
 
-std::int64_t ms(kernel::Duration d) { return std::chrono::duration_cast<std::chrono::milliseconds>(d).count(); }
-
 // The serial line. A StreamTask in frames mode that also copies its counters into the shared
 // stats (at every message and tick) and reports bad frames in the node's log.
 class HilLinkTask final : public io::StreamTask {
@@ -85,8 +83,9 @@ class HilLinkTask final : public io::StreamTask {
       const auto* fd = dynamic_cast<const io::FdStream*>(&stream());
       const std::string why = fd != nullptr ? fd->failure() : std::string();
       log(os::LogLevel::kWarn, "serial line '" + stream().name() + "' down" + (why.empty() ? "" : " (" + why + ")") +
-                                   ": reopening it at once, then after " + std::to_string(ms(reopen_first_)) +
-                                   " ms, doubling up to " + std::to_string(ms(reopen_most_)) + " ms");
+                                   ": reopening it at once, then after " +
+                                   std::to_string(kernel::to_milliseconds(reopen_first_)) + " ms, doubling up to " +
+                                   std::to_string(kernel::to_milliseconds(reopen_most_)) + " ms");
     }
     if (!backoff_.due(t)) return;
     if (auto st = stream().open(); st) {
@@ -94,13 +93,14 @@ class HilLinkTask final : public io::StreamTask {
     } else {
       const kernel::Duration wait = backoff_.failed(t);
       log(os::LogLevel::kInfo, "reopen attempt " + std::to_string(backoff_.attempts()) + " failed: " + st.error() +
-                                   "; next in " + std::to_string(ms(wait)) + " ms");
+                                   "; next in " + std::to_string(kernel::to_milliseconds(wait)) + " ms");
     }
   }
   void reopened(kernel::Time t) {
     const kernel::Duration outage = backoff_.reopened(t);
-    log(os::LogLevel::kInfo, "serial line '" + stream().name() + "' open again after " + std::to_string(ms(outage)) +
-                                 " ms (" + std::to_string(backoff_.attempts()) + " attempt(s))");
+    log(os::LogLevel::kInfo, "serial line '" + stream().name() + "' open again after " +
+                                 std::to_string(kernel::to_milliseconds(outage)) + " ms (" +
+                                 std::to_string(backoff_.attempts()) + " attempt(s))");
   }
 
   void refresh() {
@@ -185,8 +185,8 @@ class HilIrTask final : public os::Task {
     const kernel::Time t = now();
     if (!up_) {
       if (ever_up_)
-        log(os::LogLevel::kInfo, "link back after " + std::to_string(ms(t - last_frame_)) + " ms without frames (seq " +
-                                     std::to_string(seq) + ")");
+        log(os::LogLevel::kInfo, "link back after " + std::to_string(kernel::to_milliseconds(t - last_frame_)) +
+                                     " ms without frames (seq " + std::to_string(seq) + ")");
       else
         log(os::LogLevel::kInfo, "link up: first IR frame, seq " + std::to_string(seq));
     }
@@ -217,8 +217,9 @@ class HilIrTask final : public os::Task {
       ++s.link_losses;
       s.link_up = false;
     });
-    log(os::LogLevel::kWarn, "link lost: no IR frame for " + std::to_string(ms(now() - last_frame_)) +
-                                 " ms (last seq " + std::to_string(last_seq_) + "); waiting for frames");
+    log(os::LogLevel::kWarn, "link lost: no IR frame for " +
+                                 std::to_string(kernel::to_milliseconds(now() - last_frame_)) + " ms (last seq " +
+                                 std::to_string(last_seq_) + "); waiting for frames");
   }
 
  private:
@@ -289,7 +290,7 @@ class HilWheelsTask final : public os::Task {
     transmit(0.0f, 0.0f, [](BoardLinkStats& s) { ++s.watchdog_stops; });
     if (timeout_warning_.note(now()))
       log(os::LogLevel::kWarn, std::to_string(timeout_warning_.count()) + " timeout(s): no command for " +
-                                   std::to_string(ms(timeout_)) + " ms, wheels stopped");
+                                   std::to_string(kernel::to_milliseconds(timeout_)) + " ms, wheels stopped");
   }
 
  private:
@@ -376,7 +377,8 @@ std::string describe(const BoardLinkStats& s) {
                 static_cast<unsigned long long>(s.wheel_rejected), static_cast<unsigned long long>(s.watchdog_stops),
                 static_cast<unsigned long long>(s.frames_written), static_cast<unsigned long long>(s.frames_unsent),
                 s.line_open ? "open" : "DOWN", static_cast<unsigned long long>(s.line_losses),
-                static_cast<unsigned long long>(s.line_reopens), static_cast<long long>(ms(s.line_down)));
+                static_cast<unsigned long long>(s.line_reopens),
+                static_cast<long long>(kernel::to_milliseconds(s.line_down)));
   return buf;
 }
 

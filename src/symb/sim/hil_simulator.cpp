@@ -27,17 +27,16 @@ struct HilSimulator::Robot {
 
 namespace {
 kernel::Time steady_now() { return std::chrono::duration_cast<kernel::Duration>(Clock::now().time_since_epoch()); }
-std::int64_t ms(kernel::Duration d) { return std::chrono::duration_cast<std::chrono::milliseconds>(d).count(); }
 }  // namespace
 
 std::string describe(const HilRobotStats& s) {
   return "sent " + u(s.frames_sent) + " (" + u(s.corrupted) + " corrupted, " + u(s.write_errors) + " not taken, " +
          u(s.unsent) + " not sent: line down); serial line " + (s.line_open ? "open" : "DOWN") + " (" +
          u(s.line_losses) + " lost, " + u(s.line_reopens) + " reopened, down " +
-         u(static_cast<std::uint64_t>(ms(s.line_down))) + " ms in all); received " + u(s.received) + " good, " +
-         u(s.bad_frames()) + " bad; applied " + u(s.applied) + " (" + u(s.late) + " late), " + u(s.stale) + " stale, " +
-         u(s.missing) + " steps without a new frame, " + u(s.silences) + " silences, " + u(s.recoveries) +
-         " recoveries";
+         u(static_cast<std::uint64_t>(kernel::to_milliseconds(s.line_down))) + " ms in all); received " +
+         u(s.received) + " good, " + u(s.bad_frames()) + " bad; applied " + u(s.applied) + " (" + u(s.late) +
+         " late), " + u(s.stale) + " stale, " + u(s.missing) + " steps without a new frame, " + u(s.silences) +
+         " silences, " + u(s.recoveries) + " recoveries";
 }
 
 HilSimulator::HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStream>> ports, HilSimulatorOptions options)
@@ -133,11 +132,11 @@ void HilSimulator::watch_line(std::size_t i) {
         (void)port.ioctl("flush");
         if (auto* fd = dynamic_cast<io::FdStream*>(&port)) fd->set_write_timeout(options_.period / 4);
         note = "robot " + r.stats.robot + ": serial line '" + port.name() + "' open again after " +
-               std::to_string(ms(r.backoff.reopened(t))) + " ms";
+               std::to_string(kernel::to_milliseconds(r.backoff.reopened(t))) + " ms";
       } else {
         const kernel::Duration wait = r.backoff.failed(t);
         event("robot " + r.stats.robot + ": reopen attempt " + std::to_string(r.backoff.attempts()) +
-              " failed: " + st.error() + "; next in " + std::to_string(ms(wait)) + " ms");
+              " failed: " + st.error() + "; next in " + std::to_string(kernel::to_milliseconds(wait)) + " ms");
       }
     }
   }

@@ -2,20 +2,15 @@
 
 #include <bit>
 #include <charconv>
-#include <cstdio>
 #include <set>
+
+#include "symb/apps/cli_args.hpp"
 
 namespace symb::apps::evolve {
 
 namespace {
 
-std::string hex64(std::uint64_t v) {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
-
-bool parse_u64(std::string_view text, std::uint64_t& out, int base) {
+bool parse_digits(std::string_view text, std::uint64_t& out, int base) {
   if (text.empty()) return false;
   auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), out, base);
   return ec == std::errc{} && end == text.data() + text.size();
@@ -93,10 +88,10 @@ kernel::Result<EvolveCheckpoint> parse_checkpoint(std::string_view text) {
     if (key == "scenario") {
       c.scenario = std::string(value);
     } else if (key == "scenario_hash" || key == "history_hash") {
-      if (value.size() != 16 || !parse_u64(value, v, 16)) return fail(key + ": expected 16 hex digits");
+      if (value.size() != 16 || !parse_digits(value, v, 16)) return fail(key + ": expected 16 hex digits");
       (key == "scenario_hash" ? c.scenario_hash : c.history_hash) = v;
     } else if (key == "seed" || key == "evaluations" || key == "duration_ns" || key == "time_ns") {
-      if (!parse_u64(value, v, 10)) return fail(key + ": expected a whole number");
+      if (!parse_digits(value, v, 10)) return fail(key + ": expected a whole number");
       if ((key == "duration_ns" || key == "time_ns") && v > static_cast<std::uint64_t>(INT64_MAX))
         return fail(key + ": too large");
       if (key == "seed") c.seed = v;

@@ -37,12 +37,6 @@ constexpr std::string_view kEvolutionTypes[] = {"one_plus_one", "mu_plus_one"};
 
 double seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
 
-std::string hex64(std::uint64_t v) {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
-
 std::string exact(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.9g", v);
@@ -251,15 +245,16 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   };
   const kernel::Time start = executor.clock().now();
   const kernel::Time end = start + scenario.duration;
-  std::optional<kernel::Time> resume_at;
-  if (checkpoint) resume_at = start + checkpoint->time;
+  // Where a resumed run's replay ends (kTimeNever: not replaying).
+  kernel::Time resume_at = checkpoint ? start + checkpoint->time : kernel::kTimeNever;
+  const auto replaying = [&] { return resume_at != kernel::kTimeNever; };
   const kernel::Time stop_at = options.stop_at ? start + *options.stop_at : kernel::kTimeNever;
   const bool checkpoints = options.checkpoint_every.count() > 0;
   kernel::Time next_checkpoint = checkpoints ? start + options.checkpoint_every : kernel::kTimeNever;
   const kernel::Duration slice = options.speed > 0 ? std::chrono::milliseconds(20) : std::chrono::milliseconds(1000);
   // Pacing (--speed) runs from the resume point: the replay before it goes as fast as it can.
   auto pace_start = wall_start;
-  kernel::Time pace_from = resume_at.value_or(start);
+  kernel::Time pace_from = replaying() ? resume_at : start;
   auto last_report = wall_start;
 
   const auto report = [&](kernel::Time t) {
@@ -274,20 +269,20 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
     for (float f : recent) sum += f;
     p.mean = recent.empty() ? 0 : sum / static_cast<double>(recent.size());
     p.per_second = p.wall_seconds > 0 ? static_cast<double>(history.size()) / p.wall_seconds : 0;
-    p.replaying = resume_at.has_value();
+    p.replaying = replaying();
     options.on_progress(p);
   };
 
   session->start();
   for (kernel::Time t = start; t < end;) {
     kernel::Time next = std::min({end, t + slice, next_checkpoint});
-    if (resume_at) next = std::min(next, *resume_at);
+    next = std::min(next, resume_at);
     next = std::min(next, stop_at);
     executor.run_until(next);
     t = next;
     if (auto st = flush(); !st) return Error{st.error()};
     if (auto e = session->cycle_error(); !e.empty()) return Error{e};
-    if (resume_at && t == *resume_at) {
+    if (replaying() && t == resume_at) {
       if (history.size() != checkpoint->evaluations || history.hash() != checkpoint->history_hash)
         return Error{"--resume: this run does not reproduce the checkpoint: at " + fixed(seconds(t - start), 1) +
                      " s it has " + std::to_string(history.size()) + " evaluations (history hash " +
@@ -296,12 +291,12 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
                      "); a different build or referenced file? Start afresh without --resume"};
       result.resumed = true;
       result.resumed_from_seconds = seconds(t - start);
-      resume_at.reset();
+      resume_at = kernel::kTimeNever;
       pace_start = std::chrono::steady_clock::now();
     }
     if (checkpoints && t == next_checkpoint) {
       // Replaying towards a checkpoint: the one on disk is further on; leave it.
-      if (!resume_at && t < end) {
+      if (!replaying() && t < end) {
         const EvolveCheckpoint c{options.scenario_path, scenario_hash, result.seed, scenario.duration, t - start,
                                  history.size(),        history.hash()};
         if (auto st = write_file_atomically(checkpoint_path, to_text(c)); !st) return Error{st.error()};
@@ -312,7 +307,7 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
       result.stopped = true;
       break;
     }
-    if (options.speed > 0 && !resume_at) {
+    if (options.speed > 0 && !replaying()) {
       const auto due = pace_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                         std::chrono::duration<double>(seconds(t - pace_from) / options.speed));
       std::this_thread::sleep_until(due);

@@ -19,9 +19,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr std::string_view kCommand = "symb board";
+constexpr std::string_view kBoardCommand = "symb board";
 
-constexpr OptionSpec kOptions[] = {
+constexpr OptionSpec kBoardOptions[] = {
     {"--serial", "PATH", "the data line to the simulator"},
     {"--shell", "PATH", "a second serial line for the command shell (symb shell --serial ...)"},
     {"--robot", "NAME", "the scenario's robot this board runs (default: the first)"},
@@ -32,15 +32,15 @@ constexpr OptionSpec kOptions[] = {
     {"--help", "", "this help"},
 };
 
-void print_help(std::ostream& out) {
-  out << "Usage: " << kCommand << " SCENARIO --serial PATH [options]\n\n"
+void print_board_help(std::ostream& out) {
+  out << "Usage: " << kBoardCommand << " SCENARIO --serial PATH [options]\n\n"
       << "The board side of hardware-in-the-loop (docs/hil.md): builds one robot's control system\n"
       << "from the scenario and runs it on OS threads at wall-clock time, with its device tasks on\n"
       << "the serial line: link (frames) -> ir -> the scenario's controller -> wheels -> link. The\n"
       << "simulator (symb sim) sends IR frames and reads the wheel speeds back. The robot's log and\n"
       << "the link statistics (frames good, bad, missed) are printed as it runs.\n\n"
       << "Options:\n"
-      << describe_options(kOptions) << "\n"
+      << describe_options(kBoardOptions) << "\n"
       << "Runs until Ctrl-C (or --duration); it keeps running when the link goes silent, and when the\n"
       << "serial device goes away it reopens the path with backoff (100 ms doubling to 2 s). It exits\n"
       << "1 when the line was down at the end (a dead link), with how long it was down.\n";
@@ -49,7 +49,7 @@ void print_help(std::ostream& out) {
 }  // namespace
 
 int run_board_command(std::span<const std::string_view> args, const CliContext& ctx) {
-  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_help);
+  auto split = scenario_command_args(args, kBoardOptions, ctx, kBoardCommand, print_board_help);
   if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& a = std::get<SplitArgs>(split);
   std::string serial, shell_path, robot_name;
@@ -59,28 +59,28 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   bool quiet = false;
   for (const ParsedOption& o : a.options) {
     if (o.name == "--serial" || o.name == "--shell" || o.name == "--robot") {
-      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{std::string(o.name) + ": empty value"});
+      if (o.value.empty()) return usage_error(ctx, kBoardCommand, UsageError{std::string(o.name) + ": empty value"});
       (o.name == "--serial" ? serial : o.name == "--shell" ? shell_path : robot_name) = o.value;
     } else if (o.name == "--duration" || o.name == "--stats-every") {
       auto v = parse_duration(o.name, o.value, std::chrono::hours(24 * 365));
-      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kBoardCommand, *e);
       if (o.name == "--duration")
         duration = std::get<kernel::Duration>(v);
       else
         stats_every = std::get<kernel::Duration>(v);
     } else if (o.name == "--seed") {
       auto v = parse_u64("--seed", o.value);
-      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kBoardCommand, *e);
       seed = std::get<std::uint64_t>(v);
     } else if (o.name == "--quiet") {
       quiet = true;
     }
   }
-  if (serial.empty()) return usage_error(ctx, kCommand, UsageError{"missing --serial PATH (the data line)"});
+  if (serial.empty()) return usage_error(ctx, kBoardCommand, UsageError{"missing --serial PATH (the data line)"});
 
   auto loaded = sim::load_scenario(std::string(a.positional.front()));
   if (!loaded) {
-    ctx.err << kCommand << ": " << loaded.error() << "\n";
+    ctx.err << kBoardCommand << ": " << loaded.error() << "\n";
     return kExitFailure;
   }
   const sim::Scenario& sc = *loaded;
@@ -90,20 +90,20 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     if (index == sc.robots.size()) {
       std::string names;
       for (const auto& r : sc.robots) names += (names.empty() ? "" : ", ") + r.name;
-      ctx.err << kCommand << ": --robot: the scenario has no robot " << quote_arg(robot_name) << " (it has " << names
-              << ")\n";
+      ctx.err << kBoardCommand << ": --robot: the scenario has no robot " << quote_arg(robot_name) << " (it has "
+              << names << ")\n";
       return kExitUsage;
     }
   }
   if (sc.robots.empty()) {
-    ctx.err << kCommand << ": " << sc.file << ": the scenario has no robots\n";
+    ctx.err << kBoardCommand << ": " << sc.file << ": the scenario has no robots\n";
     return kExitFailure;
   }
   const sim::RobotSpec& spec = sc.robots[index];
 
   auto port = std::make_shared<io::SerialPort>("uart0", serial);
   if (auto st = port->open(); !st) {
-    ctx.err << kCommand << ": " << st.error() << "\n";
+    ctx.err << kBoardCommand << ": " << st.error() << "\n";
     return kExitFailure;
   }
   (void)port->ioctl("flush");  // frames from before this board started answer nothing
@@ -111,7 +111,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   if (!shell_path.empty()) {
     shell_port = std::make_shared<io::SerialPort>("uart1", shell_path);
     if (auto st = shell_port->open(); !st) {
-      ctx.err << kCommand << ": " << st.error() << "\n";
+      ctx.err << kBoardCommand << ": " << st.error() << "\n";
       return kExitFailure;
     }
   }
@@ -128,7 +128,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   auto log_sink = std::make_shared<PrefixedLogSink>(ctx.err, "board " + spec.name + ": ");
   auto built = sim::RobotSystem::build(executor, spec, sim::RobotDevices{}, ro);
   if (!built) {
-    ctx.err << kCommand << ": " << built.error() << "\n";
+    ctx.err << kBoardCommand << ": " << built.error() << "\n";
     return kExitFailure;
   }
   std::unique_ptr<sim::RobotSystem> system = std::move(built).value();
@@ -145,7 +145,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     so.devices = devices;
     auto attached = shell::attach_shell(system->node(), shell_port, so);
     if (!attached) {
-      ctx.err << kCommand << ": shell: " << attached.error() << "\n";
+      ctx.err << kBoardCommand << ": shell: " << attached.error() << "\n";
       return kExitFailure;
     }
   }
@@ -180,12 +180,12 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   port->close();
   if (shell_port) shell_port->close();
   if (!cycle.empty()) {
-    ctx.err << kCommand << ": " << cycle << "\n";
+    ctx.err << kBoardCommand << ": " << cycle << "\n";
     return kExitFailure;
   }
   // A dead link is a failed run: the serial line was down when the board stopped.
   if (!s.line_open) {
-    ctx.err << kCommand << ": the serial line " << serial << " was down when the board stopped (down "
+    ctx.err << kBoardCommand << ": the serial line " << serial << " was down when the board stopped (down "
             << fixed(std::chrono::duration<double>(s.line_down).count(), 1) << " s in all, " << s.line_losses
             << " loss(es), " << s.line_reopens << " reopening(s))\n";
     return kExitFailure;

@@ -23,9 +23,9 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-constexpr std::string_view kCommand = "symb link";
+constexpr std::string_view kLinkCommand = "symb link";
 
-constexpr OptionSpec kOptions[] = {
+constexpr OptionSpec kLinkOptions[] = {
     {"--dir", "DIR", "where the four paths are made (default /tmp/symb-link-<pid>)"},
     {"--corrupt", "P", "corrupt this fraction of the data line's frames, both ways (0..1, default 0)"},
     {"--seed", "S", "seed of the fault injector (default 1)"},
@@ -33,14 +33,14 @@ constexpr OptionSpec kOptions[] = {
     {"--help", "", "this help"},
 };
 
-void print_help(std::ostream& out) {
-  out << "Usage: " << kCommand << " [options]\n\n"
+void print_link_help(std::ostream& out) {
+  out << "Usage: " << kLinkCommand << " [options]\n\n"
       << "Makes the two serial lines of one hardware-in-the-loop board out of pseudo-terminals and\n"
       << "relays them until Ctrl-C: the data line (simulator <-> board: IR frames one way, wheel\n"
       << "frames the other) and the shell line (board <-> a person's `symb shell`). It prints the\n"
       << "paths and the commands to run with them.\n\n"
       << "Options:\n"
-      << describe_options(kOptions) << "\n"
+      << describe_options(kLinkOptions) << "\n"
       << "With --corrupt, one byte of the chosen frames is changed (never a framing byte), so every\n"
       << "corrupted frame is one bad frame at the receiver; the counts are printed.\n";
 }
@@ -83,11 +83,11 @@ struct Relay {
 }  // namespace
 
 int run_link_command(std::span<const std::string_view> args, const CliContext& ctx) {
-  auto split = split_args(args, kOptions, 0);
-  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
+  auto split = split_args(args, kLinkOptions, 0);
+  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kLinkCommand, *e);
   const SplitArgs& a = std::get<SplitArgs>(split);
   if (a.help) {
-    print_help(ctx.out);
+    print_link_help(ctx.out);
     return kExitOk;
   }
   fs::path dir = fs::temp_directory_path() / ("symb-link-" + std::to_string(::getpid()));
@@ -96,19 +96,19 @@ int run_link_command(std::span<const std::string_view> args, const CliContext& c
   std::optional<kernel::Duration> duration;
   for (const ParsedOption& o : a.options) {
     if (o.name == "--dir") {
-      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--dir: empty folder name"});
+      if (o.value.empty()) return usage_error(ctx, kLinkCommand, UsageError{"--dir: empty folder name"});
       dir = o.value;
     } else if (o.name == "--corrupt") {
       auto v = parse_fraction("--corrupt", o.value);
-      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kLinkCommand, *e);
       corrupt = std::get<double>(v);
     } else if (o.name == "--seed") {
       auto v = parse_u64("--seed", o.value);
-      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kLinkCommand, *e);
       seed = std::get<std::uint64_t>(v);
     } else if (o.name == "--duration") {
       auto v = parse_duration("--duration", o.value, std::chrono::hours(24 * 365));
-      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kLinkCommand, *e);
       duration = std::get<kernel::Duration>(v);
     }
   }
@@ -116,7 +116,7 @@ int run_link_command(std::span<const std::string_view> args, const CliContext& c
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) {
-    ctx.err << kCommand << ": cannot create " << dir.string() << ": " << ec.message() << "\n";
+    ctx.err << kLinkCommand << ": cannot create " << dir.string() << ": " << ec.message() << "\n";
     return kExitFailure;
   }
   const char* names[4] = {"sim", "board", "board-shell", "shell"};
@@ -125,7 +125,7 @@ int run_link_command(std::span<const std::string_view> args, const CliContext& c
   for (const char* name : names) {
     auto p = io::PtyPair::open(std::string("link.") + name);
     if (!p) {
-      ctx.err << kCommand << ": " << p.error() << "\n";
+      ctx.err << kLinkCommand << ": " << p.error() << "\n";
       return kExitFailure;
     }
     // The relay must never stall on a side that does not read.
@@ -134,7 +134,7 @@ int run_link_command(std::span<const std::string_view> args, const CliContext& c
     if (fs::is_symlink(link, ec) || fs::exists(link, ec)) fs::remove(link, ec);
     fs::create_symlink(p->slave_path, link, ec);
     if (ec) {
-      ctx.err << kCommand << ": cannot make " << link.string() << ": " << ec.message() << "\n";
+      ctx.err << kLinkCommand << ": cannot make " << link.string() << ": " << ec.message() << "\n";
       return kExitFailure;
     }
     links.push_back(link);

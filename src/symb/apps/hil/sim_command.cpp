@@ -26,10 +26,10 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-constexpr std::string_view kCommand = "symb sim";
+constexpr std::string_view kSimCommand = "symb sim";
 constexpr kernel::Duration kMaxDuration = sim::kMaxRunDuration;  // a scenario's limit too
 
-constexpr OptionSpec kOptions[] = {
+constexpr OptionSpec kSimOptions[] = {
     {"--serial", "PATH", "the board's data line; one per robot, comma-separated, in scenario order"},
     {"--duration", "D", "wall-clock time to run: 60s, 10min, ... (default: the scenario's)"},
     {"--out", "DIR", "output folder (default out/<scenario name>-hil)"},
@@ -41,15 +41,15 @@ constexpr OptionSpec kOptions[] = {
     {"--help", "", "this help"},
 };
 
-void print_help(std::ostream& out) {
-  out << "Usage: " << kCommand << " SCENARIO --serial PATH [options]\n\n"
+void print_sim_help(std::ostream& out) {
+  out << "Usage: " << kSimCommand << " SCENARIO --serial PATH [options]\n\n"
       << "The simulator side of hardware-in-the-loop (docs/hil.md): runs the scenario's world at\n"
       << "wall-clock pace; after every step (the control period, 30 ms) it sends each robot's 7 IR\n"
       << "values to its board over the serial line and, before the next step, reads the board's\n"
       << "wheel speeds without waiting for them. Start the board first (symb board); `symb link`\n"
       << "makes the serial lines out of pseudo-terminals.\n\n"
       << "Options:\n"
-      << describe_options(kOptions) << "\n"
+      << describe_options(kSimOptions) << "\n"
       << "Writes trajectory.svg, steps.csv and summary.txt (with the link statistics) into the\n"
       << "output folder. Ctrl-C stops early and still writes them. A line whose device goes away is\n"
       << "reopened with backoff (100 ms doubling to 2 s); the run exits 1 when a line was still down\n"
@@ -59,7 +59,7 @@ void print_help(std::ostream& out) {
 }  // namespace
 
 int run_sim_command(std::span<const std::string_view> args, const CliContext& ctx) {
-  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_help);
+  auto split = scenario_command_args(args, kSimOptions, ctx, kSimCommand, print_sim_help);
   if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& a = std::get<SplitArgs>(split);
   std::vector<std::string> serial;
@@ -75,14 +75,15 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
       while (true) {
         const auto comma = rest.find(',');
         const std::string_view one = rest.substr(0, comma);
-        if (one.empty()) return usage_error(ctx, kCommand, UsageError{"--serial: empty path in " + quote_arg(o.value)});
+        if (one.empty())
+          return usage_error(ctx, kSimCommand, UsageError{"--serial: empty path in " + quote_arg(o.value)});
         serial.emplace_back(one);
         if (comma == std::string_view::npos) break;
         rest = rest.substr(comma + 1);
       }
     } else if (o.name == "--duration" || o.name == "--hold" || o.name == "--wait") {
       auto v = parse_duration(o.name, o.value, kMaxDuration);
-      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kSimCommand, *e);
       const auto d = std::get<kernel::Duration>(v);
       if (o.name == "--duration")
         duration = d;
@@ -91,30 +92,30 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
       else
         wait = d;
     } else if (o.name == "--out") {
-      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--out: empty folder name"});
+      if (o.value.empty()) return usage_error(ctx, kSimCommand, UsageError{"--out: empty folder name"});
       out_dir = o.value;
     } else if (o.name == "--seed") {
       auto v = parse_u64("--seed", o.value);
-      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kSimCommand, *e);
       seed = std::get<std::uint64_t>(v);
     } else if (o.name == "--corrupt") {
       auto v = parse_fraction("--corrupt", o.value);
-      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kSimCommand, *e);
       so.corrupt = std::get<double>(v);
     } else if (o.name == "--quiet") {
       quiet = true;
     }
   }
-  if (serial.empty()) return usage_error(ctx, kCommand, UsageError{"missing --serial PATH (the board's data line)"});
+  if (serial.empty()) return usage_error(ctx, kSimCommand, UsageError{"missing --serial PATH (the board's data line)"});
 
   auto loaded = sim::load_scenario(std::string(a.positional.front()));
   if (!loaded) {
-    ctx.err << kCommand << ": " << loaded.error() << "\n";
+    ctx.err << kSimCommand << ": " << loaded.error() << "\n";
     return kExitFailure;
   }
   const sim::Scenario& sc = *loaded;
   if (serial.size() != sc.robots.size()) {
-    ctx.err << kCommand << ": the scenario has " << sc.robots.size() << " robot(s) but " << serial.size()
+    ctx.err << kSimCommand << ": the scenario has " << sc.robots.size() << " robot(s) but " << serial.size()
             << " --serial path(s) were given (one per robot, in scenario order)\n";
     return kExitUsage;
   }
@@ -131,14 +132,14 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
     world = std::make_unique<sim::EnkiWorld>(sc.world, run_seed, wo);
     for (const sim::RobotSpec& r : sc.robots) world->add_robot(r.name, r.kind, r.start);
   } catch (const std::exception& e) {
-    ctx.err << kCommand << ": " << sc.file << ": " << e.what() << "\n";
+    ctx.err << kSimCommand << ": " << sc.file << ": " << e.what() << "\n";
     return kExitFailure;
   }
   std::vector<std::shared_ptr<io::IOStream>> ports;
   for (std::size_t i = 0; i < serial.size(); ++i) {
     auto p = std::make_shared<io::SerialPort>("data." + sc.robots[i].name, serial[i]);
     if (auto st = p->open(); !st) {
-      ctx.err << kCommand << ": " << st.error() << "\n";
+      ctx.err << kSimCommand << ": " << st.error() << "\n";
       return kExitFailure;
     }
     ports.push_back(std::move(p));
@@ -148,12 +149,12 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) {
-    ctx.err << kCommand << ": cannot create " << dir.string() << ": " << ec.message() << "\n";
+    ctx.err << kSimCommand << ": cannot create " << dir.string() << ": " << ec.message() << "\n";
     return kExitFailure;
   }
   std::ofstream csv(dir / "steps.csv", std::ios::binary);
   if (!csv) {
-    ctx.err << kCommand << ": cannot write " << (dir / "steps.csv").string() << "\n";
+    ctx.err << kSimCommand << ": cannot write " << (dir / "steps.csv").string() << "\n";
     return kExitFailure;
   }
 
@@ -189,7 +190,7 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
           << std::flush;
   if (auto st = simulator.wait_for_boards(wait); !st) {
     finish_watcher();
-    ctx.err << kCommand << ": " << st.error() << "\n";
+    ctx.err << kSimCommand << ": " << st.error() << "\n";
     return kExitFailure;
   }
   const auto wall_start = std::chrono::steady_clock::now();
@@ -198,7 +199,7 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   finish_watcher();
   progress.finish("sim: " + fixed(world->time(), 1) + " s simulated in " + fixed(wall, 1) + " s");
   if (!ran) {
-    ctx.err << kCommand << ": " << ran.error() << "\n";
+    ctx.err << kSimCommand << ": " << ran.error() << "\n";
     return kExitFailure;
   }
 
@@ -237,11 +238,11 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
       sc.name + " (hardware in the loop), seed " + std::to_string(run_seed) + ", " + fixed(world->time(), 1) + " s");
   for (const auto& [name, text] : {std::pair{"trajectory.svg", svg.str()}, std::pair{"summary.txt", summary.str()}})
     if (auto st = write_file(dir / name, text); !st) {
-      ctx.err << kCommand << ": " << st.error() << "\n";
+      ctx.err << kSimCommand << ": " << st.error() << "\n";
       return kExitFailure;
     }
   if (!csv) {
-    ctx.err << kCommand << ": cannot write " << (dir / "steps.csv").string() << "\n";
+    ctx.err << kSimCommand << ": cannot write " << (dir / "steps.csv").string() << "\n";
     return kExitFailure;
   }
 
@@ -255,7 +256,7 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
           << "  " << (dir / "trajectory.svg").string() << "\n  " << (dir / "steps.csv").string() << "\n  "
           << (dir / "summary.txt").string() << "\n";
   if (!dead.empty()) {
-    ctx.err << kCommand << ": dead link: the serial line was down at the end of the run: " << dead << "\n";
+    ctx.err << kSimCommand << ": dead link: the serial line was down at the end of the run: " << dead << "\n";
     return kExitFailure;
   }
   return kExitOk;

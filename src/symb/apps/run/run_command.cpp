@@ -105,12 +105,6 @@ std::variant<std::string, UsageError> read_genome_weights(std::string_view path)
   return evo::weights_text(*real);
 }
 
-std::string hex64(std::uint64_t v) {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
-
 }  // namespace
 
 int run_run_command(std::span<const std::string_view> args, const CliContext& ctx) {

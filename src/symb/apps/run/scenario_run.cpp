@@ -5,7 +5,6 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -49,9 +48,7 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
       << " s (a stop was requested: Ctrl-C or SIGTERM)\n";
   s << "wall clock: " << fixed(r.wall_seconds, 3) << " s\n"
     << "real-time factor: " << fixed(r.real_time_factor, 1) << "\n";
-  char hash[24];
-  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(r.trajectory_hash));
-  s << "trajectory hash: " << hash << "\n\n"
+  s << "trajectory hash: " << hex64(r.trajectory_hash) << "\n\n"
     << "robot,distance_m,contacts,contact_steps,moving_s,time_in_maze_s,end_x_cm,end_y_cm\n";
   for (const RobotSummary& x : r.robots)
     s << x.name << "," << fixed(x.distance / 100, 3) << "," << x.contact_events << "," << x.contact_steps << ","

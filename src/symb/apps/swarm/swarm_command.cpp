@@ -117,7 +117,7 @@ int run_swarm_command(std::span<const std::string_view> args, const CliContext& 
   const SwarmResult& r = *result;
   progress.finish(progress_text(SwarmProgress{r.simulated_seconds, r.simulated_seconds, r.wall_seconds}, r.realtime));
 
-  if (print_hash) ctx.out << "trace-hash: " << format_hash(r.trace_hash) << "\n" << std::flush;
+  if (print_hash) ctx.out << "trace-hash: " << hex64(r.trace_hash) << "\n" << std::flush;
   if (!print_hash && !quiet) {
     ctx.out << "swarm: " << r.nodes << " robots, seed " << r.seed << ", " << fixed(r.simulated_seconds, 1) << " s "
             << (r.realtime ? "on the wall clock"
@@ -125,7 +125,7 @@ int run_swarm_command(std::span<const std::string_view> args, const CliContext& 
                                  "x real time)")
             << "\n"
             << "messages: " << r.traffic.delivered << " delivered, " << r.traffic.dropped() << " dropped; trace hash "
-            << format_hash(r.trace_hash) << (r.realtime ? " (not deterministic under --realtime)" : "") << "\n";
+            << hex64(r.trace_hash) << (r.realtime ? " (not deterministic under --realtime)" : "") << "\n";
   }
   if (!r.files.empty()) {
     // The hash owns stdout under --print-hash; the folder is then news for the person, on stderr.

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <fstream>
 #include <memory>
 #include <thread>
@@ -106,12 +105,6 @@ std::uint64_t combine_trace_hashes(std::span<const std::uint64_t> hashes) {
   for (std::uint64_t v : hashes)
     for (int b = 0; b < 8; ++b) h = (h ^ ((v >> (8 * b)) & 0xff)) * 0x100000001b3ULL;
   return h;
-}
-
-std::string format_hash(std::uint64_t hash) {
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(hash));
-  return buf;
 }
 
 kernel::Result<SwarmResult> run_swarm(const SwarmOptions& options) {
@@ -251,7 +244,7 @@ kernel::Result<std::vector<std::filesystem::path>> write_swarm_outputs(const Swa
 
   const std::string caption = std::to_string(r.nodes) + " robots, seed " + std::to_string(r.seed) + ", " +
                               fixed(r.simulated_seconds, 1) + " s" + (r.realtime ? " (real time)" : " simulated") +
-                              ", arena " + fixed(r.arena, 2) + " m, trace hash " + format_hash(r.trace_hash);
+                              ", arena " + fixed(r.arena, 2) + " m, trace hash " + hex64(r.trace_hash);
   if (auto st = write("trajectories.svg",
                       [&](std::ostream& out) { swarm::write_trajectory_svg(out, r.arena, r.trajectories, caption); });
       !st)
@@ -281,7 +274,7 @@ kernel::Result<std::vector<std::filesystem::path>> write_swarm_outputs(const Swa
                 << "poses touching a wall: "
                 << fixed(poses > 0 ? 100.0 * static_cast<double>(contacts) / static_cast<double>(poses) : 0, 3)
                 << " %\n"
-                << "trace hash: " << format_hash(r.trace_hash) << "\n";
+                << "trace hash: " << hex64(r.trace_hash) << "\n";
           });
       !st)
     return Error{st.error()};

@@ -93,9 +93,6 @@ std::uint64_t swarm_node_seed(std::uint64_t run_seed, std::size_t index);
 // FNV-1a over the hashes' 8 little-endian bytes each, in order.
 std::uint64_t combine_trace_hashes(std::span<const std::uint64_t> hashes);
 
-// "0123456789abcdef".
-std::string format_hash(std::uint64_t hash);
-
 // Builds the swarm, runs it for options.duration and collects the figures; writes the output
 // files when options.out_dir is set. Fails (with a message) on options out of range, or when the
 // output folder cannot be written.

@@ -11,8 +11,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr std::size_t kHistoryLimit = 1 << 16;  // evaluations kept for history() (days of driving)
-
 }  // namespace
 
 kernel::Result<std::unique_ptr<MuPlusOneTask>> MuPlusOneTask::create(MuPlusOneTaskOptions options) {

@@ -72,6 +72,8 @@ class MuPlusOneTask : public os::Task {
   void on_message(const os::Message& m) override;
 
  private:
+  static constexpr std::size_t kHistoryLimit = 1 << 16;  // evaluations kept for history() (days of driving)
+
   explicit MuPlusOneTask(MuPlusOneTaskOptions options)
       : options_(std::move(options)), swap_(options_.swap, "mu_plus_one") {}
   bool set_up();

@@ -8,12 +8,6 @@
 
 namespace symb::evo {
 
-namespace {
-
-constexpr std::size_t kHistoryLimit = 1 << 16;  // evaluations kept for history() (days of driving)
-
-}  // namespace
-
 kernel::Result<std::unique_ptr<OnePlusOneTask>> OnePlusOneTask::create(OnePlusOneTaskOptions options) {
   if (auto st = check(options.algorithm); !st) return kernel::Error{st.error()};
   if (auto st = check(options.swap, "one_plus_one"); !st) return kernel::Error{st.error()};

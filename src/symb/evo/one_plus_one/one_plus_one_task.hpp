@@ -81,6 +81,8 @@ class OnePlusOneTask : public os::Task {
   void on_message(const os::Message& m) override;
 
  private:
+  static constexpr std::size_t kHistoryLimit = 1 << 16;  // evaluations kept for history() (days of driving)
+
   explicit OnePlusOneTask(OnePlusOneTaskOptions options);
   bool set_up();
   void start_candidate();
