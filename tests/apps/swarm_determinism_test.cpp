@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "symb/apps/cli_args.hpp"
 #include "symb/apps/swarm/swarm_demo.hpp"
 
 namespace symb::apps {
@@ -69,7 +70,7 @@ TEST(SwarmDeterminism, SameHashAcrossProcessRestarts) {
   const Outcome second = run(command);
   ASSERT_EQ(first.exit_code, 0) << first.output;
   ASSERT_EQ(second.exit_code, 0) << second.output;
-  const std::string expected = "trace-hash: " + format_hash(hash_of(small_swarm(7))) + "\n";
+  const std::string expected = "trace-hash: " + hex64(hash_of(small_swarm(7))) + "\n";
   // Nothing but the hash line on stdout.
   EXPECT_EQ(first.output, expected);
   EXPECT_EQ(second.output, expected);
@@ -108,7 +109,7 @@ TEST(SwarmBehaviour, RobotsMoveAndStayInsideTheArena) {
 }
 
 TEST(SwarmBehaviour, WritesTheOutputFolder) {
-  const auto dir = std::filesystem::path(testing::TempDir()) / "symb_swarm_outputs";
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "symb_swarm_outputs";
   std::filesystem::remove_all(dir);
   SwarmOptions o = small_swarm(5);
   o.nodes = 10;
@@ -122,7 +123,7 @@ TEST(SwarmBehaviour, WritesTheOutputFolder) {
   std::ifstream summary(dir / "summary.txt");
   std::stringstream text;
   text << summary.rdbuf();
-  EXPECT_NE(text.str().find("trace hash: " + format_hash(r->trace_hash)), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("trace hash: " + hex64(r->trace_hash)), std::string::npos) << text.str();
   std::ifstream svg(dir / "trajectories.svg");
   std::stringstream picture;
   picture << svg.rdbuf();
@@ -167,13 +168,13 @@ void PrintTo(const BadInput& b, std::ostream* out) {
   if (*b.args != '\0') *out << ' ' << b.args;
 }
 
-std::string test_name(const testing::TestParamInfo<BadInput>& info) {
+std::string test_name(const ::testing::TestParamInfo<BadInput>& info) {
   std::string name = std::to_string(info.index) + "_";
   for (char c : std::string_view(info.param.args)) name += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
   return name;
 }
 
-class SymbBadInput : public testing::TestWithParam<BadInput> {};
+class SymbBadInput : public ::testing::TestWithParam<BadInput> {};
 
 TEST_P(SymbBadInput, ExitsWithTwoAndNamesTheArgument) {
   const BadInput& bad = GetParam();
@@ -185,7 +186,7 @@ TEST_P(SymbBadInput, ExitsWithTwoAndNamesTheArgument) {
 
 INSTANTIATE_TEST_SUITE_P(
     Cli, SymbBadInput,
-    testing::Values(
+    ::testing::Values(
         BadInput{"dmeo", "'dmeo' (did you mean 'demo'?)"}, BadInput{"", "missing command"},
         BadInput{"demo", "missing demo name"}, BadInput{"demo swram", "'swram' (did you mean 'swarm'?)"},
         BadInput{"demo swarm --nodes 0", "--nodes: '0' is out of range"},
@@ -222,7 +223,7 @@ TEST(SymbCli, HelpAndVersionSucceed) {
 }
 
 TEST(SymbCli, WritesTheOutputFolderAndSaysWhere) {
-  const auto dir = std::filesystem::path(testing::TempDir()) / "symb_cli_swarm";
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "symb_cli_swarm";
   std::filesystem::remove_all(dir);
   const Outcome o = run(symb_command("demo swarm --nodes 5 --duration 500ms --quiet --out '" + dir.string() + "'"));
   ASSERT_EQ(o.exit_code, 0) << o.output;

@@ -92,7 +92,7 @@ TEST(AhhsParser, ErrorsPointAtTheToken) {
   }
 }
 
-const char* kValid[] = {
+const char* kValidAhhs[] = {
     R"(compartments 2
 link 0 1
 hormone obstacle base 0 decay 0.2 diffusion 0.05
@@ -148,8 +148,8 @@ std::string join(const Lines& ls) {
   return s;
 }
 
-std::string mutate(std::mt19937& rng, int& kind) {
-  Lines ls = split(kValid[rng() % std::size(kValid)]);
+std::string mutate_ahhs(std::mt19937& rng, int& kind) {
+  Lines ls = split(kValidAhhs[rng() % std::size(kValidAhhs)]);
   auto line = [&]() -> std::vector<std::string>& { return ls[rng() % ls.size()]; };
   kind = static_cast<int>(rng() % 8);
   switch (kind) {
@@ -205,7 +205,7 @@ std::string mutate(std::mt19937& rng, int& kind) {
   return join(ls);
 }
 
-bool located_inside(const std::string& error, const std::string& src) {
+bool located_inside_ahhs(const std::string& error, const std::string& src) {
   static const std::regex re(R"(^(\d+):(\d+): .+)");
   std::smatch m;
   if (!std::regex_match(error, m, re)) return false;
@@ -222,13 +222,13 @@ bool located_inside(const std::string& error, const std::string& src) {
 }
 
 TEST(AhhsParser, FiveHundredMutantsRejectedWithLocatedErrors) {
-  for (const char* v : kValid) ASSERT_TRUE(parse_network(v).ok()) << parse_network(v).error();
+  for (const char* v : kValidAhhs) ASSERT_TRUE(parse_network(v).ok()) << parse_network(v).error();
   std::mt19937 rng(20261122);
   int rejected = 0, still_valid = 0;
   std::array<int, 8> by_kind{};
   for (int attempt = 0; rejected < 500 && attempt < 3000; ++attempt) {
     int kind = 0;
-    const std::string src = mutate(rng, kind);
+    const std::string src = mutate_ahhs(rng, kind);
     auto n = parse_network(src);
     if (n.ok()) {
       ++still_valid;
@@ -240,7 +240,7 @@ TEST(AhhsParser, FiveHundredMutantsRejectedWithLocatedErrors) {
     }
     ++rejected;
     ++by_kind[static_cast<std::size_t>(kind)];
-    ASSERT_TRUE(located_inside(n.error(), src)) << "error '" << n.error() << "' for:\n" << src;
+    ASSERT_TRUE(located_inside_ahhs(n.error(), src)) << "error '" << n.error() << "' for:\n" << src;
   }
   std::cout << "ahhs mutants: " << rejected << " rejected with located errors, " << still_valid
             << " still valid (ran)\n";

@@ -64,7 +64,7 @@ class Sensor : public os::Task {
   int n_ = 0;
 };
 
-class Recorder : public os::Task {
+class AhhsRecorder : public os::Task {
  public:
   std::vector<std::vector<float>> got;
 
@@ -135,22 +135,22 @@ kernel::Result<os::TaskId> create(os::Node& node, std::string_view type, std::st
   return node.create(type, std::move(name), *a);
 }
 
-struct Rig {
+struct AhhsRig {
   os::TaskTypeRegistry registry;
   kernel::VirtualTimeExecutor ex;
-  Rig() { EXPECT_TRUE(register_control_task_types(registry, inline_networks())); }
+  AhhsRig() { EXPECT_TRUE(register_control_task_types(registry, inline_networks())); }
 };
 
 TEST(AhhsTasks, OneTaskAndOneTaskPerCompartmentGiveTheSameLevelsAndCommands) {
-  Rig rig;
+  AhhsRig rig;
   os::Node node(rig.ex, {.name = "bot", .types = &rig.registry});
   Probes probes;
   node.set_probe_sink(probes.sink());
   auto sensor = *node.create("ir", std::make_unique<Sensor>(), {.priority = 1, .period = 30ms});
-  auto whole_rec = std::make_unique<Recorder>();
-  auto split_rec = std::make_unique<Recorder>();
-  Recorder* whole_out = whole_rec.get();
-  Recorder* split_out = split_rec.get();
+  auto whole_rec = std::make_unique<AhhsRecorder>();
+  auto split_rec = std::make_unique<AhhsRecorder>();
+  AhhsRecorder* whole_out = whole_rec.get();
+  AhhsRecorder* split_out = split_rec.get();
   auto w_rec = *node.create("whole_wheels", std::move(whole_rec), {.queue_capacity = 64});
   auto s_rec = *node.create("split_wheels", std::move(split_rec), {.queue_capacity = 64});
 
@@ -197,7 +197,7 @@ TEST(AhhsTasks, OneTaskAndOneTaskPerCompartmentGiveTheSameLevelsAndCommands) {
 }
 
 TEST(AhhsTasks, TwoRobotsJoinedThroughABridgeDiffuseAsOneNetwork) {
-  Rig rig;
+  AhhsRig rig;
   os::Node a(rig.ex, {.name = "robot_a", .seed = 1, .types = &rig.registry});
   os::Node b(rig.ex, {.name = "robot_b", .seed = 2, .types = &rig.registry});
   os::Node ref(rig.ex, {.name = "reference", .seed = 3, .types = &rig.registry});
@@ -279,7 +279,7 @@ TEST(AhhsTasks, ACompartmentWhoseNeighboursNeverAnswerStillSteps) {
 }
 
 TEST(AhhsTasks, TypesSchemasAndLocatedCreationErrors) {
-  Rig rig;
+  AhhsRig rig;
   for (const char* name : {"ahhs", "ahhs_compartment", "ahhs_mixer"}) {
     const os::TaskType* t = rig.registry.find(name);
     ASSERT_NE(t, nullptr) << name;
@@ -326,8 +326,8 @@ TEST(AhhsTasks, TypesSchemasAndLocatedCreationErrors) {
        "compartments 1; hormone go base 1; actuator 0 in 0; rule actuator go -> 0 centre 1 width 1 fixed 1", 1}};
   auto ok = node.create("ahhs", "c", inline_net);
   ASSERT_TRUE(ok) << ok.error();
-  auto rec_task = std::make_unique<Recorder>();
-  Recorder* rec = rec_task.get();
+  auto rec_task = std::make_unique<AhhsRecorder>();
+  AhhsRecorder* rec = rec_task.get();
   ASSERT_TRUE(node.hook(*ok, *node.create("rec", std::move(rec_task))));
   auto poster = [&](std::vector<float> v, os::Port port = 0) {
     os::Message m;
@@ -372,8 +372,8 @@ TEST(AhhsTasks, BadMessagesAreIgnoredAndCounted) {
   ASSERT_TRUE(mixer_task.ok());
   AhhsMixerTask* mixer = mixer_task.value().get();
   auto mid = *node.create("mixer", std::move(mixer_task).value(), {.queue_capacity = 32});
-  auto rec_task = std::make_unique<Recorder>();
-  Recorder* rec = rec_task.get();
+  auto rec_task = std::make_unique<AhhsRecorder>();
+  AhhsRecorder* rec = rec_task.get();
   auto rid = *node.create("rec", std::move(rec_task), {.queue_capacity = 32});
   ASSERT_TRUE(node.hook(wid, rid));
   const float nan = std::numeric_limits<float>::quiet_NaN();

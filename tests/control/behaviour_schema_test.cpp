@@ -18,6 +18,8 @@
 #include "symb/os/node.hpp"
 #include "symb/robot/thymio_ir.hpp"
 
+#include "support/virtual_time.hpp"
+
 namespace symb::control {
 namespace {
 
@@ -27,11 +29,11 @@ using robot::thymio::ir_distance;
 using robot::thymio::ir_reading;
 using Values = std::vector<float>;
 
-Time ms(long long n) { return std::chrono::milliseconds(n); }
+using test_support::ms;
 
-class ScriptedSensor : public os::Task {
+class SchemaSensor : public os::Task {
  public:
-  explicit ScriptedSensor(std::function<std::optional<Values>(Time)> script) : script_(std::move(script)) {}
+  explicit SchemaSensor(std::function<std::optional<Values>(Time)> script) : script_(std::move(script)) {}
 
  protected:
   void on_tick() override {
@@ -46,7 +48,7 @@ struct Sample {
   Time time;
   Values v;
 };
-class Recorder : public os::Task {
+class SchemaRecorder : public os::Task {
  public:
   std::vector<Sample> got;
 
@@ -56,21 +58,21 @@ class Recorder : public os::Task {
   }
 };
 
-struct Rig {
+struct SchemaRig {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry types;
   os::Node node;
-  Rig() : node(ex, {.name = "bot", .seed = 3, .types = &types}) {
+  SchemaRig() : node(ex, {.name = "bot", .seed = 3, .types = &types}) {
     EXPECT_TRUE(register_control_task_types(types, {}).ok());
   }
   os::TaskId sensor(std::string name, std::function<std::optional<Values>(Time)> script,
                     kernel::Duration period = 30ms) {
-    return *node.create(std::move(name), std::make_unique<ScriptedSensor>(std::move(script)),
+    return *node.create(std::move(name), std::make_unique<SchemaSensor>(std::move(script)),
                         {.priority = 5, .period = period});
   }
-  std::pair<os::TaskId, Recorder*> recorder(std::string name) {
-    auto r = std::make_unique<Recorder>();
-    Recorder* p = r.get();
+  std::pair<os::TaskId, SchemaRecorder*> recorder(std::string name) {
+    auto r = std::make_unique<SchemaRecorder>();
+    SchemaRecorder* p = r.get();
     return {*node.create(std::move(name), std::move(r), {.queue_capacity = 256}), p};
   }
   os::TaskId make(std::string_view type, std::string name, std::vector<os::ParamAssignment> params,
@@ -156,7 +158,7 @@ TEST(AvoidObstacleSchema, SumAddsObstaclesMaxTakesTheStrongestMagnitude) {
 }
 
 TEST(AvoidObstacleSchema, AsATaskEvaluatesAtEveryReadingAndProbesItsVector) {
-  Rig rig;
+  SchemaRig rig;
   const auto ir = rig.sensor("ir", [](Time t) -> std::optional<Values> {
     if (t == ms(60)) return Values{1, 2};  // malformed: ignored
     return t >= ms(90) ? ir_with(2, 5) : Values(7, 0.0f);
@@ -184,7 +186,7 @@ TEST(AvoidObstacleSchema, AsATaskEvaluatesAtEveryReadingAndProbesItsVector) {
 // --- move_to_goal ----------------------------------------------------------------------------------
 
 TEST(MoveToGoalSchema, PointsTowardTheNextWaypointThenTheGoalInTheRobotFrame) {
-  Rig rig;
+  SchemaRig rig;
   Values pose{0, 0, 0};
   const auto pose_task = rig.sensor("pose", [&](Time) { return pose; });
   const auto schema = rig.make(
@@ -225,7 +227,7 @@ TEST(MoveToGoalSchema, PointsTowardTheNextWaypointThenTheGoalInTheRobotFrame) {
 // --- stay_on_path ----------------------------------------------------------------------------------
 
 TEST(StayOnPathSchema, PullsTowardTheCentreLineProportionallyInsideAndFullyOutside) {
-  Rig rig;
+  SchemaRig rig;
   Values pose{50, 5, 0};
   const auto pose_task = rig.sensor("pose", [&](Time) { return pose; });
   const auto schema =
@@ -257,7 +259,7 @@ TEST(StayOnPathSchema, PullsTowardTheCentreLineProportionallyInsideAndFullyOutsi
 // --- noise -----------------------------------------------------------------------------------------
 
 TEST(NoiseSchema, HoldsARandomDirectionOfMagnitudeGForItsPersistence) {
-  Rig rig;
+  SchemaRig rig;
   const auto schema =
       rig.make("noise", "noise", {{"gain", "0.5"}, {"persistence", "300ms"}}, os::TaskOptions{.period = 100ms});
   const auto recorded = rig.recorder("sum");  // no structured binding: lambdas capture rec (clang)
@@ -305,7 +307,7 @@ std::function<std::optional<Values>(Time)> vector_until(Values v, Time until) {
 }
 
 TEST(SchemaSum, SumsTheFreshVectorsAtItsOwnRate) {
-  Rig rig;
+  SchemaRig rig;
   const auto a = rig.sensor("a", vector_until({0.5, 0.25}, ms(10000)), 50ms);
   const auto b = rig.sensor("b", vector_until({0.3, -0.25}, ms(200)), 70ms);  // goes silent after 140
   const auto sum = rig.make("schema_sum", "sum", {{"speed", "400"}, {"turn_speed", "100"}, {"max_age", "200ms"}},
@@ -348,7 +350,7 @@ TEST(SchemaSum, SumsTheFreshVectorsAtItsOwnRate) {
 TEST(SchemaSum, SchemasAtTheirOwnRatesDriveOneRobot) {
   // avoid_obstacle at every IR reading (30 ms), move_to_goal every 100 ms, noise every 250 ms,
   // the sum every 30 ms.
-  Rig rig;
+  SchemaRig rig;
   const auto ir = rig.sensor("ir", [](Time) { return Values(7, 0.0f); });
   const auto pose = rig.sensor("pose", [](Time) { return Values{0, 0, 0}; });
   const auto avoid = rig.make("avoid_obstacle", "avoid", {});
@@ -376,7 +378,7 @@ TEST(SchemaSum, SchemasAtTheirOwnRatesDriveOneRobot) {
 // --- parameters ------------------------------------------------------------------------------------
 
 TEST(SchemaTypes, BadParametersAreRejectedWithTheirLocation) {
-  Rig rig;
+  SchemaRig rig;
   const auto has = [](const std::string& error, std::string_view part) {
     return error.find(part) != std::string::npos;
   };

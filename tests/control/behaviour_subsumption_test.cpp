@@ -16,6 +16,8 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 
+#include "support/virtual_time.hpp"
+
 namespace symb::control {
 namespace {
 
@@ -23,12 +25,12 @@ using namespace std::chrono_literals;
 using kernel::Time;
 using Values = std::vector<float>;
 
-Time ms(long long n) { return std::chrono::milliseconds(n); }
+using test_support::ms;
 
 // At each tick, sends what the script says for this instant (nothing when it says nothing).
-class ScriptedSensor : public os::Task {
+class SubsumptionSensor : public os::Task {
  public:
-  explicit ScriptedSensor(std::function<std::optional<Values>(Time)> script) : script_(std::move(script)) {}
+  explicit SubsumptionSensor(std::function<std::optional<Values>(Time)> script) : script_(std::move(script)) {}
 
  protected:
   void on_tick() override {
@@ -46,7 +48,7 @@ struct Command {
 };
 
 // Keeps every command with its time and sender.
-class Recorder : public os::Task {
+class SubsumptionRecorder : public os::Task {
  public:
   std::vector<Command> commands;
 
@@ -57,7 +59,7 @@ class Recorder : public os::Task {
   }
 };
 
-const Values kClear(7, 0.0f);
+const Values kNothingNear(7, 0.0f);
 Values wall_left() {
   Values v(7, 0.0f);
   v[0] = 3000;
@@ -66,18 +68,18 @@ Values wall_left() {
 }
 
 // wander (priority-0 hook) and avoid (priority-1 hook, suppress window) into a recorder.
-struct Rig {
+struct SubsumptionRig {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry types;
   os::Node node;
-  Recorder* wheels = nullptr;
+  SubsumptionRecorder* wheels = nullptr;
   os::TaskId ir, wheels_id, wander;
 
-  explicit Rig(std::function<std::optional<Values>(Time)> ir_script)
+  explicit SubsumptionRig(std::function<std::optional<Values>(Time)> ir_script)
       : node(ex, {.name = "bot", .seed = 7, .types = &types}) {
     EXPECT_TRUE(register_control_task_types(types, {}).ok());
-    ir = *node.create("ir", std::make_unique<ScriptedSensor>(std::move(ir_script)), {.priority = 5, .period = 30ms});
-    auto w = std::make_unique<Recorder>();
+    ir = *node.create("ir", std::make_unique<SubsumptionSensor>(std::move(ir_script)), {.priority = 5, .period = 30ms});
+    auto w = std::make_unique<SubsumptionRecorder>();
     wheels = w.get();
     wheels_id = *node.create("wheels", std::move(w), {.queue_capacity = 64});
     wander = make_layer("wander", "wander", {{"speed", "200"}, {"turn_max", "0"}});
@@ -103,10 +105,10 @@ struct Rig {
 };
 
 // A wall on the left from 300 ms to 600 ms inclusive.
-std::optional<Values> wall_300_600(Time t) { return (t >= ms(300) && t <= ms(600)) ? wall_left() : kClear; }
+std::optional<Values> wall_300_600(Time t) { return (t >= ms(300) && t <= ms(600)) ? wall_left() : kNothingNear; }
 
 TEST(Subsumption, AvoidSuppressesWanderForItsWindowAndReleasesAfterIt) {
-  Rig rig(wall_300_600);
+  SubsumptionRig rig(wall_300_600);
   const os::TaskId avoid = rig.make_layer("avoid", "avoid", {{"turn", "150"}});
   ASSERT_TRUE(rig.node.hook(rig.ir, avoid));
   ASSERT_TRUE(rig.node.hook(avoid, rig.wheels_id, {.priority = 1, .suppress_window = 100ms}));
@@ -137,7 +139,7 @@ TEST(Subsumption, AvoidSuppressesWanderForItsWindowAndReleasesAfterIt) {
 }
 
 TEST(Subsumption, WithoutASuppressWindowBothLayersReachTheWheels) {
-  Rig rig(wall_300_600);
+  SubsumptionRig rig(wall_300_600);
   const os::TaskId avoid = rig.make_layer("avoid", "avoid", {});
   ASSERT_TRUE(rig.node.hook(rig.ir, avoid));
   ASSERT_TRUE(rig.node.hook(avoid, rig.wheels_id, {.priority = 1}));
@@ -147,7 +149,7 @@ TEST(Subsumption, WithoutASuppressWindowBothLayersReachTheWheels) {
 }
 
 TEST(Subsumption, AnExplicitSuppressionFromOutsideBlocksLowerHooksForItsWindow) {
-  Rig rig([](Time) { return std::nullopt; });
+  SubsumptionRig rig([](Time) { return std::nullopt; });
   rig.ex.run_until(ms(100));
   ASSERT_TRUE(rig.node.suppress(rig.wheels_id, 1, 200ms));  // [100, 300)
   rig.ex.run_until(ms(500));
@@ -162,13 +164,13 @@ std::optional<Values> zone_300_450(Time t) {
 }
 
 TEST(Subsumption, StopInZoneInhibitsWandersOutputEverywhereForItsWindow) {
-  Rig rig([](Time) { return std::nullopt; });
-  auto second = std::make_unique<Recorder>();  // wander's other listener: inhibition blocks it too
-  Recorder* log = second.get();
+  SubsumptionRig rig([](Time) { return std::nullopt; });
+  auto second = std::make_unique<SubsumptionRecorder>();  // wander's other listener: inhibition blocks it too
+  SubsumptionRecorder* log = second.get();
   const os::TaskId log_id = *rig.node.create("log", std::move(second), {.queue_capacity = 64});
   ASSERT_TRUE(rig.node.hook(rig.wander, log_id));
   const os::TaskId ground =
-      *rig.node.create("ground", std::make_unique<ScriptedSensor>(zone_300_450), {.priority = 5, .period = 30ms});
+      *rig.node.create("ground", std::make_unique<SubsumptionSensor>(zone_300_450), {.priority = 5, .period = 30ms});
   const os::TaskId stop = rig.make_layer("stop_in_zone", "stop", {{"inhibit", "wander"}, {"inhibit_for", "100ms"}});
   ASSERT_TRUE(rig.node.hook(ground, stop));
   ASSERT_TRUE(rig.node.hook(stop, rig.wheels_id, {.priority = 2}));  // no suppression: only inhibition
@@ -191,9 +193,9 @@ TEST(Subsumption, StopInZoneInhibitsWandersOutputEverywhereForItsWindow) {
 }
 
 TEST(Subsumption, StopInZoneLatchesWhenAskedAndIgnoresMalformedReadings) {
-  Rig rig([](Time) { return std::nullopt; });
+  SubsumptionRig rig([](Time) { return std::nullopt; });
   const os::TaskId ground = *rig.node.create(
-      "ground", std::make_unique<ScriptedSensor>([](Time t) -> std::optional<Values> {
+      "ground", std::make_unique<SubsumptionSensor>([](Time t) -> std::optional<Values> {
         if (t == ms(60)) return Values{0.1f};                                   // wrong count: ignored
         if (t == ms(90)) return Values{std::nanf(""), 0.1f};                    // NaN: ignored
         return Values{t == ms(120) ? 0.1f : 1.0f, t == ms(120) ? 0.3f : 1.0f};  // in the zone at 120 only
@@ -209,10 +211,10 @@ TEST(Subsumption, StopInZoneLatchesWhenAskedAndIgnoresMalformedReadings) {
 }
 
 TEST(Subsumption, StopInZoneWaitsUntilTheRobotHasBeenInTheZoneForAfter) {
-  Rig rig([](Time) { return std::nullopt; });
+  SubsumptionRig rig([](Time) { return std::nullopt; });
   // In the zone at 300 .. 360, out at 390, in again from 420 on.
   const os::TaskId ground =
-      *rig.node.create("ground", std::make_unique<ScriptedSensor>([](Time t) -> std::optional<Values> {
+      *rig.node.create("ground", std::make_unique<SubsumptionSensor>([](Time t) -> std::optional<Values> {
                          const bool in = (t >= ms(300) && t <= ms(360)) || t >= ms(420);
                          return in ? Values{0.1f, 0.1f} : Values{1.0f, 1.0f};
                        }),
@@ -229,7 +231,8 @@ TEST(Subsumption, StopInZoneWaitsUntilTheRobotHasBeenInTheZoneForAfter) {
 }
 
 TEST(Subsumption, LayersAddedRemovedAndReplacedAtRuntime) {
-  Rig rig([](Time t) -> std::optional<Values> { return t >= ms(300) ? wall_left() : kClear; });  // wall from 300 on
+  SubsumptionRig rig(
+      [](Time t) -> std::optional<Values> { return t >= ms(300) ? wall_left() : kNothingNear; });  // wall from 300 on
   rig.ex.run_until(ms(150));
   // Added at runtime: avoid, between the IR and the wheels, hook priority 1, window 100 ms.
   const os::TaskId ir[] = {rig.ir};
@@ -278,7 +281,7 @@ TEST(Subsumption, LayersAddedRemovedAndReplacedAtRuntime) {
 
 TEST(Subsumption, AvoidKeepsItsDirectionThroughAnEpisodeAndHoldsAfterIt) {
   // Wall on the left first, then only in the centre, then on the right, then clear from 300.
-  Rig rig([](Time t) -> std::optional<Values> {
+  SubsumptionRig rig([](Time t) -> std::optional<Values> {
     Values v(7, 0.0f);
     if (t < ms(100)) {
       v[0] = 3000;
@@ -311,8 +314,8 @@ TEST(Subsumption, WanderTurnsAtRandomFromItsOwnStreamReproducibly) {
     os::TaskTypeRegistry types;
     EXPECT_TRUE(register_control_task_types(types, {}).ok());
     os::Node node(ex, {.name = "bot", .seed = seed, .types = &types});
-    auto rec = std::make_unique<Recorder>();
-    Recorder* r = rec.get();
+    auto rec = std::make_unique<SubsumptionRecorder>();
+    SubsumptionRecorder* r = rec.get();
     const auto wheels = *node.create("wheels", std::move(rec), {.queue_capacity = 512});
     const auto w = *node.create("wander", "wander",
                                 std::vector<os::ParamAssignment>{{"turn_max", "80"}, {"change_every", "300ms"}});
@@ -337,7 +340,7 @@ TEST(Subsumption, WanderTurnsAtRandomFromItsOwnStreamReproducibly) {
 }
 
 TEST(Subsumption, LayersProbeActivityAndOutput) {
-  Rig rig(wall_300_600);
+  SubsumptionRig rig(wall_300_600);
   std::vector<std::pair<std::string, Values>> samples;
   rig.node.set_probe_sink([&](const os::ProbeSample& s) {
     if (s.task == "avoid") samples.push_back({std::string(s.channel), Values(s.values.begin(), s.values.end())});

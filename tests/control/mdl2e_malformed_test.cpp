@@ -16,7 +16,7 @@
 namespace symb::control::mdl2e {
 namespace {
 
-const char* kValid[] = {
+const char* kValidMdl2e[] = {
     R"(sensor ir[7]
 interrupt obstacle_left  = ir[0] > 2000
 interrupt obstacle_front = ir[2] > 2000
@@ -79,8 +79,8 @@ std::string join(const std::vector<Piece>& ps, std::mt19937& rng) {
   return s;
 }
 
-std::string mutate(std::mt19937& rng, int& kind) {
-  const std::string base = kValid[rng() % std::size(kValid)];
+std::string mutate_mdl2e(std::mt19937& rng, int& kind) {
+  const std::string base = kValidMdl2e[rng() % std::size(kValidMdl2e)];
   auto ps = pieces(base);
   const std::size_t n = ps.size();
   auto pick = [&] { return static_cast<std::size_t>(rng() % n); };
@@ -135,7 +135,7 @@ std::string mutate(std::mt19937& rng, int& kind) {
   return join(ps, rng);
 }
 
-bool located_inside(const std::string& error, const std::string& src) {
+bool located_inside_mdl2e(const std::string& error, const std::string& src) {
   static const std::regex re(R"(^(\d+):(\d+): .+)");
   std::smatch m;
   if (!std::regex_match(error, m, re)) return false;
@@ -152,7 +152,7 @@ bool located_inside(const std::string& error, const std::string& src) {
 }
 
 TEST(Mdl2eMalformed, ValidBasesCompile) {
-  for (const char* v : kValid) (void)testing::must_compile(v);
+  for (const char* v : kValidMdl2e) (void)testing::must_compile(v);
 }
 
 TEST(Mdl2eMalformed, ThousandMutantsRejectedWithLocatedErrors) {
@@ -161,7 +161,7 @@ TEST(Mdl2eMalformed, ThousandMutantsRejectedWithLocatedErrors) {
   std::array<int, 8> by_kind{};
   for (int attempt = 0; rejected < 1000 && attempt < 5000; ++attempt) {
     int kind = 0;
-    const std::string src = mutate(rng, kind);
+    const std::string src = mutate_mdl2e(rng, kind);
     auto r = compile_source(src);
     if (r.ok()) {
       ++still_valid;
@@ -174,7 +174,7 @@ TEST(Mdl2eMalformed, ThousandMutantsRejectedWithLocatedErrors) {
     }
     ++rejected;
     ++by_kind[static_cast<std::size_t>(kind)];
-    ASSERT_TRUE(located_inside(r.error(), src)) << "error '" << r.error() << "' for:\n" << src;
+    ASSERT_TRUE(located_inside_mdl2e(r.error(), src)) << "error '" << r.error() << "' for:\n" << src;
   }
   std::cout << "mdl2e mutants: " << rejected << " rejected with located errors, " << still_valid
             << " still valid (compiled, round-tripped, ran)\n";

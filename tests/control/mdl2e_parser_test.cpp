@@ -10,7 +10,7 @@
 namespace symb::control::mdl2e {
 namespace {
 
-std::string error_of(std::string_view source) {
+std::string mdl2e_error(std::string_view source) {
   auto p = compile_source(source);
   return p.ok() ? std::string("<accepted>") : p.error();
 }
@@ -46,53 +46,53 @@ TEST(Mdl2eParser, DurationsAndUnits) {
   ASSERT_TRUE(a.ok()) << a.error();
   EXPECT_EQ(a->plan->children[0].mods.duration_ms, 1500u);
   EXPECT_EQ(a->plan->children[1].mods.duration_ms, 250u);
-  EXPECT_EQ(error_of("plan p { atom stop for 10 }"), "1:24: duration '10' needs a unit: ms or s");
-  EXPECT_EQ(error_of("plan p { atom stop for 10h }"), "1:24: unknown duration unit 'h' (use ms or s)");
-  EXPECT_EQ(error_of("plan p { atom stop for 0.5ms }"), "1:24: duration '0.5ms' is not a whole number of ms");
-  EXPECT_EQ(error_of("plan p { atom stop for 0ms }"), "1:24: duration '0ms' must be in 1ms..4000000s");
+  EXPECT_EQ(mdl2e_error("plan p { atom stop for 10 }"), "1:24: duration '10' needs a unit: ms or s");
+  EXPECT_EQ(mdl2e_error("plan p { atom stop for 10h }"), "1:24: unknown duration unit 'h' (use ms or s)");
+  EXPECT_EQ(mdl2e_error("plan p { atom stop for 0.5ms }"), "1:24: duration '0.5ms' is not a whole number of ms");
+  EXPECT_EQ(mdl2e_error("plan p { atom stop for 0ms }"), "1:24: duration '0ms' must be in 1ms..4000000s");
 }
 
 TEST(Mdl2eParser, SyntaxErrorsNameLineAndColumn) {
-  EXPECT_EQ(error_of(""), "1:1: the program has no plan (add 'plan NAME { ... }')");
-  EXPECT_EQ(error_of("plan p {\n  atom forward(100\n}"), "3:1: expected ')' to close the arguments, got '}'");
-  EXPECT_EQ(error_of("plan p {\n  atom forward(100)\n"),
+  EXPECT_EQ(mdl2e_error(""), "1:1: the program has no plan (add 'plan NAME { ... }')");
+  EXPECT_EQ(mdl2e_error("plan p {\n  atom forward(100\n}"), "3:1: expected ')' to close the arguments, got '}'");
+  EXPECT_EQ(mdl2e_error("plan p {\n  atom forward(100)\n"),
             "3:1: expected '}' to close the body, got the end of the program");
-  EXPECT_EQ(error_of("plan p { }"), "1:10: a body needs at least one atom, behaviour, 'do' or 'task'");
-  EXPECT_EQ(error_of("plan p { atom stop }\n@"), "2:1: unexpected character '@'");
-  EXPECT_EQ(error_of("plan p { atom stop }\x01"), "1:21: unexpected byte 0x01");
-  EXPECT_EQ(error_of("plan p { atom stop until }"),
+  EXPECT_EQ(mdl2e_error("plan p { }"), "1:10: a body needs at least one atom, behaviour, 'do' or 'task'");
+  EXPECT_EQ(mdl2e_error("plan p { atom stop }\n@"), "2:1: unexpected character '@'");
+  EXPECT_EQ(mdl2e_error("plan p { atom stop }\x01"), "1:21: unexpected byte 0x01");
+  EXPECT_EQ(mdl2e_error("plan p { atom stop until }"),
             "1:26: expected an interrupt name, 'not', 'true', 'false' or '(', got '}'");
-  EXPECT_EQ(error_of("plan p { atom stop } plan q { atom stop }"),
+  EXPECT_EQ(mdl2e_error("plan p { atom stop } plan q { atom stop }"),
             "1:22: a program has exactly one plan; another was defined at line 1");
-  EXPECT_EQ(error_of("plan p { atom stop for 1s for 2s }"), "1:27: 'for' given twice");
-  EXPECT_EQ(error_of("plan loop { atom stop }"), "1:6: expected a plan name, got the keyword 'loop'");
-  EXPECT_EQ(error_of("sensor ir[0]\nplan p { atom stop }"), "1:11: channel size must be in 1..256, got '0'");
-  EXPECT_EQ(error_of("plan p { task stop x }"),
+  EXPECT_EQ(mdl2e_error("plan p { atom stop for 1s for 2s }"), "1:27: 'for' given twice");
+  EXPECT_EQ(mdl2e_error("plan loop { atom stop }"), "1:6: expected a plan name, got the keyword 'loop'");
+  EXPECT_EQ(mdl2e_error("sensor ir[0]\nplan p { atom stop }"), "1:11: channel size must be in 1..256, got '0'");
+  EXPECT_EQ(mdl2e_error("plan p { task stop x }"),
             "1:15: expected start, suspend, resume or delete after 'task', got 'stop'");
-  EXPECT_EQ(error_of("plan p { atom stop } 12"),
+  EXPECT_EQ(mdl2e_error("plan p { atom stop } 12"),
             "1:22: expected 'sensor', 'interrupt', 'behaviour' or 'plan', got '12'");
-  EXPECT_EQ(error_of("plan p { atom wheels(1.) }"), "1:24: expected a digit after the decimal point");
+  EXPECT_EQ(mdl2e_error("plan p { atom wheels(1.) }"), "1:24: expected a digit after the decimal point");
 }
 
 TEST(Mdl2eParser, NameErrorsNameLineColumnAndSuggest) {
-  EXPECT_EQ(error_of("plan p {\n  atom forwrd(1)\n}"),
+  EXPECT_EQ(mdl2e_error("plan p {\n  atom forwrd(1)\n}"),
             "2:8: unknown primitive behaviour 'forwrd' (did you mean 'forward'?)");
-  EXPECT_EQ(error_of("plan p { atom forward }"),
+  EXPECT_EQ(mdl2e_error("plan p { atom forward }"),
             "1:15: 'forward' takes 1 argument, got 0 (forward(speed): both wheels at speed)");
-  EXPECT_EQ(error_of("sensor ir[3]\ninterrupt near = ir[1] > 5\nplan p { atom stop until naer }"),
+  EXPECT_EQ(mdl2e_error("sensor ir[3]\ninterrupt near = ir[1] > 5\nplan p { atom stop until naer }"),
             "3:26: unknown interrupt 'naer' (did you mean 'near'?)");
-  EXPECT_EQ(error_of("sensor ir[3]\ninterrupt near = ir[3] > 5\nplan p { atom stop }"),
+  EXPECT_EQ(mdl2e_error("sensor ir[3]\ninterrupt near = ir[3] > 5\nplan p { atom stop }"),
             "2:21: index 3 is out of range for ir[3]");
-  EXPECT_EQ(error_of("sensor ir[3]\ninterrupt near = it[1] > 5\nplan p { atom stop }"),
+  EXPECT_EQ(mdl2e_error("sensor ir[3]\ninterrupt near = it[1] > 5\nplan p { atom stop }"),
             "2:18: unknown sensor channel 'it' (did you mean 'ir'?)");
-  EXPECT_EQ(error_of("behaviour avoid { atom stop }\nplan p { do aviod }"),
+  EXPECT_EQ(mdl2e_error("behaviour avoid { atom stop }\nplan p { do aviod }"),
             "2:13: unknown behaviour 'aviod' (did you mean 'avoid'?)");
-  EXPECT_EQ(error_of("behaviour a { do b }\nbehaviour b { do a }\nplan p { do a }"),
+  EXPECT_EQ(mdl2e_error("behaviour a { do b }\nbehaviour b { do a }\nplan p { do a }"),
             "2:18: behaviour 'a' calls itself (recursion is not allowed)");
-  EXPECT_EQ(error_of("plan p loop { task start x }"),
+  EXPECT_EQ(mdl2e_error("plan p loop { task start x }"),
             "1:8: 'p' loops forever but contains no atom, so it would never wait");
-  EXPECT_EQ(error_of("plan p { atom stop loop }"), "1:20: an atom cannot loop (put it in a behaviour)");
-  EXPECT_EQ(error_of("sensor ir[1]\nsensor ir[2]\nplan p { atom stop }"), "2:1: sensor 'ir' is declared twice");
+  EXPECT_EQ(mdl2e_error("plan p { atom stop loop }"), "1:20: an atom cannot loop (put it in a behaviour)");
+  EXPECT_EQ(mdl2e_error("sensor ir[1]\nsensor ir[2]\nplan p { atom stop }"), "2:1: sensor 'ir' is declared twice");
 }
 
 TEST(Mdl2eParser, DeepNestingIsBoundedNotACrash) {
@@ -100,22 +100,22 @@ TEST(Mdl2eParser, DeepNestingIsBoundedNotACrash) {
   for (int i = 0; i < 20; ++i) deep += "{ behaviour ";
   deep += "{ atom stop }";
   for (int i = 0; i < 20; ++i) deep += " }";
-  const std::string e = error_of(deep);
+  const std::string e = mdl2e_error(deep);
   EXPECT_NE(e.find("nested deeper than 16 levels"), std::string::npos) << e;
 
   std::string huge = "plan p ";
   for (int i = 0; i < 10000; ++i) huge += "{ behaviour ";
-  EXPECT_NE(error_of(huge).find("behaviours nested too deeply"), std::string::npos);
+  EXPECT_NE(mdl2e_error(huge).find("behaviours nested too deeply"), std::string::npos);
 
   std::string expr = "interrupt a = external\nplan p { atom stop until ";
   for (int i = 0; i < 10000; ++i) expr += "not (";
-  EXPECT_NE(error_of(expr).find("interrupt expression nested too deeply"), std::string::npos);
+  EXPECT_NE(mdl2e_error(expr).find("interrupt expression nested too deeply"), std::string::npos);
 
   std::string wide = "interrupt a = external\nplan p { atom stop until a";
   for (int i = 0; i < 20; ++i) wide += " or (a";
   for (int i = 0; i < 20; ++i) wide += ")";
   wide += " }";
-  EXPECT_NE(error_of(wide).find("stack slots"), std::string::npos) << error_of(wide);
+  EXPECT_NE(mdl2e_error(wide).find("stack slots"), std::string::npos) << mdl2e_error(wide);
 }
 
 // A chain of and/or is long, not deep: the parser keeps it flat and the compiler walks it with an
@@ -140,8 +140,9 @@ TEST(Mdl2eParser, LongAndOrChainCompilesWithoutRecursion) {
   std::string longer = "interrupt a = external\nplan p { atom stop until a";
   for (int i = 1; i < 150000; ++i) longer += " or a";
   longer += " }\n";
-  EXPECT_NE(error_of(longer).find("interrupt expressions are too large in all"), std::string::npos) << error_of(longer);
-  EXPECT_EQ(error_of(longer).rfind("2:", 0), 0u) << error_of(longer);
+  EXPECT_NE(mdl2e_error(longer).find("interrupt expressions are too large in all"), std::string::npos)
+      << mdl2e_error(longer);
+  EXPECT_EQ(mdl2e_error(longer).rfind("2:", 0), 0u) << mdl2e_error(longer);
 }
 
 // The deepest programs each bound lets through, and the longest chain, compile on a thread with
@@ -165,10 +166,10 @@ TEST(Mdl2eParser, TheDeepestAcceptedProgramsFitASmallStack) {
   chain += " }";
   std::string results[4];
   ASSERT_TRUE(test_support::run_on_small_stack([&] {
-    results[0] = error_of(bodies);
-    results[1] = error_of(parens);
-    results[2] = error_of(deep_parse);
-    results[3] = error_of(chain);
+    results[0] = mdl2e_error(bodies);
+    results[1] = mdl2e_error(parens);
+    results[2] = mdl2e_error(deep_parse);
+    results[3] = mdl2e_error(chain);
   }));
   EXPECT_EQ(results[0], "<accepted>");
   EXPECT_EQ(results[1], "<accepted>");

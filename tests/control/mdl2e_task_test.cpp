@@ -21,6 +21,8 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 
+#include "support/virtual_time.hpp"
+
 namespace symb::control {
 namespace {
 
@@ -30,10 +32,10 @@ using IR = std::vector<float>;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-Time at(long long ms) { return std::chrono::milliseconds(ms); }
+using test_support::ms;
 
 // Sends the IR vector scripted for an instant at its tick of that instant (and nothing else).
-class ScriptedSensor : public os::Task {
+class Mdl2eSensor : public os::Task {
  public:
   void script(Time t, IR ir) { script_[t] = std::move(ir); }
 
@@ -47,7 +49,7 @@ class ScriptedSensor : public os::Task {
 };
 
 // Keeps every wheel command with its time.
-class Recorder : public os::Task {
+class Mdl2eRecorder : public os::Task {
  public:
   struct Command {
     Time time;
@@ -107,23 +109,23 @@ plan p {
 }
 )";
 
-const IR kClear{0, 0, 0, 0, 0, 0, 0};
+const IR kClearIr{0, 0, 0, 0, 0, 0, 0};
 const IR kWall{0, 0, 3000, 0, 0, 0, 0};
 
 // sensor -> controller -> recorder on one node, each made in code.
-struct Rig {
+struct Mdl2eRig {
   kernel::VirtualTimeExecutor ex;
   os::Node node{ex, {"bot"}};
-  ScriptedSensor* sensor = nullptr;
+  Mdl2eSensor* sensor = nullptr;
   Mdl2eTask* ctl = nullptr;
-  Recorder* rec = nullptr;
+  Mdl2eRecorder* rec = nullptr;
   os::TaskId sensor_id, ctl_id, rec_id;
 
-  explicit Rig(std::string_view source, int ctl_priority = 2, Mdl2eTaskOptions options = {}) {
-    auto s = std::make_unique<ScriptedSensor>();
+  explicit Mdl2eRig(std::string_view source, int ctl_priority = 2, Mdl2eTaskOptions options = {}) {
+    auto s = std::make_unique<Mdl2eSensor>();
     sensor = s.get();
     sensor_id = *node.create("ir", std::move(s), {.priority = 1, .period = 10ms});
-    auto r = std::make_unique<Recorder>();
+    auto r = std::make_unique<Mdl2eRecorder>();
     rec = r.get();
     rec_id = *node.create("rec", std::move(r), {.queue_capacity = 64});
     ctl_id = add_controller("ctl", source, ctl_priority, options);
@@ -148,23 +150,23 @@ struct Rig {
 };
 
 TEST(Mdl2eTask, SendsNothingBeforeTheFirstSensorVectorThenReactsAtItsInstant) {
-  Rig rig(kAvoid);
-  rig.sensor->script(at(50), kClear);
-  rig.sensor->script(at(70), kWall);
-  rig.ex.run_until(at(49));
+  Mdl2eRig rig(kAvoid);
+  rig.sensor->script(ms(50), kClearIr);
+  rig.sensor->script(ms(70), kWall);
+  rig.ex.run_until(ms(49));
   EXPECT_EQ(rig.rec->size(), 0u);  // ticks at 30 ms had nothing to step on
   EXPECT_EQ(rig.ctl->stats().idle_ticks, 1u);
   EXPECT_FALSE(rig.ctl->state().started);
 
-  rig.ex.run_until(at(50));
-  auto first = rig.rec->at(at(50));  // the plan starts at the vector's own instant
+  rig.ex.run_until(ms(50));
+  auto first = rig.rec->at(ms(50));  // the plan starts at the vector's own instant
   ASSERT_EQ(first.size(), 1u);
   EXPECT_EQ(first[0].left, 100);
   EXPECT_EQ(first[0].right, 100);
   EXPECT_EQ(rig.ctl->state().active_path, "p/cruise/forward");
 
-  rig.ex.run_until(at(70));
-  auto wall = rig.rec->at(at(70));  // between two ticks (60, 90): the message itself steps
+  rig.ex.run_until(ms(70));
+  auto wall = rig.rec->at(ms(70));  // between two ticks (60, 90): the message itself steps
   ASSERT_EQ(wall.size(), 1u);
   EXPECT_EQ(wall[0].left, -80);
   EXPECT_EQ(wall[0].right, 80);
@@ -176,16 +178,16 @@ TEST(Mdl2eTask, SendsNothingBeforeTheFirstSensorVectorThenReactsAtItsInstant) {
 }
 
 TEST(Mdl2eTask, StepsAtItsPeriodWithoutNewDataAndRunsTimersInVirtualTime) {
-  Rig rig(R"(
+  Mdl2eRig rig(R"(
 sensor ir[7]
 plan p { atom forward(100) for 100ms  atom turn(50) for 200ms  atom backward(20) }
 )");
-  rig.sensor->script(at(10), kClear);  // one vector, then silence
-  rig.ex.run_until(at(400));
+  rig.sensor->script(ms(10), kClearIr);  // one vector, then silence
+  rig.ex.run_until(ms(400));
   const auto cmds = rig.rec->commands();
   ASSERT_EQ(cmds.size(), 1u + 13u);  // at 10 ms, then every tick 30 .. 390 ms
-  EXPECT_EQ(cmds[0].time, at(10));
-  for (std::size_t k = 1; k < cmds.size(); ++k) EXPECT_EQ(cmds[k].time, at(30 * static_cast<long long>(k)));
+  EXPECT_EQ(cmds[0].time, ms(10));
+  for (std::size_t k = 1; k < cmds.size(); ++k) EXPECT_EQ(cmds[k].time, ms(30 * static_cast<long long>(k)));
   // forward until 110 ms, turn until 310 ms, then backward: as seen at the ticks.
   for (const auto& c : cmds) {
     const long long t = std::chrono::duration_cast<std::chrono::milliseconds>(c.time).count();
@@ -195,11 +197,11 @@ plan p { atom forward(100) for 100ms  atom turn(50) for 200ms  atom backward(20)
 }
 
 TEST(Mdl2eTask, TickThenVectorAtOneInstantStepsTwiceTheLastOnTheNewVector) {
-  Rig rig(kAvoid, /*ctl_priority=*/2);  // above the sensor (1): its tick runs first
-  rig.sensor->script(at(10), kClear);
-  rig.sensor->script(at(90), kWall);
-  rig.ex.run_until(at(90));
-  const auto both = rig.rec->at(at(90));
+  Mdl2eRig rig(kAvoid, /*ctl_priority=*/2);  // above the sensor (1): its tick runs first
+  rig.sensor->script(ms(10), kClearIr);
+  rig.sensor->script(ms(90), kWall);
+  rig.ex.run_until(ms(90));
+  const auto both = rig.rec->at(ms(90));
   ASSERT_EQ(both.size(), 2u);
   EXPECT_EQ(both[0].left, 100);  // the tick, on the vector of 10 ms
   EXPECT_EQ(both[1].left, -80);  // the new vector
@@ -207,19 +209,19 @@ TEST(Mdl2eTask, TickThenVectorAtOneInstantStepsTwiceTheLastOnTheNewVector) {
 }
 
 TEST(Mdl2eTask, VectorThenTickAtOneInstantStepsOnce) {
-  Rig rig(kAvoid, /*ctl_priority=*/0);  // below the sensor (1): the vector comes first
-  rig.sensor->script(at(10), kClear);
-  rig.sensor->script(at(90), kWall);
-  rig.ex.run_until(at(90));
-  const auto one = rig.rec->at(at(90));
+  Mdl2eRig rig(kAvoid, /*ctl_priority=*/0);  // below the sensor (1): the vector comes first
+  rig.sensor->script(ms(10), kClearIr);
+  rig.sensor->script(ms(90), kWall);
+  rig.ex.run_until(ms(90));
+  const auto one = rig.rec->at(ms(90));
   ASSERT_EQ(one.size(), 1u);
   EXPECT_EQ(one[0].left, -80);
   EXPECT_EQ(rig.ctl->stats().skipped_ticks, 1u);
 
   // A bad vector waiting at a tick: the tick's step is not lost, it is taken on the last good one.
-  rig.sensor->script(at(180), {1, 2, 3});
-  rig.ex.run_until(at(180));
-  const auto kept = rig.rec->at(at(180));
+  rig.sensor->script(ms(180), {1, 2, 3});
+  rig.ex.run_until(ms(180));
+  const auto kept = rig.rec->at(ms(180));
   ASSERT_EQ(kept.size(), 1u);
   EXPECT_EQ(kept[0].left, -80);
   EXPECT_EQ(rig.ctl->stats().wrong_count, 1u);
@@ -227,26 +229,26 @@ TEST(Mdl2eTask, VectorThenTickAtOneInstantStepsOnce) {
 }
 
 TEST(Mdl2eTask, ExternalBitsReactAtOnceAndThePlanEndGivesZeros) {
-  Rig rig(kAvoid);
-  rig.sensor->script(at(10), kClear);
-  rig.ex.run_until(at(100));
+  Mdl2eRig rig(kAvoid);
+  rig.sensor->script(ms(10), kClearIr);
+  rig.ex.run_until(ms(100));
   os::Message bump;
   bump.port = kExternalPort;
   bump.payload = os::Payload{0.0f, 1.0f};
   ASSERT_TRUE(rig.node.post(rig.ctl_id, bump));
   rig.ex.run_for(0ms);
-  EXPECT_EQ(rig.rec->last().time, at(100));
+  EXPECT_EQ(rig.rec->last().time, ms(100));
   EXPECT_EQ(rig.rec->last().left, -40);  // backward(40) for 100 ms
   EXPECT_EQ(rig.ctl->state().external, 1u);
   EXPECT_EQ(rig.ctl->state().active_path, "p/backward");
-  rig.ex.run_until(at(300));
+  rig.ex.run_until(ms(300));
   // Ended at 200 ms (seen at the tick of 210 ms): zeros at every tick from then on.
   std::size_t zeros = 0;
   for (const auto& c : rig.rec->commands()) {
-    if (c.time < at(210)) {
+    if (c.time < ms(210)) {
       EXPECT_NE(c.left, 0.0f);
     }
-    if (c.time >= at(210)) {
+    if (c.time >= ms(210)) {
       EXPECT_EQ(c.left, 0.0f);
       EXPECT_EQ(c.right, 0.0f);
       ++zeros;
@@ -263,9 +265,9 @@ TEST(Mdl2eTask, ExternalBitsReactAtOnceAndThePlanEndGivesZeros) {
 }
 
 TEST(Mdl2eTask, BadMessagesAreIgnoredCountedAndWarnedAtALimitedRate) {
-  Rig rig(kAvoid);
-  rig.sensor->script(at(10), kClear);
-  rig.ex.run_until(at(20));
+  Mdl2eRig rig(kAvoid);
+  rig.sensor->script(ms(10), kClearIr);
+  rig.ex.run_until(ms(20));
   const std::size_t before = rig.rec->size();
   auto post = [&](os::Port port, std::vector<float> v) {
     os::Message m;
@@ -303,7 +305,7 @@ TEST(Mdl2eTask, BadMessagesAreIgnoredCountedAndWarnedAtALimitedRate) {
 
   // The last good vector (clear) still drives; a bad one later in another interval warns again
   // and counts what it stands for.
-  rig.ex.run_until(at(1200));
+  rig.ex.run_until(ms(1200));
   EXPECT_EQ(rig.rec->last().left, 100);
   post(kSensorPort, {kNaN, 0, 0, 0, 0, 0, 0});
   EXPECT_EQ(rig.warnings("ignored"), 2u);
@@ -311,7 +313,7 @@ TEST(Mdl2eTask, BadMessagesAreIgnoredCountedAndWarnedAtALimitedRate) {
 }
 
 TEST(Mdl2eTask, TaskActionsStartSuspendResumeDeleteAndAMissingTaskIsOnlyWarned) {
-  Rig rig(R"(
+  Mdl2eRig rig(R"(
 sensor ir[7]
 plan p {
   task start logger
@@ -328,14 +330,14 @@ plan p {
   auto logger = *rig.node.create("logger", std::make_unique<Idle>(), {.autostart = false});
   auto worker = *rig.node.create("worker", std::make_unique<Idle>());
   auto victim = *rig.node.create("victim", std::make_unique<Idle>());
-  rig.sensor->script(at(10), kClear);
-  rig.ex.run_until(at(10));
+  rig.sensor->script(ms(10), kClearIr);
+  rig.ex.run_until(ms(10));
   EXPECT_EQ(rig.node.info(logger)->state, os::TaskState::kRunning);
   EXPECT_EQ(rig.node.info(worker)->state, os::TaskState::kRunning);
-  rig.ex.run_until(at(120));  // forward(10) ended at 110 ms, seen at the tick of 120 ms
+  rig.ex.run_until(ms(120));  // forward(10) ended at 110 ms, seen at the tick of 120 ms
   EXPECT_EQ(rig.node.info(worker)->state, os::TaskState::kSuspended);
   EXPECT_EQ(rig.rec->last().left, 20);
-  rig.ex.run_until(at(210));
+  rig.ex.run_until(ms(210));
   EXPECT_EQ(rig.node.info(worker)->state, os::TaskState::kRunning);
   EXPECT_FALSE(rig.node.find("victim").has_value());
   EXPECT_FALSE(rig.node.info(victim).has_value());
@@ -348,41 +350,41 @@ plan p {
 }
 
 TEST(Mdl2eTask, SuspendedItSendsNothingAndResumedItGoesOn) {
-  Rig rig(kAvoid);
-  rig.sensor->script(at(10), kClear);
-  rig.ex.run_until(at(100));
+  Mdl2eRig rig(kAvoid);
+  rig.sensor->script(ms(10), kClearIr);
+  rig.ex.run_until(ms(100));
   ASSERT_TRUE(rig.node.suspend(rig.ctl_id));
   const std::size_t before = rig.rec->size();
-  rig.sensor->script(at(150), kWall);  // queued while suspended
-  rig.ex.run_until(at(300));
+  rig.sensor->script(ms(150), kWall);  // queued while suspended
+  rig.ex.run_until(ms(300));
   EXPECT_EQ(rig.rec->size(), before);
   ASSERT_TRUE(rig.node.resume(rig.ctl_id));
   rig.ex.run_for(0ms);
   // The queued vector is handled at resume, and ticks restart one period later.
   ASSERT_EQ(rig.rec->size(), before + 1);
-  EXPECT_EQ(rig.rec->last().time, at(300));
+  EXPECT_EQ(rig.rec->last().time, ms(300));
   EXPECT_EQ(rig.rec->last().left, -80);
-  rig.ex.run_until(at(330));
+  rig.ex.run_until(ms(330));
   EXPECT_EQ(rig.rec->size(), before + 2);
-  EXPECT_EQ(rig.rec->last().time, at(330));
+  EXPECT_EQ(rig.rec->last().time, ms(330));
 }
 
 TEST(Mdl2eTask, ReplacingTheControllerAtRuntimeKeepsTheOutputFlowing) {
-  Rig rig(kAvoid);
-  for (long long t = 10; t <= 600; t += 10) rig.sensor->script(at(t), kClear);
-  rig.ex.run_until(at(300));
+  Mdl2eRig rig(kAvoid);
+  for (long long t = 10; t <= 600; t += 10) rig.sensor->script(ms(t), kClearIr);
+  rig.ex.run_until(ms(300));
   ASSERT_TRUE(rig.node.remove(rig.ctl_id));
   rig.add_controller("ctl2", R"(
 sensor ir[7]
 plan q loop { atom wheels(30, 60) }
 )");
-  rig.ex.run_until(at(600));
+  rig.ex.run_until(ms(600));
   Time last{0};
   bool seen_new = false;
   for (const auto& c : rig.rec->commands()) {
     EXPECT_LE(c.time - last, 30ms) << "gap before " << c.time.count();
     last = c.time;
-    if (c.time > at(300)) {
+    if (c.time > ms(300)) {
       EXPECT_EQ(c.left, 30);
       EXPECT_EQ(c.right, 60);
       seen_new = true;
@@ -391,17 +393,17 @@ plan q loop { atom wheels(30, 60) }
     }
   }
   EXPECT_TRUE(seen_new);
-  EXPECT_EQ(rig.rec->last().time, at(600));
+  EXPECT_EQ(rig.rec->last().time, ms(600));
 }
 
 TEST(Mdl2eTask, SpeedsAreClampedToTheLimitAndBadOptionsAreRefused) {
-  Rig rig(R"(
+  Mdl2eRig rig(R"(
 sensor ir[7]
 plan p { atom wheels(900, -2000) }
 )",
-          2, {.speed_limit = 500});
-  rig.sensor->script(at(10), kClear);
-  rig.ex.run_until(at(10));
+               2, {.speed_limit = 500});
+  rig.sensor->script(ms(10), kClearIr);
+  rig.ex.run_until(ms(10));
   EXPECT_EQ(rig.rec->last().left, 500);
   EXPECT_EQ(rig.rec->last().right, -500);
   EXPECT_EQ(rig.ctl->stats().clamped, 2u);
@@ -415,8 +417,8 @@ plan p { atom wheels(900, -2000) }
 TEST(Mdl2eTask, AProgramWithoutSensorsStartsAtItsFirstTickAndRunsUnderTheThreadExecutor) {
   kernel::ThreadExecutor ex;
   os::Node node(ex, {"bot"});
-  auto rec_task = std::make_unique<Recorder>();
-  Recorder* rec = rec_task.get();
+  auto rec_task = std::make_unique<Mdl2eRecorder>();
+  Mdl2eRecorder* rec = rec_task.get();
   auto rec_id = *node.create("rec", std::move(rec_task), {.queue_capacity = 64});
   auto c = Mdl2eTask::create(compile("plan p loop { atom forward(10) for 20ms  atom turn(5) for 20ms }"));
   ASSERT_TRUE(c);
@@ -446,7 +448,7 @@ TEST(Mdl2eTask, AProgramWithoutSensorsStartsAtItsFirstTickAndRunsUnderTheThreadE
 TEST(Mdl2eTask, StatsReadFromAnotherThreadWhileItRunsNeverGoBack) {
   kernel::ThreadExecutor ex;
   os::Node node(ex, {"bot"});
-  auto rec_id = *node.create("rec", std::make_unique<Recorder>(), {.queue_capacity = 64});
+  auto rec_id = *node.create("rec", std::make_unique<Mdl2eRecorder>(), {.queue_capacity = 64});
   auto c = Mdl2eTask::create(compile("plan p loop { atom forward(10) for 4ms  atom turn(5) for 4ms }"));
   ASSERT_TRUE(c);
   Mdl2eTask* ctl = c->get();
@@ -550,8 +552,8 @@ TEST(ControlTaskTypes, CreationErrorsNameTheProgramAndTheLineAndColumn) {
   // Runtime parameters: the limit changes, the program does not.
   auto ok = create(node, "c", "program=ok");
   ASSERT_TRUE(ok) << ok.error();
-  auto rec_task = std::make_unique<Recorder>();
-  Recorder* rec = rec_task.get();
+  auto rec_task = std::make_unique<Mdl2eRecorder>();
+  Mdl2eRecorder* rec = rec_task.get();
   ASSERT_TRUE(node.hook(*ok, *node.create("rec", std::move(rec_task))));
   ex.run_for(30ms);  // a program without sensors starts at its first tick
   EXPECT_EQ(rec->last().left, 300);
@@ -574,11 +576,11 @@ TEST(ControlTaskTypes, ShippedObstacleAvoidanceDrivesTheRobotThroughTheNode) {
   ASSERT_TRUE(register_control_task_types(registry, scenario_files()));
   kernel::VirtualTimeExecutor ex;
   os::Node node(ex, {.name = "thymio", .types = &registry});
-  auto sensor_task = std::make_unique<ScriptedSensor>();
-  ScriptedSensor* sensor = sensor_task.get();
+  auto sensor_task = std::make_unique<Mdl2eSensor>();
+  Mdl2eSensor* sensor = sensor_task.get();
   auto ir = *node.create("ir", std::move(sensor_task), os::TaskOptions{.priority = 1, .period = 30ms});
-  auto rec_task = std::make_unique<Recorder>();
-  Recorder* rec = rec_task.get();
+  auto rec_task = std::make_unique<Mdl2eRecorder>();
+  Mdl2eRecorder* rec = rec_task.get();
   auto wheels = *node.create("wheels", std::move(rec_task), {.queue_capacity = 64});
   auto logger = *node.create("obstacle_logger", std::make_unique<Idle>(), {.autostart = false});
   auto ctl = create(node, "avoid", "program=obstacle_avoidance.mdl2e speed_limit=90");
@@ -590,26 +592,26 @@ TEST(ControlTaskTypes, ShippedObstacleAvoidanceDrivesTheRobotThroughTheNode) {
 
   // IR at 30 ms intervals, from the sensor's first tick: clear, a wall in front from 300 ms to
   // 600 ms, clear again; bumped at 900 ms.
-  for (long long t = 30; t <= 1800; t += 30) sensor->script(at(t), t >= 300 && t < 600 ? kWall : kClear);
-  ex.run_until(at(30));
+  for (long long t = 30; t <= 1800; t += 30) sensor->script(ms(t), t >= 300 && t < 600 ? kWall : kClearIr);
+  ex.run_until(ms(30));
   EXPECT_EQ(node.info(logger)->state, os::TaskState::kRunning);  // task start obstacle_logger
   EXPECT_EQ(rec->last().left, 90);                               // forward(100), clamped to speed_limit=90
   EXPECT_EQ(rec->last().right, 90);
-  ex.run_until(at(300));
-  EXPECT_EQ(rec->last().time, at(300));
+  ex.run_until(ms(300));
+  EXPECT_EQ(rec->last().time, ms(300));
   EXPECT_EQ(rec->last().left, -80);  // turn(80): left
   EXPECT_EQ(rec->last().right, 80);
-  ex.run_until(at(600));
+  ex.run_until(ms(600));
   EXPECT_EQ(rec->last().left, 90);
-  ex.run_until(at(899));
+  ex.run_until(ms(899));
   os::Message bump;
   bump.port = kExternalPort;
   bump.payload = os::Payload{0.0f, 1.0f};
-  ex.run_until(at(900));
+  ex.run_until(ms(900));
   ASSERT_TRUE(node.post(*ctl, bump));
   ex.run_for(0ms);
   EXPECT_EQ(rec->last().left, -50);  // backward(50) for 500 ms
-  ex.run_until(at(1500));
+  ex.run_until(ms(1500));
   EXPECT_EQ(rec->last().left, 0);  // plan over: task suspend obstacle_logger, zeros
   EXPECT_EQ(rec->last().right, 0);
   EXPECT_EQ(node.info(logger)->state, os::TaskState::kSuspended);
@@ -636,8 +638,8 @@ TEST(ControlTaskTypes, ALongInterruptChainIsCreatedOrRefusedWhileTheRobotRuns) {
   os::Node node(ex, {.name = "bot", .types = &registry});
   auto running = create(node, "running", "program=ok");
   ASSERT_TRUE(running) << running.error();
-  auto rec_task = std::make_unique<Recorder>();
-  Recorder* rec = rec_task.get();
+  auto rec_task = std::make_unique<Mdl2eRecorder>();
+  Mdl2eRecorder* rec = rec_task.get();
   ASSERT_TRUE(node.hook(*running, *node.create("rec", std::move(rec_task))));
   ex.run_for(30ms);
   auto longer = create(node, "c2", "program=longer");

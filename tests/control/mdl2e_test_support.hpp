@@ -11,9 +11,11 @@
 #include "symb/control/mdl2e/compiler.hpp"
 #include "symb/control/mdl2e/interpreter.hpp"
 
+#include "support/virtual_time.hpp"
+
 namespace symb::control::mdl2e::testing {
 
-inline kernel::Time ms(long long v) { return std::chrono::milliseconds(v); }
+using test_support::ms;
 
 inline Program must_compile(std::string_view source) {
   auto p = compile_source(source);

@@ -18,7 +18,7 @@
 namespace symb::control::network {
 namespace {
 
-const char* kValid[] = {
+const char* kValidNetworks[] = {
     R"(# a Braitenberg perceptron
 type mlp
 inputs 7
@@ -48,7 +48,7 @@ weights
 };
 
 // "LINE:COLUMN: " at the start, both inside the text.
-bool located_inside(const std::string& error, const std::string& text) {
+bool located_inside_network(const std::string& error, const std::string& text) {
   static const std::regex shape(R"(^(\d+):(\d+): .+)");
   std::smatch m;
   if (!std::regex_search(error, m, shape)) return false;
@@ -61,7 +61,7 @@ bool located_inside(const std::string& error, const std::string& text) {
 }
 
 TEST(NetworkDescription, ValidTextsParse) {
-  auto a = parse_description(kValid[0]);
+  auto a = parse_description(kValidNetworks[0]);
   ASSERT_TRUE(a.ok()) << a.error();
   EXPECT_EQ(a->topology.kind, Kind::kMlp);
   EXPECT_EQ(a->topology.inputs, 7u);
@@ -71,12 +71,12 @@ TEST(NetworkDescription, ValidTextsParse) {
   EXPECT_FLOAT_EQ((*a->weights)[8], -1.5f);
   EXPECT_FLOAT_EQ(*a->output_scale, 500.0);
   EXPECT_EQ(a->input_scale, std::vector<float>{0.000222f});
-  auto b = parse_description(kValid[1]);
+  auto b = parse_description(kValidNetworks[1]);
   ASSERT_TRUE(b.ok()) << b.error();
   EXPECT_EQ(b->topology.kind, Kind::kElman);
   EXPECT_EQ(b->topology.activation, Activation::kSigmoid);
   EXPECT_EQ(b->input_scale.size(), 2u);
-  auto c = parse_description(kValid[2]);
+  auto c = parse_description(kValidNetworks[2]);
   ASSERT_TRUE(c.ok()) << c.error();
   EXPECT_EQ(c->topology.kind, Kind::kCtrnn);
   EXPECT_EQ(c->tau, (std::vector<float>{0.1f, 0.2f}));
@@ -118,7 +118,7 @@ TEST(NetworkDescription, MistakesAreLocated) {
     auto d = parse_description(c.text);
     ASSERT_FALSE(d.ok());
     EXPECT_EQ(d.error().rfind(c.error, 0), 0u) << d.error();
-    EXPECT_TRUE(located_inside(d.error(), c.text)) << d.error();
+    EXPECT_TRUE(located_inside_network(d.error(), c.text)) << d.error();
   }
 }
 
@@ -209,7 +209,7 @@ TEST(NetworkDescription, FourHundredMutantsRejectedWithLocatedErrors) {
   std::mt19937 rng(20261122);
   int rejected = 0, still_valid = 0;
   for (int k = 0; k < 400; ++k) {
-    const std::string base = kValid[k % 3];
+    const std::string base = kValidNetworks[k % 3];
     std::string text = mutate(base, rng);
     if (k % 4 == 3) text = mutate(text, rng);  // some get two mutations
     auto d = parse_description(text);
@@ -226,7 +226,7 @@ TEST(NetworkDescription, FourHundredMutantsRejectedWithLocatedErrors) {
       continue;
     }
     ++rejected;
-    ASSERT_TRUE(located_inside(d.error(), text)) << "mutant " << k << ": " << d.error() << "\n" << text;
+    ASSERT_TRUE(located_inside_network(d.error(), text)) << "mutant " << k << ": " << d.error() << "\n" << text;
   }
   std::cout << "network description mutants: " << rejected << " rejected with located errors, " << still_valid
             << " still valid\n";

@@ -21,6 +21,8 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 
+#include "support/virtual_time.hpp"
+
 namespace symb::control {
 namespace {
 
@@ -28,10 +30,10 @@ using namespace std::chrono_literals;
 using kernel::Time;
 using Vec = std::vector<float>;
 
-Time at(long long ms) { return std::chrono::milliseconds(ms); }
+using test_support::ms;
 
 // Sends the vector scripted for an instant at its tick of that instant.
-class ScriptedSensor : public os::Task {
+class NetworkSensor : public os::Task {
  public:
   void script(Time t, Vec v) { script_[t] = std::move(v); }
   std::vector<Time> sent() const {
@@ -54,7 +56,7 @@ class ScriptedSensor : public os::Task {
   std::vector<Time> sent_;
 };
 
-class Recorder : public os::Task {
+class NetworkRecorder : public os::Task {
  public:
   struct Entry {
     Time time;
@@ -77,7 +79,7 @@ class Recorder : public os::Task {
   std::vector<Entry> entries_;
 };
 
-const std::map<std::string, std::string, std::less<>> kFiles{
+const std::map<std::string, std::string, std::less<>> kNetworkFiles{
     {"identity.w", "# two inputs straight to two outputs\n1 0 0\n0 1 0\n"},
     {"swap.w", "0 1 0   1 0 0"},
     {"bad.w", "1 0 0\n0 1 zero\n"},
@@ -85,31 +87,31 @@ const std::map<std::string, std::string, std::less<>> kFiles{
     {"broken.net", "type mlp\nlayers 2\nweights 1 2\n  3 x\n"},
 };
 
-ControlResources files() {
+ControlResources network_files() {
   ControlResources r;
   r.read_program = [](std::string_view ref) -> kernel::Result<std::string> {
-    auto it = kFiles.find(ref);
-    if (it == kFiles.end()) return kernel::Error{"no such file"};
+    auto it = kNetworkFiles.find(ref);
+    if (it == kNetworkFiles.end()) return kernel::Error{"no such file"};
     return it->second;
   };
   return r;
 }
 
-struct Rig {
+struct NetworkRig {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry registry;
   std::unique_ptr<os::Node> node;
-  ScriptedSensor* sensor = nullptr;
-  Recorder* rec = nullptr;
+  NetworkSensor* sensor = nullptr;
+  NetworkRecorder* rec = nullptr;
   os::TaskId sensor_id, rec_id;
 
-  Rig() {
-    EXPECT_TRUE(register_control_task_types(registry, files()).ok());
+  NetworkRig() {
+    EXPECT_TRUE(register_control_task_types(registry, network_files()).ok());
     node = std::make_unique<os::Node>(ex, os::NodeConfig{.name = "bot", .types = &registry});
-    auto s = std::make_unique<ScriptedSensor>();
+    auto s = std::make_unique<NetworkSensor>();
     sensor = s.get();
     sensor_id = *node->create("ir", std::move(s), {.priority = 1, .period = 10ms});
-    auto r = std::make_unique<Recorder>();
+    auto r = std::make_unique<NetworkRecorder>();
     rec = r.get();
     rec_id = *node->create("rec", std::move(r), {.queue_capacity = 64});
   }
@@ -127,8 +129,8 @@ struct Rig {
     EXPECT_TRUE(node->hook(*id, rec_id).ok());
     return *id;
   }
-  std::vector<Recorder::Entry> on_port(os::Port p) const {
-    std::vector<Recorder::Entry> out;
+  std::vector<NetworkRecorder::Entry> on_port(os::Port p) const {
+    std::vector<NetworkRecorder::Entry> out;
     for (auto& e : rec->entries())
       if (e.port == p) out.push_back(e);
     return out;
@@ -136,16 +138,16 @@ struct Rig {
 };
 
 TEST(NetworkTask, PerceptronWheelsFollowHandComputedOutputs) {
-  Rig rig;
+  NetworkRig rig;
   rig.network("mlp", "net", "inputs=2 layers=2 input_scale=1 weights=identity.w");
-  rig.sensor->script(at(20), {0.5f, -0.2f});
-  rig.sensor->script(at(40), {2.0f, 0.0f});
-  rig.ex.run_until(at(19));
+  rig.sensor->script(ms(20), {0.5f, -0.2f});
+  rig.sensor->script(ms(40), {2.0f, 0.0f});
+  rig.ex.run_until(ms(19));
   EXPECT_TRUE(rig.rec->entries().empty()) << "nothing before the first input";
-  rig.ex.run_until(at(50));
+  rig.ex.run_until(ms(50));
   const auto cmds = rig.rec->entries();
   ASSERT_EQ(cmds.size(), 2u);  // one step per input, output=wheels sends port 0 only
-  EXPECT_EQ(cmds[0].time, at(20));
+  EXPECT_EQ(cmds[0].time, ms(20));
   EXPECT_EQ(cmds[0].port, 0);
   EXPECT_NEAR(cmds[0].values[0], 500 * std::tanh(0.5), 1e-3);
   EXPECT_NEAR(cmds[0].values[1], 500 * std::tanh(-0.2), 1e-3);
@@ -154,10 +156,10 @@ TEST(NetworkTask, PerceptronWheelsFollowHandComputedOutputs) {
 }
 
 TEST(NetworkTask, DefaultInputScaleIsTheIrRange) {
-  Rig rig;
+  NetworkRig rig;
   rig.network("mlp", "net", "inputs=1 layers=\"1 1\" activation=linear weights=\"1 0 1 0\" output=raw");
-  rig.sensor->script(at(10), {4505.0f});
-  rig.ex.run_until(at(10));
+  rig.sensor->script(ms(10), {4505.0f});
+  rig.ex.run_until(ms(10));
   const auto out = rig.on_port(0);
   ASSERT_EQ(out.size(), 1u);
   ASSERT_EQ(out[0].values.size(), 1u);
@@ -165,16 +167,16 @@ TEST(NetworkTask, DefaultInputScaleIsTheIrRange) {
 }
 
 TEST(NetworkTask, ClampsNeverSendsNaNAndIgnoresBadInput) {
-  Rig rig;
+  NetworkRig rig;
   const auto id = rig.network("mlp", "net",
                               "inputs=2 layers=2 activation=linear input_scale=1 output_scale=1000 speed_limit=300 "
                               "weights=identity.w");
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  rig.sensor->script(at(10), {1.0f, -0.1f});
-  rig.sensor->script(at(20), {nan, 0.0f});         // ignored
-  rig.sensor->script(at(30), {1.0f, 1.0f, 1.0f});  // wrong length: ignored
-  rig.sensor->script(at(40), {1e30f, -1e30f});
-  rig.ex.run_until(at(50));
+  rig.sensor->script(ms(10), {1.0f, -0.1f});
+  rig.sensor->script(ms(20), {nan, 0.0f});         // ignored
+  rig.sensor->script(ms(30), {1.0f, 1.0f, 1.0f});  // wrong length: ignored
+  rig.sensor->script(ms(40), {1e30f, -1e30f});
+  rig.ex.run_until(ms(50));
   const auto cmds = rig.rec->entries();
   ASSERT_EQ(cmds.size(), 2u);
   EXPECT_FLOAT_EQ(cmds[0].values[0], 300.0f);
@@ -193,19 +195,19 @@ TEST(NetworkTask, ClampsNeverSendsNaNAndIgnoresBadInput) {
 }
 
 TEST(NetworkTask, GenomeChangesAtRuntimeInlineAndFromAFile) {
-  Rig rig;
+  NetworkRig rig;
   const auto id = rig.network("mlp", "net", "inputs=2 layers=2 input_scale=1 weights=identity.w");
-  for (int k = 1; k <= 4; ++k) rig.sensor->script(at(10 * k), {0.5f, 0.0f});
-  rig.ex.run_until(at(10));
+  for (int k = 1; k <= 4; ++k) rig.sensor->script(ms(10 * k), {0.5f, 0.0f});
+  rig.ex.run_until(ms(10));
   ASSERT_TRUE(rig.node->set_parameter(id, "weights", "swap.w").ok());
-  rig.ex.run_until(at(20));
+  rig.ex.run_until(ms(20));
   ASSERT_TRUE(rig.node->set_parameter(id, "weights", "0 0 0.5  0 0 -0.5").ok());
-  rig.ex.run_until(at(30));
+  rig.ex.run_until(ms(30));
   // Refused genomes leave the last one in place.
   // The schema accepts both strings; the task refuses them on its own context (and logs why).
   EXPECT_TRUE(rig.node->set_parameter(id, "weights", "1 2 3").ok());
   EXPECT_TRUE(rig.node->set_parameter(id, "weights", "bad.w").ok());
-  rig.ex.run_until(at(40));
+  rig.ex.run_until(ms(40));
   const auto cmds = rig.rec->entries();
   ASSERT_EQ(cmds.size(), 4u);
   EXPECT_NEAR(cmds[0].values[0], 500 * std::tanh(0.5), 1e-3);  // identity
@@ -227,7 +229,7 @@ TEST(NetworkTask, GenomeChangesAtRuntimeInlineAndFromAFile) {
 }
 
 TEST(NetworkTask, BadParametersAndDescriptionsRejectedWithLocatedErrors) {
-  Rig rig;
+  NetworkRig rig;
   struct Case {
     const char* type;
     const char* params;
@@ -264,18 +266,18 @@ TEST(NetworkTask, BadParametersAndDescriptionsRejectedWithLocatedErrors) {
   // Structure stays fixed at runtime.
   const auto id = rig.network("mlp", "net", "");
   (void)rig.node->set_parameter(id, "layers", "3 2");
-  rig.ex.run_until(at(5));
+  rig.ex.run_until(ms(5));
   bool said = false;
   for (const auto& e : rig.node->log().since(0)) said |= e.text.find("keeps its layers") != std::string::npos;
   EXPECT_TRUE(said);
 }
 
 TEST(NetworkTask, DescribedNetworkAndItsWeightOverride) {
-  Rig rig;
+  NetworkRig rig;
   rig.network("network", "net", "description=braitenberg.net");
   rig.network("network", "swapped", "description=braitenberg.net weights=swap.w");
-  rig.sensor->script(at(10), {0.5f, 0.0f});
-  rig.ex.run_until(at(10));
+  rig.sensor->script(ms(10), {0.5f, 0.0f});
+  rig.ex.run_until(ms(10));
   const auto cmds = rig.rec->entries();
   ASSERT_EQ(cmds.size(), 2u);
   std::vector<float> lefts{cmds[0].values[0], cmds[1].values[0]};
@@ -285,7 +287,7 @@ TEST(NetworkTask, DescribedNetworkAndItsWeightOverride) {
 }
 
 TEST(NetworkTask, ProbesEveryLayerAndTheOutputs) {
-  Rig rig;
+  NetworkRig rig;
   std::mutex mu;
   std::map<std::string, std::size_t> sizes;
   rig.node->set_probe_sink([&](const os::ProbeSample& s) {
@@ -294,8 +296,8 @@ TEST(NetworkTask, ProbesEveryLayerAndTheOutputs) {
   });
   rig.network("elman", "el", "inputs=2 layers=\"3 2\"");
   rig.network("ctrnn", "ct", "inputs=2 layers=\"4 2\"");
-  rig.sensor->script(at(10), {1.0f, 2.0f});
-  rig.ex.run_until(at(10));
+  rig.sensor->script(ms(10), {1.0f, 2.0f});
+  rig.ex.run_until(ms(10));
   std::lock_guard lock(mu);
   const std::map<std::string, std::size_t> expect{{"el:activations/input", 2},
                                                   {"el:activations/hidden1", 3},
@@ -308,14 +310,14 @@ TEST(NetworkTask, ProbesEveryLayerAndTheOutputs) {
 }
 
 TEST(NetworkTask, CircuitOneNetworkFeedsAnother) {
-  Rig rig;
+  NetworkRig rig;
   // Stage 1: 2 inputs -> 2 raw outputs (tanh of each input); stage 2 reads them and drives.
   const auto a = rig.network("mlp", "stage1", "inputs=2 layers=2 input_scale=1 weights=identity.w output=both");
   const auto b = *rig.create("mlp", "stage2", "inputs=2 layers=2 input_scale=1 input_port=1 weights=swap.w");
   ASSERT_TRUE(rig.node->hook(a, b, {.port = 1}).ok());
   ASSERT_TRUE(rig.node->hook(b, rig.rec_id).ok());
-  rig.sensor->script(at(10), {0.5f, -1.0f});
-  rig.ex.run_until(at(10));
+  rig.sensor->script(ms(10), {0.5f, -1.0f});
+  rig.ex.run_until(ms(10));
   const auto cmds = rig.rec->entries();
   // stage1 (port 0 wheels, port 1 raw) and stage2 (port 0 wheels).
   ASSERT_EQ(cmds.size(), 3u);
@@ -331,14 +333,14 @@ TEST(NetworkTask, CircuitOneNetworkFeedsAnother) {
 }
 
 TEST(NetworkTask, ReplacedWhileInputsKeepComingNoStaleNoNaN) {
-  Rig rig;
+  NetworkRig rig;
   auto old_id = rig.network("mlp", "ctl", "inputs=2 layers=2 input_scale=1 weights=identity.w");
-  for (int k = 1; k <= 30; ++k) rig.sensor->script(at(10 * k), {0.1f * static_cast<float>(k % 5), 0.3f});
-  rig.ex.run_until(at(145));
+  for (int k = 1; k <= 30; ++k) rig.sensor->script(ms(10 * k), {0.1f * static_cast<float>(k % 5), 0.3f});
+  rig.ex.run_until(ms(145));
   // Swap: the new network is hooked before the old one goes, so no input instant is left out.
   const auto new_id = rig.network("ctrnn", "ctl2", "inputs=2 layers=\"2 2\" weights=\"1 0 0 0 0  0 1 0 0 0\"");
   ASSERT_TRUE(rig.node->remove(old_id).ok());
-  rig.ex.run_until(at(300));
+  rig.ex.run_until(ms(300));
   const auto sent = rig.sensor->sent();
   ASSERT_EQ(sent.size(), 30u);
   const auto cmds = rig.rec->entries();
@@ -362,7 +364,7 @@ class Pulse : public os::Task {
 TEST(NetworkTask, GenomesWrittenWhileItRunsUnderTheThreadExecutor) {
   kernel::ThreadExecutor ex;
   os::TaskTypeRegistry registry;
-  ASSERT_TRUE(register_control_task_types(registry, files()).ok());
+  ASSERT_TRUE(register_control_task_types(registry, network_files()).ok());
   os::Node node(ex, {.name = "bot", .types = &registry});
   std::mutex mu;
   std::size_t probes = 0;
@@ -370,8 +372,8 @@ TEST(NetworkTask, GenomesWrittenWhileItRunsUnderTheThreadExecutor) {
     std::lock_guard lock(mu);
     ++probes;
   });
-  auto rec_task = std::make_unique<Recorder>();
-  Recorder* rec = rec_task.get();
+  auto rec_task = std::make_unique<NetworkRecorder>();
+  NetworkRecorder* rec = rec_task.get();
   const auto rec_id = *node.create("rec", std::move(rec_task), {.queue_capacity = 64});
   const auto pulse = *node.create("pulse", std::make_unique<Pulse>(), {.period = 1ms});
   auto a = os::parse_param_assignments("inputs=2 layers=\"3 2\" input_scale=1");
@@ -401,14 +403,14 @@ TEST(NetworkTask, GenomesWrittenWhileItRunsUnderTheThreadExecutor) {
 }
 
 TEST(NetworkTask, OutputsInZeroOneAreCentredForTheWheels) {
-  Rig rig;
+  NetworkRig rig;
   // A ctrnn at rest: rates sigma(theta) = sigma(1), sigma(-1); wheels 500 (2 sigma - 1) = 500 tanh(theta / 2).
   rig.network("ctrnn", "ct", "inputs=1 layers=\"2 2\" weights=\"0 0 0 1  0 0 0 -1\"");
   // A sigmoid perceptron: 500 (2 sigma(x) - 1).
   rig.network("mlp", "sg", "inputs=1 layers=2 activation=sigmoid input_scale=1 weights=\"1 0  -1 0\"");
-  rig.sensor->script(at(10), {0.0f});
-  rig.sensor->script(at(20), {2.0f});
-  rig.ex.run_until(at(20));
+  rig.sensor->script(ms(10), {0.0f});
+  rig.sensor->script(ms(20), {2.0f});
+  rig.ex.run_until(ms(20));
   const auto cmds = rig.rec->entries();
   ASSERT_EQ(cmds.size(), 4u);
   std::vector<Vec> seen;

@@ -15,7 +15,7 @@
 namespace symb::control::snn {
 namespace {
 
-std::vector<AerEvent> random_events(std::size_t n, std::uint64_t seed) {
+std::vector<AerEvent> random_aedat_events(std::size_t n, std::uint64_t seed) {
   kernel::RandomStream r(seed);
   std::vector<AerEvent> e(n);
   std::uint32_t t = 0;
@@ -47,7 +47,7 @@ TEST(AedatWriter, HeaderAndRecordsAreJaerLayout) {
 TEST(AedatReader, RoundTripIsBitIdentical) {
   const std::vector<std::string> comments{"Symbricator spike raster", "", "  indented", "module 3 = linda"};
   for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{20000}}) {
-    const auto events = random_events(n, n + 5);
+    const auto events = random_aedat_events(n, n + 5);
     std::string f = aedat_header(comments);
     // Records may be appended in pieces, as a run writes them.
     append_aedat_records(f, std::span(events).first(n / 2));
@@ -93,7 +93,7 @@ TEST(AedatReader, JaerStyleHeaderIsRead) {
 }
 
 TEST(AedatReader, RoundTripThroughARealFile) {
-  const auto events = random_events(5000, 77);
+  const auto events = random_aedat_events(5000, 77);
   std::string f = aedat_header(std::vector<std::string>{"written by snn_aedat_test"});
   append_aedat_records(f, events);
   const auto path = std::filesystem::temp_directory_path() /
@@ -153,7 +153,7 @@ TEST(AedatReader, HeaderOnlyIsValid) {
 TEST(AedatReader, RandomMutationsNeverCrash) {
   kernel::RandomStream r(11);
   std::string base = aedat_header(std::vector<std::string>{"a", "bb"});
-  append_aedat_records(base, random_events(20, 3));
+  append_aedat_records(base, random_aedat_events(20, 3));
   std::size_t accepted = 0;
   for (int i = 0; i < 1000; ++i) {
     std::string f = base.substr(0, r.below(base.size() + 1));

@@ -241,7 +241,7 @@ TEST(LindaGenomeParser, MalformedInputsAreRejectedWithTheirLocation) {
 }
 
 // The example's tokens with their offsets, for token edits.
-std::vector<std::pair<std::size_t, std::size_t>> tokens_of(const std::string& text) {
+std::vector<std::pair<std::size_t, std::size_t>> token_spans(const std::string& text) {
   std::vector<std::pair<std::size_t, std::size_t>> out;
   std::size_t i = 0;
   while (i < text.size()) {
@@ -258,7 +258,7 @@ std::vector<std::pair<std::size_t, std::size_t>> tokens_of(const std::string& te
 
 TEST(LindaGenomeParser, TokenEditsAreRejectedWithALocationOrGiveAValidGenome) {
   const std::string base = kExample;
-  const auto tokens = tokens_of(base);
+  const auto tokens = token_spans(base);
   const std::vector<std::string> junk = {"-1",   "1e9", "nan", "zz",   "*",  "class", "99", "0", "light", "do",
                                          "when", "up",  "-0",  "1*zz", "64", "FS",    "\t", "#", "gene",  "2.5e-3"};
   kernel::RandomStream random(42);

@@ -21,6 +21,8 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 
+#include "support/virtual_time.hpp"
+
 namespace symb::control {
 namespace {
 
@@ -28,10 +30,10 @@ using namespace std::chrono_literals;
 using kernel::Time;
 using snn::AerEvent;
 
-Time at(long long ms) { return std::chrono::milliseconds(ms); }
+using test_support::ms;
 
 // Keeps every message: numbers, or the events of an AER packet.
-class Recorder : public os::Task {
+class SnnRecorder : public os::Task {
  public:
   struct Entry {
     Time time;
@@ -84,34 +86,34 @@ std::string grown_relay(float weight) {
          std::to_string(weight) + " delay 2\n";
 }
 
-const std::map<std::string, std::string, std::less<>> kFiles{
+const std::map<std::string, std::string, std::less<>> kSnnFiles{
     {"relay.genome", kRelayGenome},
     {"broken.genome", "grid 3 1\nticks 0\nseed at 0 0 class XX\n"},
 };
 
-ControlResources files() {
+ControlResources snn_files() {
   ControlResources r;
   r.read_program = [](std::string_view ref) -> kernel::Result<std::string> {
-    auto it = kFiles.find(ref);
-    if (it == kFiles.end()) return kernel::Error{"no such file"};
+    auto it = kSnnFiles.find(ref);
+    if (it == kSnnFiles.end()) return kernel::Error{"no such file"};
     return it->second;
   };
   return r;
 }
 
-struct Rig {
+struct SnnRig {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry registry;
   std::unique_ptr<os::Node> node;
-  Recorder* rec = nullptr;
+  SnnRecorder* rec = nullptr;
   os::TaskId rec_id;
   std::vector<os::ProbeSample> probes;
   std::vector<std::vector<float>> probe_values;
 
-  Rig() {
-    EXPECT_TRUE(register_control_task_types(registry, files()).ok());
+  SnnRig() {
+    EXPECT_TRUE(register_control_task_types(registry, snn_files()).ok());
     node = std::make_unique<os::Node>(ex, os::NodeConfig{.name = "bot", .seed = 7, .types = &registry});
-    auto r = std::make_unique<Recorder>();
+    auto r = std::make_unique<SnnRecorder>();
     rec = r.get();
     rec_id = *node->create("rec", std::move(r), {.queue_capacity = 256});
   }
@@ -143,7 +145,7 @@ snn::GrownNetwork relay_network() {
 }
 
 TEST(SpikingNetworkTask, SpikesLeaveAsAerWithModuleBitsAndStepTimes) {
-  Rig rig;
+  SnnRig rig;
   SpikingNetworkTaskOptions o;
   o.module = 5;
   auto task = SpikingNetworkTask::create(relay_network(), o);
@@ -151,7 +153,7 @@ TEST(SpikingNetworkTask, SpikesLeaveAsAerWithModuleBitsAndStepTimes) {
   const auto id = *rig.node->create("net", std::move(task).value(), {.period = 10ms});
   ASSERT_TRUE(rig.node->hook(id, rig.rec_id).ok());
   rig.post(id, os::Payload{20.0f});  // channel 0 held at 20
-  rig.ex.run_until(at(500));
+  rig.ex.run_until(ms(500));
 
   // The reference: the same network stepped by hand with the same input.
   auto ref = snn::SpikingNetwork::create(relay_network().spec);
@@ -172,7 +174,7 @@ TEST(SpikingNetworkTask, SpikesLeaveAsAerWithModuleBitsAndStepTimes) {
 }
 
 TEST(SpikingNetworkTask, AerInputEventsPulseTheirChannelAtTheirMillisecond) {
-  Rig rig;
+  SnnRig rig;
   SpikingNetworkTaskOptions o;
   o.pulse = 200;  // one event makes neuron 0 fire at the next step
   auto task = SpikingNetworkTask::create(relay_network(), o);
@@ -180,7 +182,7 @@ TEST(SpikingNetworkTask, AerInputEventsPulseTheirChannelAtTheirMillisecond) {
   auto* raw = task.value().get();
   const auto id = *rig.node->create("net", std::move(task).value(), {.period = 10ms});
   ASSERT_TRUE(rig.node->hook(id, rig.rec_id).ok());
-  rig.ex.run_until(at(20));
+  rig.ex.run_until(ms(20));
   // At 20 ms: events for 35 ms and 72 ms ahead, one 5 ms in the past (late), one for channel 9
   // (no such channel) and one 5 s ahead (too far): two dropped.
   rig.post(id, snn::aer_payload({{snn::aer_address(0, 0), 35'000},
@@ -188,7 +190,7 @@ TEST(SpikingNetworkTask, AerInputEventsPulseTheirChannelAtTheirMillisecond) {
                                  {snn::aer_address(3, 0), 15'000},
                                  {snn::aer_address(0, 9), 40'000},
                                  {snn::aer_address(0, 0), 5'020'000}}));
-  rig.ex.run_until(at(200));
+  rig.ex.run_until(ms(200));
   std::vector<std::uint32_t> fired;
   for (const AerEvent& e : rig.rec->events(kAllSpikesPort))
     if (snn::aer_neuron(e.address) == 0) fired.push_back(e.timestamp_us / 1000);
@@ -201,7 +203,7 @@ TEST(SpikingNetworkTask, AerInputEventsPulseTheirChannelAtTheirMillisecond) {
 }
 
 TEST(SpikingNetworkTask, BadInputIsCountedAndNothingBreaks) {
-  Rig rig;
+  SnnRig rig;
   auto task = SpikingNetworkTask::create(relay_network(), {});
   ASSERT_TRUE(task.ok());
   auto* raw = task.value().get();
@@ -210,7 +212,7 @@ TEST(SpikingNetworkTask, BadInputIsCountedAndNothingBreaks) {
   rig.post(id, os::Payload{nan});
   rig.post(id, os::Payload{1e9f});
   rig.post(id, os::Payload{5.0f, 1.0f, 2.0f, 3.0f});  // extra channels: ignored values, accepted
-  rig.ex.run_until(at(100));
+  rig.ex.run_until(ms(100));
   const SpikingNetworkStats s = raw->stats();
   EXPECT_EQ(s.ignored, 2u);
   EXPECT_EQ(s.current_vectors, 1u);
@@ -233,13 +235,13 @@ TEST(SpikingNetworkTask, CreationRejectsBadNetworksAndOptions) {
 }
 
 TEST(LindaType, GrowsFromAGenomeFileOrInlineTextAndRegrowsAtRuntime) {
-  Rig rig;
+  SnnRig rig;
   std::vector<std::vector<float>> layouts;
   rig.node->set_probe_sink([&layouts](const os::ProbeSample& s) {
     if (s.channel == "layout") layouts.emplace_back(s.values.begin(), s.values.end());
   });
   const auto id = rig.make("linda", "net", "genome=relay.genome");
-  rig.ex.run_until(at(50));
+  rig.ex.run_until(ms(50));
   ASSERT_EQ(layouts.size(), 1u);
   auto first = snn::layout_from_values(layouts[0]);
   ASSERT_TRUE(first.ok()) << (first ? "" : first.error());
@@ -248,7 +250,7 @@ TEST(LindaType, GrowsFromAGenomeFileOrInlineTextAndRegrowsAtRuntime) {
 
   // Regrown at runtime from inline text: now the input cell has grown a synapse to the output.
   ASSERT_TRUE(rig.node->set_parameter(id, "genome", grown_relay(35)).ok());
-  rig.ex.run_until(at(100));
+  rig.ex.run_until(ms(100));
   ASSERT_EQ(layouts.size(), 2u);
   auto second = snn::layout_from_values(layouts[1]);
   ASSERT_TRUE(second.ok());
@@ -257,9 +259,9 @@ TEST(LindaType, GrowsFromAGenomeFileOrInlineTextAndRegrowsAtRuntime) {
   EXPECT_FLOAT_EQ(second->spec.synapses[0].weight, 35.0f);
 
   // A broken genome is refused with its location; the grown network goes on.
-  rig.ex.run_until(at(110));
+  rig.ex.run_until(ms(110));
   ASSERT_TRUE(rig.node->set_parameter(id, "genome", "broken.genome").ok());  // applied on the task's context
-  rig.ex.run_until(at(150));
+  rig.ex.run_until(ms(150));
   EXPECT_EQ(layouts.size(), 2u);
   bool located = false;
   for (const auto& e : rig.node->log().since(0))
@@ -270,7 +272,7 @@ TEST(LindaType, GrowsFromAGenomeFileOrInlineTextAndRegrowsAtRuntime) {
 }
 
 TEST(LindaType, CreationErrorsNameTheGenomeAndTheLine) {
-  Rig rig;
+  SnnRig rig;
   auto a = os::parse_param_assignments("genome=broken.genome");
   ASSERT_TRUE(a.ok());
   auto id = rig.node->create("linda", "net", *a);
@@ -290,16 +292,16 @@ TEST(IzhikevichType, ReferenceExampleRunsAndIsDeterministic) {
   auto run = [](std::uint64_t node_seed) {
     kernel::VirtualTimeExecutor ex;
     os::TaskTypeRegistry registry;
-    EXPECT_TRUE(register_control_task_types(registry, files()).ok());
+    EXPECT_TRUE(register_control_task_types(registry, snn_files()).ok());
     os::Node node(ex, os::NodeConfig{.name = "bot", .seed = node_seed, .types = &registry});
-    auto r = std::make_unique<Recorder>();
-    Recorder* rec = r.get();
+    auto r = std::make_unique<SnnRecorder>();
+    SnnRecorder* rec = r.get();
     const auto rec_id = *node.create("rec", std::move(r), {.queue_capacity = 256});
     auto a = os::parse_param_assignments("example=reference_2003");
     auto id = node.create("izhikevich", "net", *a);
     EXPECT_TRUE(id.ok()) << (id ? "" : id.error());
     EXPECT_TRUE(node.hook(*id, rec_id).ok());
-    ex.run_until(at(1000));
+    ex.run_until(ms(1000));
     return rec->events(kAllSpikesPort);
   };
   const auto a = run(1), b = run(1), c = run(2);
@@ -311,23 +313,23 @@ TEST(IzhikevichType, ReferenceExampleRunsAndIsDeterministic) {
 }
 
 TEST(SpikeEncoder, CurrentCodingScalesAndClamps) {
-  Rig rig;
+  SnnRig rig;
   const auto id = rig.make("spike_encoder", "enc", "coding=current gain=40 input_scale=0.001");
   rig.post(id, os::Payload{0.0f, 500.0f, 1000.0f, 4000.0f, -10.0f});
-  rig.ex.run_until(at(1));
+  rig.ex.run_until(ms(1));
   const auto e = rig.rec->entries();
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0].values, (std::vector<float>{0.0f, 20.0f, 40.0f, 40.0f, 0.0f}));
 }
 
 TEST(SpikeEncoder, RateCodingGivesPoissonCountsAtTheCodedRate) {
-  Rig rig;
+  SnnRig rig;
   const auto id = rig.make("spike_encoder", "enc", "coding=rate max_rate=400 window=100ms input_scale=1");
   for (int k = 0; k < 50; ++k) {
-    rig.ex.run_until(at(100 * k));
+    rig.ex.run_until(ms(100 * k));
     rig.post(id, os::Payload{0.0f, 0.25f, 1.0f});
   }
-  rig.ex.run_until(at(5000));
+  rig.ex.run_until(ms(5000));
   std::size_t counts[3] = {0, 0, 0};
   for (const AerEvent& e : rig.rec->events(0)) {
     ASSERT_LT(snn::aer_neuron(e.address), 3u);
@@ -340,7 +342,7 @@ TEST(SpikeEncoder, RateCodingGivesPoissonCountsAtTheCodedRate) {
 }
 
 TEST(SpikeDecoder, RatesOverTheWindowBecomeClampedWheelCommands) {
-  Rig rig;
+  SnnRig rig;
   const auto id = rig.make("spike_decoder", "dec", "channels=2 gain=10 offset=-100 window=100ms speed_limit=450");
   // 100 ms before 100 ms: channel 0 fires 5 times (50 Hz), channel 1 40 times (400 Hz).
   std::vector<AerEvent> events;
@@ -349,10 +351,10 @@ TEST(SpikeDecoder, RatesOverTheWindowBecomeClampedWheelCommands) {
   for (int k = 0; k < 40; ++k)
     events.push_back({snn::aer_address(0, 1), static_cast<std::uint32_t>(1'000 + 2'000 * k)});
   events.push_back({snn::aer_address(0, 7), 5'000});  // channel beyond 2: not counted
-  rig.ex.run_until(at(85));
+  rig.ex.run_until(ms(85));
   rig.post(id, snn::aer_payload(events));
   rig.post(id, os::Payload{1.0f});  // not a packet: ignored
-  rig.ex.run_until(at(90));
+  rig.ex.run_until(ms(90));
   const auto cmds = rig.rec->entries();
   ASSERT_EQ(cmds.size(), 3u);  // at 30, 60, 90 ms (a period after creation, then every period)
   EXPECT_EQ(cmds[0].values, (std::vector<float>{-100.0f, -100.0f}));  // silent: the offset
@@ -366,7 +368,7 @@ TEST(SpikeDecoder, RatesOverTheWindowBecomeClampedWheelCommands) {
 TEST(AerAcrossNodes, SpikesCrossAByteLinkAndDriveTheOtherNodesNetwork) {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry registry;
-  ASSERT_TRUE(register_control_task_types(registry, files()).ok());
+  ASSERT_TRUE(register_control_task_types(registry, snn_files()).ok());
   os::Node a(ex, os::NodeConfig{.name = "a", .seed = 1, .types = &registry});
   os::Node b(ex, os::NodeConfig{.name = "b", .seed = 2, .types = &registry});
   auto make = [](os::Node& node, std::string_view type, std::string name, std::string_view params) {
@@ -418,10 +420,10 @@ TEST(AerAcrossNodes, SpikesCrossAByteLinkAndDriveTheOtherNodesNetwork) {
   ASSERT_TRUE(net_b_task.ok());
   auto* net_b_raw = net_b_task.value().get();
   const auto net_b = *b.create("net", std::move(net_b_task).value(), {.period = 10ms});
-  auto rec_a = std::make_unique<Recorder>();
-  auto rec_b = std::make_unique<Recorder>();
-  Recorder* sent = rec_a.get();
-  Recorder* got = rec_b.get();
+  auto rec_a = std::make_unique<SnnRecorder>();
+  auto rec_b = std::make_unique<SnnRecorder>();
+  SnnRecorder* sent = rec_a.get();
+  SnnRecorder* got = rec_b.get();
   const auto rec_a_id = *a.create("rec", std::move(rec_a), {.queue_capacity = 256});
   const auto rec_b_id = *b.create("rec", std::move(rec_b), {.queue_capacity = 256});
   ASSERT_TRUE(a.hook(net_a, rec_a_id, port1).ok());
@@ -435,7 +437,7 @@ TEST(AerAcrossNodes, SpikesCrossAByteLinkAndDriveTheOtherNodesNetwork) {
   os::Message current;
   current.payload = os::Payload{20.0f};
   ASSERT_TRUE(a.post(net_a, current).ok());
-  ex.run_until(at(1000));
+  ex.run_until(ms(1000));
 
   const std::vector<AerEvent> out_a = sent->events(kOutputSpikesPort);
   ASSERT_GT(out_a.size(), 10u);

@@ -69,7 +69,7 @@ class Variant final : public os::Task {
   std::function<std::vector<float>(std::span<const float>)> rule_;
 };
 
-class Wheels final : public os::Task {
+class ArbiterWheels final : public os::Task {
  public:
   std::vector<std::pair<os::TaskId, std::vector<float>>> seen;  // not the source: the arbiter forwards
   std::size_t non_finite = 0;
@@ -89,14 +89,14 @@ struct Bench {
   std::unique_ptr<os::Node> node = std::make_unique<os::Node>(executor, os::NodeConfig{.name = "bench"});
   os::TaskId ir, judge, wheels_id;
   ArbiterTask* arbiter = nullptr;
-  Wheels* wheels = nullptr;
+  ArbiterWheels* wheels = nullptr;
 
   explicit Bench(ArbiterOptions options) {
     ir = *node->create("ir", std::make_unique<Ir>(), {.priority = 3, .period = 30ms});
     auto a = std::make_unique<ArbiterTask>(options);
     arbiter = a.get();
     judge = *node->create("judge", std::move(a), {.priority = 1, .queue_capacity = 32});
-    auto w = std::make_unique<Wheels>();
+    auto w = std::make_unique<ArbiterWheels>();
     wheels = w.get();
     wheels_id = *node->create("wheels", std::move(w), {.queue_capacity = 32});
     EXPECT_TRUE(node->hook(ir, judge).ok());

@@ -32,7 +32,7 @@ class TickingIr final : public os::Task {
 };
 
 // Counts the wheel commands per sender.
-class CountingWheels final : public os::Task {
+class EmbryoCountingWheels final : public os::Task {
  public:
   std::size_t from(os::TaskId id) const {
     return static_cast<std::size_t>(std::count(sources_.begin(), sources_.end(), id));
@@ -61,7 +61,7 @@ struct PlainRobot {
   kernel::VirtualTimeExecutor executor;
   os::TaskTypeRegistry registry;
   std::unique_ptr<os::Node> node;
-  CountingWheels* wheels = nullptr;
+  EmbryoCountingWheels* wheels = nullptr;
   os::TaskId controller;
 
   PlainRobot() {
@@ -77,7 +77,7 @@ struct PlainRobot {
     const os::PortSpec wheels_in{0, "wheels", robot::layout::kWheelCommand};
     auto ir = node->create("ir", std::make_unique<TickingIr>(),
                            {.priority = 3, .period = 30ms, .ports = os::PortDeclaration{{}, {ir_out}}});
-    auto w = std::make_unique<CountingWheels>();
+    auto w = std::make_unique<EmbryoCountingWheels>();
     wheels = w.get();
     auto wid =
         node->create("wheels", std::move(w), {.queue_capacity = 32, .ports = os::PortDeclaration{{wheels_in}, {}}});

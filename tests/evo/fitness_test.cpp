@@ -94,7 +94,7 @@ class Recorder : public os::Task {
   std::vector<std::vector<float>> values_;
 };
 
-struct Rig {
+struct FitnessRig {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry registry;
   std::unique_ptr<os::Node> node;
@@ -102,7 +102,7 @@ struct Rig {
   Recorder* rec = nullptr;
   FitnessTask* task = nullptr;
 
-  explicit Rig(std::string_view params) {
+  explicit FitnessRig(std::string_view params) {
     EXPECT_TRUE(register_evo_task_types(registry, {}).ok());
     node = std::make_unique<os::Node>(ex, os::NodeConfig{.name = "bot", .types = &registry});
     auto a = os::parse_param_assignments(params);
@@ -125,7 +125,7 @@ struct Rig {
 };
 
 TEST(FitnessTask, OneStepPerReadingWithTheLatestCommand) {
-  Rig rig("formula=one_plus_one");
+  FitnessRig rig("formula=one_plus_one");
   rig.post({0, 0, 0, 0, 0, 0, 0});  // no command yet: wheels count as stopped
   rig.post({250, 150});             // a command: no step
   rig.post({0, 901, 0, 0, 0, 0, 0});
@@ -146,7 +146,7 @@ TEST(FitnessTask, OneStepPerReadingWithTheLatestCommand) {
 // every=N: one report per N readings, [sum, steps, window sum, N]; the sum and step count are the
 // same as at every=1, and changing `every` at runtime takes effect at the next report.
 TEST(FitnessTask, EveryNthStepReportsTheWindowSinceTheLast) {
-  Rig rig("formula=one_plus_one every=3");
+  FitnessRig rig("formula=one_plus_one every=3");
   rig.post({500, 500});
   for (int i = 0; i < 7; ++i) rig.post({0, 0, 0, 0, 0, 0, 0});  // 1 per step: straight, nothing seen
   auto out = rig.rec->values();
@@ -167,7 +167,7 @@ TEST(FitnessTask, EveryNthStepReportsTheWindowSinceTheLast) {
 TEST(FitnessTask, EachFormulaByName) {
   for (const char* f : {"floreano_mondada", "one_plus_one", "liolib"}) {
     SCOPED_TRACE(f);
-    Rig rig(std::string("formula=") + f);
+    FitnessRig rig(std::string("formula=") + f);
     rig.post({250, 150});
     rig.post({0, 901, 0, 0, 0, 0, 0});
     const auto out = rig.rec->values();
@@ -177,7 +177,7 @@ TEST(FitnessTask, EachFormulaByName) {
 }
 
 TEST(FitnessTask, ResetZeroesTheSum) {
-  Rig rig("");
+  FitnessRig rig("");
   rig.post({500, 500});
   rig.post({0, 0, 0, 0, 0, 0, 0});
   rig.post({0, 0, 0, 0, 0, 0, 0});
@@ -192,7 +192,7 @@ TEST(FitnessTask, ResetZeroesTheSum) {
 }
 
 TEST(FitnessTask, FormulaChangesAtRuntimeAndABadOneIsIgnored) {
-  Rig rig("formula=one_plus_one");
+  FitnessRig rig("formula=one_plus_one");
   ASSERT_TRUE(rig.node->set_parameter(rig.fitness, "formula", "nolfi").ok());  // checked by the task
   rig.ex.run_for(1ms);
   rig.post({250, 150});
@@ -207,7 +207,7 @@ TEST(FitnessTask, FormulaChangesAtRuntimeAndABadOneIsIgnored) {
 }
 
 TEST(FitnessTask, AStaleCommandCountsAsStoppedWheels) {
-  Rig rig("command_timeout=50ms");
+  FitnessRig rig("command_timeout=50ms");
   rig.post({500, 500});
   rig.ex.run_for(100ms);  // the wheels' watchdog would have stopped the robot by now
   rig.post({0, 0, 0, 0, 0, 0, 0});
@@ -217,7 +217,7 @@ TEST(FitnessTask, AStaleCommandCountsAsStoppedWheels) {
 }
 
 TEST(FitnessTask, BadMessagesAreIgnored) {
-  Rig rig("");
+  FitnessRig rig("");
   rig.post({500, 500});
   rig.post({7});                       // one number: neither
   rig.post({0, 0, 0, 0, 0, 0, 0}, 1);  // another port
@@ -244,7 +244,7 @@ TEST(FitnessTask, BadParametersAreRefusedAtCreation) {
 // The fitness report has a layout of its own: hooking it into a task that reads wheel commands is
 // refused at hook time, naming both ends.
 TEST(FitnessTaskOnNode, ItsReportIntoTheWheelsIsRefused) {
-  Rig rig("formula=one_plus_one");
+  FitnessRig rig("formula=one_plus_one");
   os::TaskOptions o;
   o.ports = os::PortDeclaration{{{0, "wheels", robot::layout::kWheelCommand}}, {}};
   auto wheels = rig.node->create("wheels", std::make_unique<Recorder>(), o);

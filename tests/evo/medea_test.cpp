@@ -31,7 +31,7 @@ MedeaOptions small(std::size_t genes = 4) {
   return o;
 }
 
-Medea make(MedeaOptions o = small(), std::uint64_t seed = 1) {
+Medea make_medea(MedeaOptions o = small(), std::uint64_t seed = 1) {
   auto m = Medea::create(o, kernel::RandomStream(seed, 0));
   EXPECT_TRUE(m.ok()) << (m ? "" : m.error());
   return std::move(m).value();
@@ -63,7 +63,7 @@ TEST(Medea, RejectsBadOptions) {
 }
 
 TEST(Medea, StartsActiveWithARandomGenomeInTheBounds) {
-  const Medea m = make();
+  const Medea m = make_medea();
   EXPECT_TRUE(m.active());
   ASSERT_EQ(m.genome().values.size(), 4u);
   for (double v : m.genome().values) {
@@ -71,12 +71,12 @@ TEST(Medea, StartsActiveWithARandomGenomeInTheBounds) {
     EXPECT_LE(v, 4);
   }
   EXPECT_EQ(m.genome().sigma, 0.1);
-  EXPECT_NE(make(small(), 1).genome(), make(small(), 2).genome());
-  EXPECT_EQ(make(small(), 3).genome(), make(small(), 3).genome());
+  EXPECT_NE(make_medea(small(), 1).genome(), make_medea(small(), 2).genome());
+  EXPECT_EQ(make_medea(small(), 3).genome(), make_medea(small(), 3).genome());
 }
 
 TEST(Medea, InactiveForALifetimeWhenNothingWasHeardThenActiveAgain) {
-  Medea m = make();
+  Medea m = make_medea();
   m.end_of_lifetime();
   EXPECT_FALSE(m.active());
   EXPECT_EQ(m.counts().inactive_lifetimes, 1u);
@@ -91,7 +91,7 @@ TEST(Medea, InactiveForALifetimeWhenNothingWasHeardThenActiveAgain) {
 }
 
 TEST(Medea, KeepsTheLatestGenomePerSenderAndEmptiesTheListAtTheEndOfALifetime) {
-  Medea m = make();
+  Medea m = make_medea();
   ASSERT_TRUE(m.receive(1, constant(1)).ok());
   ASSERT_TRUE(m.receive(1, constant(2)).ok());  // replaces sender 1's
   EXPECT_EQ(m.received_count(), 1u);
@@ -107,7 +107,7 @@ TEST(Medea, PicksUniformlyAmongTheSenders) {
   // Four senders with genes 0, 1, 2, 3 (far apart next to sigma 0.01): 4000 picks.
   MedeaOptions o = small(2);
   o.sigma = 0.01;
-  Medea m = make(o, 5);
+  Medea m = make_medea(o, 5);
   std::array<int, 4> picked{};
   const int kPicks = 4000;
   for (int i = 0; i < kPicks; ++i) {
@@ -125,7 +125,7 @@ TEST(Medea, PicksUniformlyAmongTheSenders) {
 TEST(Medea, MutatesWithTheGenomesOwnSigma) {
   // The picked genome's sigma (not the options') sets the noise: mean |noise| = sigma sqrt(2/pi).
   MedeaOptions o = small(1000);
-  Medea m = make(o, 9);
+  Medea m = make_medea(o, 9);
   for (double sigma : {0.01, 1.0}) {
     ASSERT_TRUE(m.receive(1, constant(0, 1000, sigma)).ok());
     m.end_of_lifetime();
@@ -139,7 +139,7 @@ TEST(Medea, MutatesWithTheGenomesOwnSigma) {
 TEST(Medea, SigmaRuleMultipliesByOnePlusOrMinusFactorWithItsProbability) {
   MedeaOptions o = small();
   o.sigma_probability = 1;
-  Medea m = make(o, 11);
+  Medea m = make_medea(o, 11);
   int up = 0, down = 0;
   for (int i = 0; i < 400; ++i) {
     ASSERT_TRUE(m.receive(1, constant(0, 4, 0.1)).ok());
@@ -161,7 +161,7 @@ TEST(Medea, SigmaRuleMultipliesByOnePlusOrMinusFactorWithItsProbability) {
 }
 
 TEST(Medea, CountsAndIgnoresMalformedGenomes) {
-  Medea m = make();
+  Medea m = make_medea();
   EXPECT_FALSE(m.receive(1, constant(0, 5)).ok());  // wrong length
   RealGenome other = constant(0);
   other.lo = -8;
@@ -180,7 +180,7 @@ TEST(Medea, CountsAndIgnoresMalformedGenomes) {
 }
 
 TEST(Medea, RefusesMoreSendersThanItKeeps) {
-  Medea m = make();
+  Medea m = make_medea();
   for (std::uint64_t s = 0; s < kMaxMedeaSenders; ++s) ASSERT_TRUE(m.receive(s, constant(0)).ok());
   EXPECT_FALSE(m.receive(kMaxMedeaSenders, constant(0)).ok());
   EXPECT_TRUE(m.receive(0, constant(1)).ok());  // a known sender is still updated
@@ -189,7 +189,7 @@ TEST(Medea, RefusesMoreSendersThanItKeeps) {
 }
 
 TEST(Medea, ReceivesGenomeTextsAndReusesARepeatedOne) {
-  Medea m = make();
+  Medea m = make_medea();
   const std::string text = to_text(Genome{constant(0.5)});
   ASSERT_TRUE(m.receive_text(3, text).ok());
   ASSERT_TRUE(m.receive_text(3, text).ok());
@@ -208,13 +208,13 @@ TEST(Medea, ReceivesGenomeTextsAndReusesARepeatedOne) {
 using namespace std::chrono_literals;
 
 // A sensor that sends 7 IR readings every 30 ms: all zero (open space).
-class OpenSpaceSensor : public os::Task {
+class MedeaOpenSpace : public os::Task {
  protected:
   void on_tick() override { send(0, {0, 0, 0, 0, 0, 0, 0}); }
 };
 
 // Counts the wheel commands.
-class Wheels : public os::Task {
+class MedeaWheels : public os::Task {
  public:
   std::uint64_t commands() const {
     std::lock_guard lock(mu_);
@@ -262,9 +262,9 @@ TEST(MedeaTask, BroadcastsRunsGoesInactiveAndComesBackWhenItHearsAGenome) {
   ASSERT_TRUE(control::register_control_task_types(registry, {}).ok());
   ASSERT_TRUE(register_evo_task_types(registry, {}).ok());
   os::Node node(ex, os::NodeConfig{.name = "bot", .seed = 3, .types = &registry});
-  (void)*node.create("ir", std::make_unique<OpenSpaceSensor>(), {.priority = 3, .period = 30ms});
-  auto w = std::make_unique<Wheels>();
-  Wheels* wheels = w.get();
+  (void)*node.create("ir", std::make_unique<MedeaOpenSpace>(), {.priority = 3, .period = 30ms});
+  auto w = std::make_unique<MedeaWheels>();
+  MedeaWheels* wheels = w.get();
   (void)*node.create("wheels", std::move(w), {.queue_capacity = 8});
   auto r = std::make_unique<FakeRadio>();
   FakeRadio* radio = r.get();

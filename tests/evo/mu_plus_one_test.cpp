@@ -26,13 +26,13 @@ namespace {
 
 using namespace std::chrono_literals;
 
-double sphere(const RealGenome& g) {
+double mu_sphere(const RealGenome& g) {
   double s = 0;
   for (double v : g.values) s += (v - 1) * (v - 1);
   return -s;  // higher is better; best at all genes = 1
 }
 
-MuPlusOne make(MuPlusOneOptions o = {}, std::uint64_t seed = 7) {
+MuPlusOne make_mu(MuPlusOneOptions o = {}, std::uint64_t seed = 7) {
   auto a = MuPlusOne::create(o, kernel::RandomStream(seed));
   EXPECT_TRUE(a.ok()) << (a ? "" : a.error());
   return std::move(a).value();
@@ -45,12 +45,12 @@ TEST(MuPlusOne, ImprovesOnANoisySphere) {
     SCOPED_TRACE(seed);
     MuPlusOneOptions o;
     o.sigma = 0.3;
-    MuPlusOne a = make(o, seed);
+    MuPlusOne a = make_mu(o, seed);
     kernel::RandomStream noise(seed + 100);
-    for (std::size_t k = 0; k < o.mu; ++k) a.report(sphere(a.next()) + 0.5 * noise.normal());
-    const double start = sphere(a.best().genome);
-    for (int k = 0; k < 3000; ++k) a.report(sphere(a.next()) + 0.5 * noise.normal());
-    const double end = sphere(a.best().genome);
+    for (std::size_t k = 0; k < o.mu; ++k) a.report(mu_sphere(a.next()) + 0.5 * noise.normal());
+    const double start = mu_sphere(a.best().genome);
+    for (int k = 0; k < 3000; ++k) a.report(mu_sphere(a.next()) + 0.5 * noise.normal());
+    const double end = mu_sphere(a.best().genome);
     std::printf("seed %llu: best member %.2f -> %.2f\n", static_cast<unsigned long long>(seed), start, end);
     EXPECT_GT(end, 0.1 * start);  // fitness is negative
     EXPECT_GT(end, -5.0);
@@ -66,7 +66,7 @@ TEST(MuPlusOne, ImprovesOnANoisySphere) {
 TEST(MuPlusOne, FirstMuEvaluationsFillThePopulationWithRandomGenomes) {
   MuPlusOneOptions o;
   o.mu = 6;
-  MuPlusOne a = make(o);
+  MuPlusOne a = make_mu(o);
   std::set<std::vector<double>> seen;
   for (std::size_t k = 0; k < o.mu; ++k) {
     EXPECT_EQ(a.candidate_kind(), MuCandidate::kInitial);
@@ -87,7 +87,7 @@ TEST(MuPlusOne, FirstMuEvaluationsFillThePopulationWithRandomGenomes) {
 TEST(MuPlusOne, ReevaluationRateAveragingAndReplacementAsSpecified) {
   MuPlusOneOptions o;
   o.rho = 0.3;
-  MuPlusOne a = make(o, 11);
+  MuPlusOne a = make_mu(o, 11);
   kernel::RandomStream noise(99);
   std::uint64_t reevaluations = 0, children = 0, replacements = 0;
   for (int k = 0; k < 20000; ++k) {
@@ -133,7 +133,7 @@ TEST(MuPlusOne, ReplaceModeKeepsOnlyTheNewestMeasurement) {
   MuPlusOneOptions o;
   o.rho = 0.5;
   o.reevaluation = Reevaluation::kReplace;
-  MuPlusOne a = make(o, 3);
+  MuPlusOne a = make_mu(o, 3);
   kernel::RandomStream noise(5);
   std::uint64_t checked = 0;
   for (int k = 0; k < 2000; ++k) {
@@ -155,7 +155,7 @@ TEST(MuPlusOne, ChildIsAParentMutatedWithSigma) {
   o.crossover = 0;
   o.rho = 0;
   o.selection = ParentSelection::kUniform;
-  MuPlusOne a = make(o, 5);
+  MuPlusOne a = make_mu(o, 5);
   for (std::size_t k = 0; k < o.mu; ++k) a.report(0.0);
   ASSERT_EQ(a.candidate_kind(), MuCandidate::kChild);
   const RealGenome& parent = a.population()[a.candidate_index()].genome;
@@ -167,11 +167,11 @@ TEST(MuPlusOne, ChildIsAParentMutatedWithSigma) {
 }
 
 TEST(MuPlusOne, SameStreamSameRun) {
-  MuPlusOne a = make({}, 3), b = make({}, 3), c = make({}, 4);
+  MuPlusOne a = make_mu({}, 3), b = make_mu({}, 3), c = make_mu({}, 4);
   for (int k = 0; k < 500; ++k) {
-    a.report(sphere(a.next()));
-    b.report(sphere(b.next()));
-    c.report(sphere(c.next()));
+    a.report(mu_sphere(a.next()));
+    b.report(mu_sphere(b.next()));
+    c.report(mu_sphere(c.next()));
   }
   EXPECT_EQ(a.best().genome, b.best().genome);
   EXPECT_EQ(a.best().fitness, b.best().fitness);
@@ -195,7 +195,7 @@ TEST(MuPlusOne, BadOptionsAndNanFitness) {
   MuPlusOneOptions o;
   o.mu = 2;
   o.rho = 0;
-  MuPlusOne a = make(o);
+  MuPlusOne a = make_mu(o);
   a.report(std::nan(""));  // the worst fitness, not a NaN that nothing beats
   a.report(1.0);
   a.report(-1e9);  // a child better than the NaN member replaces it
@@ -206,12 +206,12 @@ TEST(MuPlusOne, BadOptionsAndNanFitness) {
 // --- the task ----------------------------------------------------------------------------------
 
 // A sensor that sends 7 IR readings every 30 ms: all zero (open space).
-class OpenSpaceSensor : public os::Task {
+class MuOpenSpace : public os::Task {
  protected:
   void on_tick() override { send(0, {0, 0, 0, 0, 0, 0, 0}); }
 };
 
-class CountingWheels : public os::Task {
+class MuCountingWheels : public os::Task {
  public:
   std::set<os::TaskId> senders() const {
     std::lock_guard lock(mu_);
@@ -233,15 +233,15 @@ struct MuRig {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry registry;
   std::unique_ptr<os::Node> node;
-  CountingWheels* wheels = nullptr;
+  MuCountingWheels* wheels = nullptr;
   kernel::Result<os::TaskId> evo = kernel::Error{"not made"};
 
   explicit MuRig(std::string_view evo_params, std::uint64_t seed = 1) {
     EXPECT_TRUE(control::register_control_task_types(registry, {}).ok());
     EXPECT_TRUE(register_evo_task_types(registry, {}).ok());
     node = std::make_unique<os::Node>(ex, os::NodeConfig{.name = "bot", .seed = seed, .types = &registry});
-    const auto ir = *node->create("ir", std::make_unique<OpenSpaceSensor>(), {.priority = 3, .period = 30ms});
-    auto w = std::make_unique<CountingWheels>();
+    const auto ir = *node->create("ir", std::make_unique<MuOpenSpace>(), {.priority = 3, .period = 30ms});
+    auto w = std::make_unique<MuCountingWheels>();
     wheels = w.get();
     (void)*node->create("wheels", std::move(w), {.queue_capacity = 8});
     auto f = node->create("fitness", "fitness", std::vector<os::ParamAssignment>{{"formula", "one_plus_one", 1}});
@@ -315,8 +315,8 @@ TEST(MuPlusOneTask, RecoveryIsNotCountedAndEveryEvaluationIsRecorded) {
   ASSERT_TRUE(control::register_control_task_types(registry, {}).ok());
   ASSERT_TRUE(register_evo_task_types(registry, {}).ok());
   os::Node node(ex, os::NodeConfig{.name = "bot", .seed = 3, .types = &registry});
-  const auto ir = *node.create("ir", std::make_unique<OpenSpaceSensor>(), {.priority = 3, .period = 30ms});
-  (void)*node.create("wheels", std::make_unique<CountingWheels>(), {.queue_capacity = 8});
+  const auto ir = *node.create("ir", std::make_unique<MuOpenSpace>(), {.priority = 3, .period = 30ms});
+  (void)*node.create("wheels", std::make_unique<MuCountingWheels>(), {.queue_capacity = 8});
   auto f = node.create("fitness", "fitness", std::vector<os::ParamAssignment>{});
   ASSERT_TRUE(f.ok());
   ASSERT_TRUE(node.hook(ir, *f).ok());
@@ -367,8 +367,8 @@ TEST(MuPlusOneTask, WaitsForAMissingFitnessTask) {
   ASSERT_TRUE(control::register_control_task_types(registry, {}).ok());
   ASSERT_TRUE(register_evo_task_types(registry, {}).ok());
   os::Node node(ex, os::NodeConfig{.name = "bot", .seed = 3, .types = &registry});
-  const auto ir = *node.create("ir", std::make_unique<OpenSpaceSensor>(), {.priority = 3, .period = 30ms});
-  (void)*node.create("wheels", std::make_unique<CountingWheels>(), {.queue_capacity = 8});
+  const auto ir = *node.create("ir", std::make_unique<MuOpenSpace>(), {.priority = 3, .period = 30ms});
+  (void)*node.create("wheels", std::make_unique<MuCountingWheels>(), {.queue_capacity = 8});
   auto made = MuPlusOneTask::create({});
   ASSERT_TRUE(made.ok());
   MuPlusOneTask* task = made->get();

@@ -27,13 +27,13 @@ namespace {
 
 using namespace std::chrono_literals;
 
-double sphere(const RealGenome& g) {
+double one_sphere(const RealGenome& g) {
   double s = 0;
   for (double v : g.values) s += (v - 1) * (v - 1);
   return -s;  // higher is better; best at all genes = 1
 }
 
-OnePlusOne make(OnePlusOneOptions o = {}, std::uint64_t seed = 7) {
+OnePlusOne make_one(OnePlusOneOptions o = {}, std::uint64_t seed = 7) {
   auto a = OnePlusOne::create(o, kernel::RandomStream(seed));
   EXPECT_TRUE(a.ok()) << (a ? "" : a.error());
   return std::move(a).value();
@@ -43,12 +43,12 @@ OnePlusOne make(OnePlusOneOptions o = {}, std::uint64_t seed = 7) {
 // fail, failures double sigma, re-evaluation replaces the lucky score. On a noisy sphere it gets
 // close; measured (seeds 1..3, 3000 evaluations, noise sd 0.5): -143/-100/-116 -> -23/-25/-20.
 TEST(OnePlusOne, ImprovesOnANoisySphere) {
-  OnePlusOne a = make();
+  OnePlusOne a = make_one();
   EXPECT_EQ(a.candidate_kind(), Candidate::kFirst);
   kernel::RandomStream noise(17);
-  const double start = sphere(a.next());
-  for (int k = 0; k < 3000; ++k) a.report(sphere(a.next()) + 0.5 * noise.normal());
-  EXPECT_GT(sphere(a.champion()), 0.35 * start) << "start " << start;  // fitness is negative
+  const double start = one_sphere(a.next());
+  for (int k = 0; k < 3000; ++k) a.report(one_sphere(a.next()) + 0.5 * noise.normal());
+  EXPECT_GT(one_sphere(a.champion()), 0.35 * start) << "start " << start;  // fitness is negative
   EXPECT_GT(a.counts().successes, 50u);
   for (double v : a.champion().values) {
     EXPECT_GE(v, -4.0);
@@ -59,21 +59,21 @@ TEST(OnePlusOne, ImprovesOnANoisySphere) {
 // Without noise the rule crawls, as the reference's does: after a success sigma = sigma_min, a
 // step of 1e-4 wins about every other time, so sigma seldom grows. Measured: -107 -> -72 in 3000.
 TEST(OnePlusOne, NoiseFreeFitnessCrawlsWithTinySteps) {
-  OnePlusOne a = make();
-  const double start = sphere(a.next());
-  for (int k = 0; k < 3000; ++k) a.report(sphere(a.next()));
-  EXPECT_DOUBLE_EQ(a.champion_fitness(), sphere(a.champion()));  // re-evaluations are exact
+  OnePlusOne a = make_one();
+  const double start = one_sphere(a.next());
+  for (int k = 0; k < 3000; ++k) a.report(one_sphere(a.next()));
+  EXPECT_DOUBLE_EQ(a.champion_fitness(), one_sphere(a.champion()));  // re-evaluations are exact
   EXPECT_GT(a.champion_fitness(), start);
   EXPECT_LT(a.champion_fitness(), 0.35 * start) << "the crawl: still far from the optimum";
   EXPECT_GT(a.counts().successes, a.counts().challengers / 3);
 }
 
 TEST(OnePlusOne, SameStreamSameRun) {
-  OnePlusOne a = make({}, 3), b = make({}, 3), c = make({}, 4);
+  OnePlusOne a = make_one({}, 3), b = make_one({}, 3), c = make_one({}, 4);
   for (int k = 0; k < 500; ++k) {
-    a.report(sphere(a.next()));
-    b.report(sphere(b.next()));
-    c.report(sphere(c.next()));
+    a.report(one_sphere(a.next()));
+    b.report(one_sphere(b.next()));
+    c.report(one_sphere(c.next()));
   }
   EXPECT_EQ(a.champion(), b.champion());
   EXPECT_EQ(a.champion_fitness(), b.champion_fitness());
@@ -82,7 +82,7 @@ TEST(OnePlusOne, SameStreamSameRun) {
 
 TEST(OnePlusOne, StepSizeRuleAndReevaluationAsSpecified) {
   OnePlusOneOptions o;
-  OnePlusOne a = make(o, 11);
+  OnePlusOne a = make_one(o, 11);
   kernel::RandomStream noise(99);
   std::uint64_t failures = 0, reevaluations_after_failure = 0, successes = 0;
   a.report(0.0);  // the first genome: fitness 0
@@ -128,7 +128,7 @@ TEST(OnePlusOne, ChallengerIsTheChampionMutatedWithItsSigma) {
   OnePlusOneOptions o;
   o.sigma = 0.01;
   o.sigma_min = 1e-4;
-  OnePlusOne a = make(o, 5);
+  OnePlusOne a = make_one(o, 5);
   a.report(1.0);
   ASSERT_EQ(a.candidate_kind(), Candidate::kChallenger);
   double largest = 0;
@@ -148,7 +148,7 @@ TEST(OnePlusOne, BadOptionsAndNanFitness) {
   o = {};
   o.genes = 0;
   EXPECT_FALSE(OnePlusOne::create(o, kernel::RandomStream(1)).ok());
-  OnePlusOne a = make();
+  OnePlusOne a = make_one();
   a.report(std::nan(""));  // the worst fitness, not a NaN that nothing beats
   a.report(-1e9);
   EXPECT_EQ(a.counts().successes, 1u);
@@ -157,13 +157,13 @@ TEST(OnePlusOne, BadOptionsAndNanFitness) {
 // --- the task ----------------------------------------------------------------------------------
 
 // A sensor that sends 7 IR readings every 30 ms: all zero (open space).
-class OpenSpaceSensor : public os::Task {
+class OneOpenSpace : public os::Task {
  protected:
   void on_tick() override { send(0, {0, 0, 0, 0, 0, 0, 0}); }
 };
 
 // Keeps the commands it gets and which task sent them.
-class Wheels : public os::Task {
+class OneWheels : public os::Task {
  public:
   std::set<os::TaskId> senders() const {
     std::lock_guard lock(mu_);
@@ -187,19 +187,19 @@ class Wheels : public os::Task {
   std::uint64_t commands_ = 0;
 };
 
-struct Rig {
+struct OneRig {
   kernel::VirtualTimeExecutor ex;
   os::TaskTypeRegistry registry;
   std::unique_ptr<os::Node> node;
-  Wheels* wheels = nullptr;
+  OneWheels* wheels = nullptr;
   os::TaskId evo;
 
-  explicit Rig(std::string_view evo_params, std::uint64_t seed = 1) {
+  explicit OneRig(std::string_view evo_params, std::uint64_t seed = 1) {
     EXPECT_TRUE(control::register_control_task_types(registry, {}).ok());
     EXPECT_TRUE(register_evo_task_types(registry, {}).ok());
     node = std::make_unique<os::Node>(ex, os::NodeConfig{.name = "bot", .seed = seed, .types = &registry});
-    const auto ir = *node->create("ir", std::make_unique<OpenSpaceSensor>(), {.priority = 3, .period = 30ms});
-    auto w = std::make_unique<Wheels>();
+    const auto ir = *node->create("ir", std::make_unique<OneOpenSpace>(), {.priority = 3, .period = 30ms});
+    auto w = std::make_unique<OneWheels>();
     wheels = w.get();
     (void)*node->create("wheels", std::move(w), {.queue_capacity = 8});
     auto f = node->create("fitness", "fitness", std::vector<os::ParamAssignment>{{"formula", "one_plus_one", 1}});
@@ -220,7 +220,7 @@ struct Probes {
 };
 
 TEST(OnePlusOneTask, ReplacesTheControllerTaskAndImprovesInOpenSpace) {
-  Rig rig("evaluation=300ms recovery=60ms");
+  OneRig rig("evaluation=300ms recovery=60ms");
   auto probes = std::make_shared<Probes>();
   rig.node->set_probe_sink([probes](const os::ProbeSample& s) {
     std::lock_guard lock(probes->mu);
@@ -257,7 +257,7 @@ TEST(OnePlusOneTask, ReplacesTheControllerTaskAndImprovesInOpenSpace) {
 
 TEST(OnePlusOneTask, SameNodeSeedSameEvolution) {
   auto run = [](std::uint64_t seed) {
-    Rig rig("evaluation=300ms recovery=60ms", seed);
+    OneRig rig("evaluation=300ms recovery=60ms", seed);
     auto trace = std::make_shared<std::vector<float>>();
     rig.node->set_probe_sink([trace](const os::ProbeSample& s) {
       if (s.channel == "fitness") trace->push_back(s.values[0]);
@@ -287,8 +287,8 @@ OpenSpaceRun run_in_open_space(const std::vector<os::ParamAssignment>& fitness_p
   EXPECT_TRUE(control::register_control_task_types(registry, {}).ok());
   EXPECT_TRUE(register_evo_task_types(registry, {}).ok());
   os::Node node(ex, os::NodeConfig{.name = "bot", .seed = 5, .types = &registry});
-  const auto ir = *node.create("ir", std::make_unique<OpenSpaceSensor>(), {.priority = 3, .period = 30ms});
-  (void)*node.create("wheels", std::make_unique<Wheels>());
+  const auto ir = *node.create("ir", std::make_unique<OneOpenSpace>(), {.priority = 3, .period = 30ms});
+  (void)*node.create("wheels", std::make_unique<OneWheels>());
   const auto f = *node.create("fitness", "fitness", fitness_params);
   EXPECT_TRUE(node.hook(ir, f).ok());
   OnePlusOneTaskOptions o;
@@ -373,8 +373,8 @@ TEST(OnePlusOneTask, WaitsForMissingTasks) {
   ex.run_for(3s);
   EXPECT_FALSE(node.find("controller").has_value()) << "nothing to hook: no candidate yet";
   // The tasks arrive late: evolution starts at its next tick.
-  const auto ir = *node.create("ir", std::make_unique<OpenSpaceSensor>(), {.period = 30ms});
-  (void)*node.create("wheels", std::make_unique<Wheels>());
+  const auto ir = *node.create("ir", std::make_unique<OneOpenSpace>(), {.period = 30ms});
+  (void)*node.create("wheels", std::make_unique<OneWheels>());
   const auto f = *node.create("fitness", "fitness", {});
   ASSERT_TRUE(node.hook(ir, f).ok());
   ex.run_for(1500ms);

@@ -24,8 +24,8 @@ constexpr double kWheelBase = 0.1;
 
 // A body (the plant, 100 Hz odometry) and an ActuatorTask (50 Hz) on one virtual-time node, with
 // a collector for the task's status reports.
-struct Rig {
-  explicit Rig(ActuatorTask::Options o = {}, bool wheel_odometry = false) {
+struct ActuatorRig {
+  explicit ActuatorRig(ActuatorTask::Options o = {}, bool wheel_odometry = false) {
     o.wheel_base = kWheelBase;
     if (wheel_odometry) o.odometry = OdometryFormat::kWheelDistances;
     auto p = std::make_unique<Plant>(drive, kWheelBase, wheel_odometry);
@@ -69,7 +69,7 @@ struct Rig {
 };
 
 TEST(ActuatorTask, DrivesOneMetreAndReportsCompletion) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(1.0, 0.2, 7)));
   auto done = rig.run_until_event(GoalEvent::kCompleted, 10s);
   ASSERT_TRUE(done);
@@ -103,7 +103,7 @@ TEST(ActuatorTask, TheSameGoalGivesTheSameRunBitForBit) {
   kernel::Time at[2];
   double x[2];
   for (int i = 0; i < 2; ++i) {
-    Rig rig;
+    ActuatorRig rig;
     ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(0.5, 0.25)));
     ASSERT_TRUE(rig.run_until_event(GoalEvent::kCompleted, 10s));
     at[i] = rig.time_of_first(GoalEvent::kCompleted);
@@ -114,7 +114,7 @@ TEST(ActuatorTask, TheSameGoalGivesTheSameRunBitForBit) {
 }
 
 TEST(ActuatorTask, TurnsNinetyDegreesInPlace) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::turn(kPi / 2, 0.1)));
   auto done = rig.run_until_event(GoalEvent::kCompleted, 5s);
   ASSERT_TRUE(done);
@@ -128,7 +128,7 @@ TEST(ActuatorTask, TurnsNinetyDegreesInPlace) {
 }
 
 TEST(ActuatorTask, TurnsOneAndAHalfTurnsClockwiseThroughTheWrapOfThePose) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::turn(-3 * kPi, 0.2)));
   auto done = rig.run_until_event(GoalEvent::kCompleted, 10s);
   ASSERT_TRUE(done);
@@ -136,7 +136,7 @@ TEST(ActuatorTask, TurnsOneAndAHalfTurnsClockwiseThroughTheWrapOfThePose) {
 }
 
 TEST(ActuatorTask, DrivesWithWheelDistanceOdometry) {
-  Rig rig({}, /*wheel_odometry=*/true);
+  ActuatorRig rig({}, /*wheel_odometry=*/true);
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(-0.3, 0.15)));
   auto done = rig.run_until_event(GoalEvent::kCompleted, 10s);
   ASSERT_TRUE(done);
@@ -148,7 +148,7 @@ TEST(ActuatorTask, DrivesWithWheelDistanceOdometry) {
 }
 
 TEST(ActuatorTask, ANewGoalAbortsTheOldOneWithAStatus) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(1.0, 0.2, 1)));
   rig.ex.run_for(1s);
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::turn(kPi / 2, 0.1, 2)));
@@ -173,7 +173,7 @@ TEST(ActuatorTask, ANewGoalAbortsTheOldOneWithAStatus) {
 }
 
 TEST(ActuatorTask, SilentOdometryStopsTheWheels) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(1.0, 0.2)));
   rig.ex.run_for(1s);
   EXPECT_NE(rig.drive->wheel_speeds().first, 0.0);
@@ -192,7 +192,7 @@ TEST(ActuatorTask, SilentOdometryStopsTheWheels) {
 }
 
 TEST(ActuatorTask, AGoalWithoutAnyOdometryNeverMovesTheWheels) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(rig.node.suspend(rig.plant_id));
   rig.ex.run_for(1s);
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(1.0, 0.2)));
@@ -201,7 +201,7 @@ TEST(ActuatorTask, AGoalWithoutAnyOdometryNeverMovesTheWheels) {
 }
 
 TEST(ActuatorTask, StopZeroesTheWheelsAtOnce) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::hold_speed(0.15, 9)));
   rig.ex.run_for(1s);
   // Goals travel as floats: 0.15 arrives as 0.15f.
@@ -224,7 +224,7 @@ TEST(ActuatorTask, StopZeroesTheWheelsAtOnce) {
 }
 
 TEST(ActuatorTask, DeletingTheTaskStopsTheWheels) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::hold_speed(0.1)));
   rig.ex.run_for(500ms);
   EXPECT_NE(rig.drive->wheel_speeds().first, 0.0);
@@ -233,7 +233,7 @@ TEST(ActuatorTask, DeletingTheTaskStopsTheWheels) {
 }
 
 TEST(ActuatorTask, BadGoalsAreRejectedAndTheGoalInProgressGoesOn) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(0.5, 0.2, 1)));
   rig.ex.run_for(100ms);
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(1, 0, 2)));  // no speed
@@ -263,7 +263,7 @@ TEST(ActuatorTask, BadGoalsAreRejectedAndTheGoalInProgressGoesOn) {
 TEST(ActuatorTask, SpeedsAboveTheLimitAreClampedWithAWarning) {
   ActuatorTask::Options o;
   o.max_speed = 0.3;
-  Rig rig(o);
+  ActuatorRig rig(o);
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(0.5, 5.0)));
   ASSERT_TRUE(rig.run_until_event(GoalEvent::kCompleted, 10s));
   for (const auto& [l, r] : rig.drive->commands()) EXPECT_LE(std::max(std::abs(l), std::abs(r)), 0.3 + 1e-6);
@@ -274,7 +274,7 @@ TEST(ActuatorTask, SpeedsAboveTheLimitAreClampedWithAWarning) {
 }
 
 TEST(ActuatorTask, ADriveThatRefusesCommandsAbortsTheGoal) {
-  Rig rig;
+  ActuatorRig rig;
   ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(1.0, 0.2)));
   rig.ex.run_for(200ms);
   rig.drive->fail = true;
@@ -297,7 +297,7 @@ class GoalSender : public os::Task {
 };
 
 TEST(ActuatorTask, TakesGoalsFromHookedTasks) {
-  Rig rig;
+  ActuatorRig rig;
   auto sender = *rig.node.create("planner", std::make_unique<GoalSender>(DriveGoal::turn(-kPi / 2, 0.1, 5)),
                                  {.autostart = false});
   ASSERT_TRUE(rig.node.hook(sender, rig.id, {.policy = os::QueuePolicy::kRefuse}));

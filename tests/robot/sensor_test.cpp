@@ -19,15 +19,15 @@ using testing::Collector;
 
 std::vector<ChannelSpec> ir_channels() { return {{"ir0", "raw", 0, 1023}, {"ir1", "raw", 0, 1023}}; }
 
-std::size_t warnings_containing(os::Node& node, std::string_view text) {
+std::size_t sensor_warnings_containing(os::Node& node, std::string_view text) {
   std::size_t n = 0;
   for (const auto& e : node.log().since(0))
     if (e.level == os::LogLevel::kWarn && e.text.find(text) != std::string::npos) ++n;
   return n;
 }
 
-struct Rig {
-  explicit Rig(kernel::Executor& ex, Sensor::Options o = {}) : node(ex, {"bot"}) {
+struct SensorRig {
+  explicit SensorRig(kernel::Executor& ex, Sensor::Options o = {}) : node(ex, {"bot"}) {
     sensor = std::make_shared<Sensor>("ir", ir_channels(), o);
     task = *node.create("ir_task", std::make_unique<SensorTask>(sensor));
     auto c = std::make_unique<Collector>();
@@ -44,7 +44,7 @@ struct Rig {
 
 TEST(Sensor, PushesFromAnotherThreadReachHookedTasksUnderVirtualTime) {
   kernel::VirtualTimeExecutor ex;
-  Rig rig(ex, {.mailbox = 256});
+  SensorRig rig(ex, {.mailbox = 256});
   ex.run_for(1ms);
   ASSERT_TRUE(rig.sensor->has_listener());
   ASSERT_TRUE(rig.sensor->is_open());  // the task opened it
@@ -70,14 +70,14 @@ TEST(Sensor, PushesFromAnotherThreadReachHookedTasksUnderVirtualTime) {
   EXPECT_EQ(s.overwritten, 0u);
   EXPECT_EQ(s.clamped_values, 100u);
   // Clamping is logged, at a limited rate: not once per sample.
-  const std::size_t warns = warnings_containing(rig.node, "clamped");
+  const std::size_t warns = sensor_warnings_containing(rig.node, "clamped");
   EXPECT_GE(warns, 1u);
   EXPECT_LT(warns, 5u);
 }
 
 TEST(Sensor, SamplesAreForwardedAtTheVirtualInstantTheExecutorTakesThem) {
   kernel::VirtualTimeExecutor ex;
-  Rig rig(ex);
+  SensorRig rig(ex);
   ex.run_for(5ms);
   std::thread driver([&] {
     for (int i = 0; i < 3; ++i) {
@@ -95,7 +95,7 @@ TEST(Sensor, SamplesAreForwardedAtTheVirtualInstantTheExecutorTakesThem) {
 
 TEST(Sensor, PushesFromAnotherThreadReachHookedTasksUnderThreads) {
   kernel::ThreadExecutor ex;
-  Rig rig(ex, {.mailbox = 256});
+  SensorRig rig(ex, {.mailbox = 256});
   ASSERT_TRUE(testing::wait_until([&] { return rig.sensor->has_listener(); }));
   std::thread driver([&] {
     for (int i = 0; i < 200; ++i) {
@@ -117,7 +117,7 @@ TEST(Sensor, PushesFromAnotherThreadReachHookedTasksUnderThreads) {
 
 TEST(Sensor, AFullMailboxKeepsTheNewestAndEveryCounterAddsUp) {
   kernel::VirtualTimeExecutor ex;
-  Rig rig(ex, {.mailbox = 4});
+  SensorRig rig(ex, {.mailbox = 4});
   ex.run_for(1ms);
   std::thread driver([&] {
     for (int i = 0; i < 10; ++i) {
@@ -136,7 +136,7 @@ TEST(Sensor, AFullMailboxKeepsTheNewestAndEveryCounterAddsUp) {
   EXPECT_EQ(s.queued_total, 10u);
   EXPECT_EQ(s.overwritten, 6u);
   EXPECT_EQ(s.taken, 4u);
-  EXPECT_EQ(warnings_containing(rig.node, "lost"), 1u);
+  EXPECT_EQ(sensor_warnings_containing(rig.node, "lost"), 1u);
 }
 
 TEST(Sensor, RejectsNaNAndWrongCountsAndCountsClosedAndUnheardSamples) {
@@ -167,7 +167,7 @@ TEST(Sensor, RejectsNaNAndWrongCountsAndCountsClosedAndUnheardSamples) {
   EXPECT_EQ(s.queued_total, 1u);
   EXPECT_EQ(s.published, s.not_open + s.unheard + s.rejected + s.queued_total);
   EXPECT_EQ(sensor->latest()->time, kernel::Time{4});
-  EXPECT_EQ(warnings_containing(node, "rejected"), 1u);
+  EXPECT_EQ(sensor_warnings_containing(node, "rejected"), 1u);
 }
 
 TEST(Sensor, NotificationsForAGoneTaskOrNodeDoNothing) {

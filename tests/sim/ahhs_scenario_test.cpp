@@ -24,29 +24,29 @@ using namespace std::chrono_literals;
 // ends), no contact (docs/ahhs.md); seeds 2-5: 37.6-39.1 m. The run is deterministic (same seed,
 // same run), so it is held to its figure within 5% (1.9 m) either way: the seeds spread by 4%, so a
 // change of noise passes, and a controller that drives a twentieth less far fails.
-constexpr double kMeasuredM = 37.7;
-constexpr double kMarginM = 1.9;
+constexpr double kAhhsMeasuredM = 37.7;
+constexpr double kAhhsMarginM = 1.9;
 
-std::string read(const std::string& path) {
+std::string read_text(const std::string& path) {
   std::ifstream f(path);
   std::stringstream s;
   s << f.rdbuf();
   return s.str();
 }
 
-struct Outcome {
+struct AhhsOutcome {
   double distance = 0;
   std::uint64_t contact_steps = 0;
   std::uint64_t steps = 0;
   std::vector<Pose> poses;
 };
 
-Outcome run(const Scenario& scenario, kernel::Duration duration) {
+AhhsOutcome run_ahhs(const Scenario& scenario, kernel::Duration duration) {
   kernel::VirtualTimeExecutor executor;
   auto session = ScenarioSession::create(scenario, executor);
   EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
   if (!session) return {};
-  Outcome out;
+  AhhsOutcome out;
   (*session)->runner().add_observer([&](const StepRecord& r) { out.poses.push_back(r.robots[0].state.pose); });
   (*session)->start();
   executor.run_for(duration);
@@ -63,16 +63,16 @@ const std::string kFile = std::string(SYMB_SCENARIO_DIR) + "/ahhs_obstacle_avoid
 TEST(AhhsScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
   auto sc = load_scenario(kFile);
   ASSERT_TRUE(sc.ok()) << sc.error();
-  const Outcome o = run(*sc, 10min);
+  const AhhsOutcome o = run_ahhs(*sc, 10min);
   EXPECT_EQ(o.steps, 20000u);
   EXPECT_EQ(o.contact_steps, 0u);
-  EXPECT_TRUE(testing::near_measured(o.distance / 100, kMeasuredM, kMarginM));
+  EXPECT_TRUE(testing::near_measured(o.distance / 100, kAhhsMeasuredM, kAhhsMarginM));
   std::cout << "ahhs maze: " << o.distance / 100 << " m in 10 min, " << o.contact_steps << " contact steps\n";
 }
 
 // The shipped file with its controller replaced by one task per compartment and a mixer.
 std::string compartment_version() {
-  std::string text = read(kFile);
+  std::string text = read_text(kFile);
   const std::string tasks_at = "    tasks:\n";
   const auto from = text.find(tasks_at);
   EXPECT_NE(from, std::string::npos);
@@ -97,7 +97,7 @@ TEST(AhhsScenario, OneTaskPerCompartmentDrivesTheSameTrajectory) {
   ASSERT_TRUE(whole.ok()) << whole.error();
   auto split = parse_scenario(compartment_version(), kFile);
   ASSERT_TRUE(split.ok()) << split.error();
-  const Outcome a = run(*whole, 2min), b = run(*split, 2min);
+  const AhhsOutcome a = run_ahhs(*whole, 2min), b = run_ahhs(*split, 2min);
   ASSERT_EQ(a.poses.size(), 4000u);
   ASSERT_EQ(b.poses.size(), a.poses.size());
   for (std::size_t i = 0; i < a.poses.size(); ++i) {

@@ -20,6 +20,7 @@
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"
 
+#include "support/maze_evolution.hpp"
 #include "support/measured.hpp"
 #include "support/tsan_skip.hpp"
 
@@ -28,18 +29,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// The maze with no controller: only the device tasks.
-Scenario bare_maze() {
-  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/maze.yaml");
-  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
-  if (!s) return {};
-  Scenario scenario = *s;
-  for (RobotSpec& r : scenario.robots) {
-    r.tasks.clear();
-    r.hooks.clear();
-  }
-  return scenario;
-}
+using maze_test::bare_maze;
 
 // Braitenberg's weights with the sensor signs flipped: it steers towards the nearer wall.
 constexpr const char* kBad =
@@ -54,13 +44,13 @@ constexpr const char* kGood =
     "hook avoid -> judge\n"
     "hook braitenberg -> judge\n";
 
-struct Robot {
+struct ArbiterRobot {
   kernel::VirtualTimeExecutor executor;
   std::unique_ptr<ScenarioSession> session;
   os::Node* node = nullptr;
   evo::ArbiterTask* judge = nullptr;  // owned by the node
 
-  explicit Robot(std::uint64_t seed = 1) {
+  explicit ArbiterRobot(std::uint64_t seed = 1) {
     SessionOptions options;
     options.seed = seed;
     auto s = ScenarioSession::create(bare_maze(), executor, options);
@@ -76,7 +66,7 @@ struct Robot {
     EXPECT_TRUE(node->hook(*id, *node->find("wheels")).ok());
     session->start();
   }
-  ~Robot() {
+  ~ArbiterRobot() {
     if (session) session->stop();
   }
   void develop(const std::string& text) {
@@ -111,7 +101,7 @@ TEST(ArbiterScenario, WithABadVariantPresentTheArbiterDrivesWithAGoodOne) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-    Robot r(seed);
+    ArbiterRobot r(seed);
     ASSERT_NE(r.judge, nullptr);
     // The bad variant first, so it is heard first and takes the wheels first.
     r.develop(kBad);
@@ -135,7 +125,7 @@ TEST(ArbiterScenario, WithABadVariantPresentTheArbiterDrivesWithAGoodOne) {
 }
 
 TEST(ArbiterScenario, TheBadVariantAloneIsReplacedAndARemovedDriverIsHandedOver) {
-  Robot r;
+  ArbiterRobot r;
   ASSERT_NE(r.judge, nullptr);
   r.develop(kBad);
   r.executor.run_for(10s);
@@ -167,7 +157,7 @@ TEST(ArbiterScenario, TheBadVariantAloneIsReplacedAndARemovedDriverIsHandedOver)
 
 // The bad variant is really bad: driving alone, it hits walls.
 TEST(ArbiterScenario, TheBadVariantAloneHitsWalls) {
-  Robot r;
+  ArbiterRobot r;
   ASSERT_NE(r.judge, nullptr);
   r.develop(kBad);
   r.executor.run_for(2min);
@@ -239,7 +229,7 @@ TEST(EmbryogenesisScenario, TheMazeDemoGrownFromAGenomeDrivesLikeTheScenario) {
 }
 
 TEST(ArbiterScenario, ItsTaskTypeIsInTheScenarioRegistry) {
-  Robot r;
+  ArbiterRobot r;
   ASSERT_NE(r.node, nullptr);
   const os::TaskType* t = r.session->robot(0).types().find("arbiter");
   ASSERT_NE(t, nullptr);

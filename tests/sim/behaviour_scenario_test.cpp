@@ -18,26 +18,26 @@ namespace {
 
 using namespace std::chrono_literals;
 
-Scenario load(const std::string& name) {
+Scenario load_behaviour(const std::string& name) {
   auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
   EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
   return s ? *s : Scenario{};
 }
 
-struct Outcome {
+struct BehaviourOutcome {
   std::vector<Pose> poses;  // every step (30 ms)
   std::uint64_t contact_steps = 0;
   std::vector<float> last_probe;  // the last ("active") sample of the probed task
 };
 
-Outcome run(const Scenario& scenario, std::uint64_t seed, const std::string& probed_task = "") {
+BehaviourOutcome run_behaviour(const Scenario& scenario, std::uint64_t seed, const std::string& probed_task = "") {
   kernel::VirtualTimeExecutor executor;
   SessionOptions options;
   options.seed = seed;
   auto session = ScenarioSession::create(scenario, executor, options);
   EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
   if (!session) return {};
-  Outcome out;
+  BehaviourOutcome out;
   (*session)->runner().add_observer([&](const StepRecord& r) { out.poses.push_back(r.robots[0].state.pose); });
   if (!probed_task.empty())
     (*session)->robot(0).node().set_probe_sink([&](const os::ProbeSample& s) {
@@ -51,12 +51,12 @@ Outcome run(const Scenario& scenario, std::uint64_t seed, const std::string& pro
 }
 
 TEST(SubsumptionScenario, TheRobotStopsInTheTargetZoneAndStaysThere) {
-  const Scenario sc = load("subsumption.yaml");
+  const Scenario sc = load_behaviour("subsumption.yaml");
   ASSERT_EQ(sc.world.zones.size(), 1u);
   const ZoneSpec& target = sc.world.zones[0];
   for (std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    const Outcome o = run(sc, seed, "stop");
+    const BehaviourOutcome o = run_behaviour(sc, seed, "stop");
     ASSERT_EQ(o.poses.size(), 20000u);
     // The first step from which the robot's centre never leaves the zone again.
     std::size_t settled = o.poses.size();
@@ -76,7 +76,7 @@ TEST(SubsumptionScenario, TheRobotStopsInTheTargetZoneAndStaysThere) {
 // deleted at the start, so the robot crosses the target zone and wanders on; once it has left the
 // zone a new stop layer is created and hooked in above the others, and the robot then stops in it.
 TEST(SubsumptionScenario, AStopLayerAddedThroughTheShellAtRuntimeTakesOver) {
-  const Scenario sc = load("subsumption.yaml");
+  const Scenario sc = load_behaviour("subsumption.yaml");
   const ZoneSpec& target = sc.world.zones.at(0);
   kernel::VirtualTimeExecutor executor;
   auto session = ScenarioSession::create(sc, executor);
@@ -116,11 +116,11 @@ TEST(SubsumptionScenario, AStopLayerAddedThroughTheShellAtRuntimeTakesOver) {
 }
 
 TEST(MotorSchemaScenario, TheRobotReachesTheGoalAtTheFarEndOfTheMaze) {
-  const Scenario sc = load("motor_schemas.yaml");
+  const Scenario sc = load_behaviour("motor_schemas.yaml");
   constexpr double kGoalX = 175, kGoalY = 25, kWithin = 15;
   for (std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    const Outcome o = run(sc, seed);
+    const BehaviourOutcome o = run_behaviour(sc, seed);
     ASSERT_EQ(o.poses.size(), 20000u);
     std::optional<std::size_t> reached;
     for (std::size_t k = 0; k < o.poses.size() && !reached; ++k)

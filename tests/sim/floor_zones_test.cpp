@@ -18,13 +18,13 @@ namespace {
 
 using namespace std::chrono_literals;
 
-const std::string kHead =
+const std::string kZonesHead =
     "name: zones\n"
     "duration: 5s\n"
     "world:\n"
     "  arena: {width: 200, height: 100}\n";
 
-const std::string kRobot =
+const std::string kZonesRobot =
     "robots:\n"
     "  - name: r\n"
     "    start: {x: 30, y: 50, heading: 0}\n"
@@ -33,9 +33,9 @@ const std::string kRobot =
     "    hooks:\n"
     "      - drive -> wheels\n";
 
-std::string with_zones(const std::string& zones) { return kHead + "  zones:\n" + zones + kRobot; }
+std::string with_zones(const std::string& zones) { return kZonesHead + "  zones:\n" + zones + kZonesRobot; }
 
-void expect_error(const std::string& yaml, const std::string& where, const std::string& what) {
+void expect_zones_error(const std::string& yaml, const std::string& where, const std::string& what) {
   auto sc = parse_scenario(yaml, "t.yaml");
   ASSERT_FALSE(sc.ok()) << "accepted:\n" << yaml;
   EXPECT_EQ(sc.error().rfind("t.yaml:" + where + ": ", 0), 0u) << sc.error();
@@ -61,14 +61,15 @@ TEST(FloorZones, RectanglesAndDiscsParse) {
 }
 
 TEST(FloorZones, MistakesAreReportedWhereTheyAre) {
-  expect_error(with_zones("    - {rect: [150, 20, 120, 80], ground: 0.1}\n"), "6:14", "x1 < x2");
-  expect_error(with_zones("    - {rect: [150, 20, 190], ground: 0.1}\n"), "6:14", "[x1, y1, x2, y2]");
-  expect_error(with_zones("    - {rect: [150, 20, 250, 80], ground: 0.1}\n"), "6:24", "rect x2");
-  expect_error(with_zones("    - {circle: [100, 50, 10], ground: 1.5}\n"), "6:39", "ground");
-  expect_error(with_zones("    - {circle: [100, 50, 10]}\n"), "6:7", "ground");
-  expect_error(with_zones("    - {circle: [100, 50, 10], rect: [1, 1, 2, 2], ground: 0}\n"), "6:7", "exactly one");
-  expect_error(with_zones("    - {circel: [100, 50, 10], ground: 0}\n"), "6:8", "did you mean 'circle'");
-  expect_error(with_zones("    - [1, 2, 3, 4]\n"), "6:7", "a zone is");
+  expect_zones_error(with_zones("    - {rect: [150, 20, 120, 80], ground: 0.1}\n"), "6:14", "x1 < x2");
+  expect_zones_error(with_zones("    - {rect: [150, 20, 190], ground: 0.1}\n"), "6:14", "[x1, y1, x2, y2]");
+  expect_zones_error(with_zones("    - {rect: [150, 20, 250, 80], ground: 0.1}\n"), "6:24", "rect x2");
+  expect_zones_error(with_zones("    - {circle: [100, 50, 10], ground: 1.5}\n"), "6:39", "ground");
+  expect_zones_error(with_zones("    - {circle: [100, 50, 10]}\n"), "6:7", "ground");
+  expect_zones_error(with_zones("    - {circle: [100, 50, 10], rect: [1, 1, 2, 2], ground: 0}\n"), "6:7",
+                     "exactly one");
+  expect_zones_error(with_zones("    - {circel: [100, 50, 10], ground: 0}\n"), "6:8", "did you mean 'circle'");
+  expect_zones_error(with_zones("    - [1, 2, 3, 4]\n"), "6:7", "a zone is");
 }
 
 TEST(FloorZones, TheGroundModelSeesAZoneUnderTheSensorsOnly) {
@@ -112,7 +113,7 @@ class Collector : public os::Task {
 };
 
 TEST(FloorZones, PoseAndGroundDeviceTasksAreMadeWhenHookedAndReportEveryPeriod) {
-  const std::string yaml = kHead +
+  const std::string yaml = kZonesHead +
                            "  zones:\n"
                            "    - {rect: [60, 0, 80, 100], ground: 0.1, name: stripe}\n"
                            "robots:\n"
@@ -182,10 +183,10 @@ TEST(FloorZones, PoseAndGroundDeviceTasksAreMadeWhenHookedAndReportEveryPeriod) 
 }
 
 TEST(FloorZones, ADeviceTaskNameIsReserved) {
-  expect_error(kHead +
-                   "robots:\n  - name: r\n    start: {x: 30, y: 50}\n    tasks:\n"
-                   "      - {name: pose, type: mdl2e, params: {program: p.mdl2e}}\n",
-               "9:9", "taken");
+  expect_zones_error(kZonesHead +
+                         "robots:\n  - name: r\n    start: {x: 30, y: 50}\n    tasks:\n"
+                         "      - {name: pose, type: mdl2e, params: {program: p.mdl2e}}\n",
+                     "9:9", "taken");
 }
 
 }  // namespace

@@ -29,11 +29,11 @@ using namespace std::chrono_literals;
 // those 16 runs touched a wall, for 11 steps); rate coded (below), seed 1: 53.0 m (kRateCodedM).
 // Each run is deterministic (same seed, same run), so each is held to its figure within 5% (2.5 m)
 // either way: the seeds spread by 3%, and a controller that drives a twentieth less far fails.
-constexpr double kMeasuredM[] = {50.9, 50.4, 51.1};
+constexpr double kLindaMeasuredM[] = {50.9, 50.4, 51.1};
 constexpr double kRateCodedM = 53.0;
-constexpr double kMarginM = 2.5;
+constexpr double kLindaMarginM = 2.5;
 
-Scenario load(const std::string& name) {
+Scenario load_linda(const std::string& name) {
   auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
   EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
   return s ? *s : Scenario{};
@@ -45,13 +45,13 @@ TaskSpec* task(Scenario& s, const std::string& name) {
   return nullptr;
 }
 
-struct Outcome {
+struct LindaOutcome {
   double distance = 0;
   std::uint64_t contact_steps = 0;
   std::uint64_t steps = 0;
 };
 
-Outcome run(const Scenario& scenario, kernel::Duration duration, std::uint64_t seed = 1) {
+LindaOutcome run_linda(const Scenario& scenario, kernel::Duration duration, std::uint64_t seed = 1) {
   kernel::VirtualTimeExecutor executor;
   SessionOptions options;
   options.seed = seed;
@@ -67,15 +67,15 @@ Outcome run(const Scenario& scenario, kernel::Duration duration, std::uint64_t s
 
 TEST(LindaScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
   SYMB_SKIP_UNDER_TSAN();
-  const Scenario sc = load("linda_maze.yaml");
+  const Scenario sc = load_linda("linda_maze.yaml");
   for (std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE(seed);
-    const Outcome o = run(sc, 10min, seed);
+    const LindaOutcome o = run_linda(sc, 10min, seed);
     std::printf("linda maze, seed %llu: %.1f m, %llu contact steps\n", static_cast<unsigned long long>(seed),
                 o.distance / 100, static_cast<unsigned long long>(o.contact_steps));
     EXPECT_EQ(o.steps, 20000u);
     EXPECT_EQ(o.contact_steps, 0u);
-    EXPECT_TRUE(testing::near_measured(o.distance / 100, kMeasuredM[seed - 1], kMarginM));
+    EXPECT_TRUE(testing::near_measured(o.distance / 100, kLindaMeasuredM[seed - 1], kLindaMarginM));
   }
 }
 
@@ -84,7 +84,7 @@ TEST(LindaScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
 // drives as far, but the noise makes it graze a wall now and then: measured (10 minutes, seeds 1
 // and 2) 52.6-53.0 m and 2-3 brief contacts (12-15 steps of 20,000).
 TEST(LindaScenario, RateCodedSensorsAlsoDriveTheMaze) {
-  Scenario sc = load("linda_maze.yaml");
+  Scenario sc = load_linda("linda_maze.yaml");
   auto set = [&sc](const std::string& task_name, const std::string& param, const std::string& value) {
     TaskSpec* t = task(sc, task_name);
     ASSERT_NE(t, nullptr);
@@ -99,11 +99,11 @@ TEST(LindaScenario, RateCodedSensorsAlsoDriveTheMaze) {
   set("encoder", "coding", "rate");
   set("encoder", "max_rate", "1000");
   set("controller", "pulse", "200");
-  const Outcome o = run(sc, 10min);
+  const LindaOutcome o = run_linda(sc, 10min);
   std::printf("linda maze, rate coded: %.1f m, %llu contact steps\n", o.distance / 100,
               static_cast<unsigned long long>(o.contact_steps));
   EXPECT_LT(o.contact_steps, 30u);  // measured 12 (seed 2: 15): twice that at most
-  EXPECT_TRUE(testing::near_measured(o.distance / 100, kRateCodedM, kMarginM));
+  EXPECT_TRUE(testing::near_measured(o.distance / 100, kRateCodedM, kLindaMarginM));
 }
 
 // Counts the output-channel spikes it is sent, and their last timestamp.
@@ -129,7 +129,7 @@ class SpikeCounter : public os::Task {
 
 TEST(LindaSwap, NetworkRegrownFromAnotherGenomeAndReplacedWhileTheRobotDrives) {
   kernel::VirtualTimeExecutor executor;
-  auto s = ScenarioSession::create(load("linda_maze.yaml"), executor);
+  auto s = ScenarioSession::create(load_linda("linda_maze.yaml"), executor);
   ASSERT_TRUE(s.ok()) << (s ? "" : s.error());
   ScenarioSession& session = **s;
   os::Node& node = session.robot(0).node();

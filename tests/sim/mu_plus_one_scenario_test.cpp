@@ -30,9 +30,9 @@ namespace {
 // The seeds of the evolution test (every one in release; the sanitizer builds check the same
 // code for memory errors and races on one seed: 10-20x slower).
 #ifdef SYMB_SANITIZER
-constexpr std::uint64_t kSeeds = 1;
+constexpr std::uint64_t kMuSeeds = 1;
 #else
-constexpr std::uint64_t kSeeds = 3;
+constexpr std::uint64_t kMuSeeds = 3;
 #endif
 
 using namespace std::chrono_literals;
@@ -44,13 +44,13 @@ using maze_test::maze_with_perceptron;
 using maze_test::Replay;
 using maze_test::replay;
 
-struct Evolved {
+struct MuEvolved {
   evo::Member best;
   double mean_fitness = 0;
   evo::MuPlusOneCounts counts;
 };
 
-Evolved evolve(std::uint64_t seed, kernel::Duration budget, const evo::MuPlusOneTaskOptions& evolution_options) {
+MuEvolved evolve_mu(std::uint64_t seed, kernel::Duration budget, const evo::MuPlusOneTaskOptions& evolution_options) {
   kernel::VirtualTimeExecutor executor;
   SessionOptions options;
   options.seed = seed;
@@ -68,7 +68,7 @@ Evolved evolve(std::uint64_t seed, kernel::Duration budget, const evo::MuPlusOne
   executor.run_for(budget);
   (*session)->stop();
   EXPECT_EQ(evolution->state(), evo::EvolutionState::kRunning) << evolution->error();
-  Evolved e;
+  MuEvolved e;
   if (auto b = evolution->best()) e.best = *b;
   const auto h = evolution->history();
   if (!h.empty()) e.mean_fitness = h.back().mean_fitness;
@@ -88,7 +88,7 @@ Evolved evolve(std::uint64_t seed, kernel::Duration budget, const evo::MuPlusOne
 // A failure is mostly a member scored once (lucky) in a spot of the maze that favours a gliding
 // wall-follower: the replay in the full maze then touches walls. The (1+1) run with its tuned
 // sigma_min does better at this budget (11 of 12, tests/sim/evolution_scenario_test.cpp).
-evo::MuPlusOneTaskOptions run_options() {
+evo::MuPlusOneTaskOptions mu_run_options() {
   evo::MuPlusOneTaskOptions o;
   o.algorithm.mu = 10;
   o.algorithm.rho = 0.2;
@@ -98,7 +98,7 @@ evo::MuPlusOneTaskOptions run_options() {
   o.swap.recovery = 1s;
   return o;
 }
-constexpr kernel::Duration kBudget = 240min;
+constexpr kernel::Duration kMuBudget = 240min;
 
 // Each seed's replay as a share of Braitenberg's fitness, measured (release; the bold figures of
 // docs/evolution.md's (mu+1) table). A seed's run is deterministic (same seed, same best), so each
@@ -106,19 +106,19 @@ constexpr kernel::Duration kBudget = 240min;
 // hide a loss that one fixed seed shows. Ten points is a tenth of Braitenberg's fitness: a
 // loss that size on any seed fails. (The release build, g++, and the ASan build, clang, measure the
 // same figures.)
-constexpr double kMeasuredPercent[] = {169, 163, 167};
-constexpr double kMarginPoints = 10;
-constexpr double kBraitenbergFitness = 0.4653;  // measured; 0.465 in docs/evolution.md
+constexpr double kMuMeasuredPercent[] = {169, 163, 167};
+constexpr double kMuMarginPoints = 10;
+constexpr double kMuBraitenbergFitness = 0.4653;  // measured; 0.465 in docs/evolution.md
 
 TEST(MuPlusOneScenario, ReachesBraitenbergInTheMazeWithThreeSeedsIn4Hours) {
   SYMB_SKIP_UNDER_TSAN();
   const Replay baseline = replay(maze_with_perceptron("network/braitenberg.w"), 10min);
   std::printf("braitenberg: fitness %.4f, %llu contact steps, %.0f cm\n", baseline.fitness,
               static_cast<unsigned long long>(baseline.contact_steps), baseline.distance);
-  ASSERT_TRUE(testing::near_measured(baseline.fitness, kBraitenbergFitness, 0.005));
-  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+  ASSERT_TRUE(testing::near_measured(baseline.fitness, kMuBraitenbergFitness, 0.005));
+  for (std::uint64_t seed = 1; seed <= kMuSeeds; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    const Evolved e = evolve(seed, kBudget, run_options());
+    const MuEvolved e = evolve_mu(seed, kMuBudget, mu_run_options());
     EXPECT_GT(e.counts.evaluations, 650u);   // 240 min / 21 s = 685
     EXPECT_GT(e.counts.reevaluations, 90u);  // rho 0.2 of 675
     const Replay r = replay(maze_with_perceptron(evo::weights_text(e.best.genome)), 10min);
@@ -129,14 +129,15 @@ TEST(MuPlusOneScenario, ReachesBraitenbergInTheMazeWithThreeSeedsIn4Hours) {
         static_cast<unsigned long long>(e.counts.reevaluations), static_cast<unsigned long long>(e.counts.replacements),
         e.best.fitness, static_cast<unsigned long long>(e.best.measurements), e.mean_fitness, r.fitness,
         100 * r.fitness / baseline.fitness, static_cast<unsigned long long>(r.contact_steps), r.distance);
-    EXPECT_TRUE(testing::near_measured(100 * r.fitness / baseline.fitness, kMeasuredPercent[seed - 1], kMarginPoints));
+    EXPECT_TRUE(
+        testing::near_measured(100 * r.fitness / baseline.fitness, kMuMeasuredPercent[seed - 1], kMuMarginPoints));
     EXPECT_EQ(r.contact_steps, 0u);
   }
 }
 
 TEST(MuPlusOneScenario, SameSeedSameBest) {
-  const Evolved a = evolve(3, 10min, run_options()), b = evolve(3, 10min, run_options());
-  const Evolved c = evolve(4, 10min, run_options());
+  const MuEvolved a = evolve_mu(3, 10min, mu_run_options()), b = evolve_mu(3, 10min, mu_run_options());
+  const MuEvolved c = evolve_mu(4, 10min, mu_run_options());
   EXPECT_EQ(a.best.genome, b.best.genome);
   EXPECT_EQ(a.best.fitness, b.best.fitness);
   EXPECT_NE(a.best.genome, c.best.genome);

@@ -30,11 +30,11 @@ namespace fs = std::filesystem;
 // 52.0 m (maze_spiral), never a contact (docs/networks.md). The runs are deterministic (same seed,
 // same run), so each is held to its figure within 5% (2.5 m) either way: a controller that drives a
 // twentieth less far fails, a change of sensor noise (seeds spread by 1-3%) passes.
-const std::map<std::string, double> kMeasuredM = {
+const std::map<std::string, double> kNetworkMeasuredM = {
     {"maze.yaml", 50.4}, {"maze_rooms.yaml", 51.6}, {"maze_spiral.yaml", 52.0}};
-constexpr double kMarginM = 2.5;
+constexpr double kNetworkMarginM = 2.5;
 
-Scenario load(const std::string& name) {
+Scenario load_network(const std::string& name) {
   auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
   EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
   return s ? *s : Scenario{};
@@ -42,7 +42,7 @@ Scenario load(const std::string& name) {
 
 // The maze's controller replaced by the Braitenberg perceptron of braitenberg.yaml.
 Scenario with_braitenberg(Scenario s) {
-  const Scenario b = load("braitenberg.yaml");
+  const Scenario b = load_network("braitenberg.yaml");
   for (RobotSpec& r : s.robots)
     for (TaskSpec& t : r.tasks)
       if (t.name == "controller") {
@@ -53,13 +53,13 @@ Scenario with_braitenberg(Scenario s) {
   return s;
 }
 
-struct Outcome {
+struct NetworkOutcome {
   double distance = 0;
   std::uint64_t contact_steps = 0;
   std::uint64_t steps = 0;
 };
 
-Outcome run(const Scenario& scenario, kernel::Duration duration) {
+NetworkOutcome run_network(const Scenario& scenario, kernel::Duration duration) {
   kernel::VirtualTimeExecutor executor;
   auto session = ScenarioSession::create(scenario, executor);
   EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
@@ -72,14 +72,14 @@ Outcome run(const Scenario& scenario, kernel::Duration duration) {
 }
 
 TEST(BraitenbergScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
-  const Scenario sc = load("braitenberg.yaml");
+  const Scenario sc = load_network("braitenberg.yaml");
   ASSERT_EQ(sc.robots.at(0).tasks.at(0).type, "mlp");
-  const Outcome o = run(sc, 10min);
+  const NetworkOutcome o = run_network(sc, 10min);
   std::printf("braitenberg.yaml: %.1f m, %llu contact steps\n", o.distance / 100,
               static_cast<unsigned long long>(o.contact_steps));
   EXPECT_EQ(o.steps, 20000u);
   EXPECT_EQ(o.contact_steps, 0u);
-  EXPECT_TRUE(testing::near_measured(o.distance / 100, kMeasuredM.at("maze.yaml"), kMarginM));
+  EXPECT_TRUE(testing::near_measured(o.distance / 100, kNetworkMeasuredM.at("maze.yaml"), kNetworkMarginM));
 }
 
 TEST(BraitenbergScenario, EveryShippedMazeTenMinutesWithoutTouchingAWall) {
@@ -91,12 +91,13 @@ TEST(BraitenbergScenario, EveryShippedMazeTenMinutesWithoutTouchingAWall) {
   ASSERT_GE(mazes.size(), 3u);
   for (const std::string& name : mazes) {
     SCOPED_TRACE(name);
-    const Outcome o = run(with_braitenberg(load(name)), 10min);
+    const NetworkOutcome o = run_network(with_braitenberg(load_network(name)), 10min);
     std::printf("braitenberg in %s: %.1f m, %llu contact steps\n", name.c_str(), o.distance / 100,
                 static_cast<unsigned long long>(o.contact_steps));
     EXPECT_EQ(o.contact_steps, 0u);
-    ASSERT_TRUE(kMeasuredM.contains(name)) << "a new maze: measure it and add its figure here and to docs/networks.md";
-    EXPECT_TRUE(testing::near_measured(o.distance / 100, kMeasuredM.at(name), kMarginM));
+    ASSERT_TRUE(kNetworkMeasuredM.contains(name))
+        << "a new maze: measure it and add its figure here and to docs/networks.md";
+    EXPECT_TRUE(testing::near_measured(o.distance / 100, kNetworkMeasuredM.at(name), kNetworkMarginM));
   }
 }
 
@@ -147,7 +148,7 @@ std::string elman_weights() {
 
 TEST(NetworkHotSwap, ControllerReplacedByAnotherNetworkWhileTheRobotDrives) {
   kernel::VirtualTimeExecutor executor;
-  auto s = ScenarioSession::create(load("braitenberg.yaml"), executor);
+  auto s = ScenarioSession::create(load_network("braitenberg.yaml"), executor);
   ASSERT_TRUE(s.ok()) << (s ? "" : s.error());
   ScenarioSession& session = **s;
   os::Node& node = session.robot(0).node();
@@ -219,7 +220,7 @@ TEST(NetworkHotSwap, ControllerReplacedByAnotherNetworkWhileTheRobotDrives) {
 // by a hook; then stage 1 is replaced by an mlp task with the same weights while the robot drives.
 TEST(NetworkCircuit, TwoStagesDriveTheMazeAndAStageIsSwappedAtRuntime) {
   kernel::VirtualTimeExecutor executor;
-  Scenario sc = load("braitenberg.yaml");
+  Scenario sc = load_network("braitenberg.yaml");
   sc.robots[0].tasks.clear();
   sc.robots[0].hooks.clear();
   auto s = ScenarioSession::create(sc, executor);

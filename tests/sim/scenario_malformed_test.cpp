@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 
 constexpr int kMutantsPerFile = 300;
 
-std::vector<std::pair<std::string, std::string>> shipped() {
+std::vector<std::pair<std::string, std::string>> shipped_files() {
   std::vector<std::pair<std::string, std::string>> out;
   for (const auto& e : fs::directory_iterator(SYMB_SCENARIO_DIR))
     if (e.path().extension() == ".yaml") {
@@ -162,8 +162,8 @@ void expect_sound(const Scenario& sc) {
 }
 
 // "file:LINE:COLUMN: " with 1 <= LINE <= lines; returns false (with a reason) otherwise.
-testing::AssertionResult located(const std::string& error, const std::string& file, int lines) {
-  if (error.rfind(file + ":", 0) != 0) return testing::AssertionFailure() << "no file prefix: " << error;
+::testing::AssertionResult located(const std::string& error, const std::string& file, int lines) {
+  if (error.rfind(file + ":", 0) != 0) return ::testing::AssertionFailure() << "no file prefix: " << error;
   std::size_t i = file.size() + 1;
   auto number = [&](long& out) {
     const std::size_t s = i;
@@ -174,16 +174,17 @@ testing::AssertionResult located(const std::string& error, const std::string& fi
   };
   long line = 0, column = 0;
   if (!number(line) || i >= error.size() || error[i++] != ':' || !number(column))
-    return testing::AssertionFailure() << "no LINE:COLUMN: " << error;
+    return ::testing::AssertionFailure() << "no LINE:COLUMN: " << error;
   if (error.compare(i, 2, ": ") != 0 || error.size() <= i + 2)
-    return testing::AssertionFailure() << "no message: " << error;
+    return ::testing::AssertionFailure() << "no message: " << error;
   if (line < 1 || line > lines || column < 1)
-    return testing::AssertionFailure() << "line " << line << " of " << lines << ", column " << column << ": " << error;
-  return testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << "line " << line << " of " << lines << ", column " << column << ": "
+                                         << error;
+  return ::testing::AssertionSuccess();
 }
 
 TEST(ScenarioMalformed, MutantsOfTheShippedFilesAreRejectedWithALocationOrStaySound) {
-  const auto files = shipped();
+  const auto files = shipped_files();
   ASSERT_GE(files.size(), 4u);
   int total = 0, rejected = 0;
   kernel::RandomStream rng(20240607, 1);

@@ -32,29 +32,29 @@ namespace fs = std::filesystem;
 // (maze_spiral); seeds 1 to 4: 50 to 56 m. The runs are deterministic (same seed, same run), so
 // each is held to its figure within 5% (2.6 m) either way: a demo that drives a twentieth less far
 // fails.
-const std::map<std::string, double> kMeasuredM = {
+const std::map<std::string, double> kSessionMeasuredM = {
     {"maze.yaml", 51.4}, {"maze_rooms.yaml", 55.1}, {"maze_spiral.yaml", 55.6}};
-constexpr double kMarginM = 2.6;
+constexpr double kSessionMarginM = 2.6;
 
-Scenario load(const std::string& name) {
+Scenario load_session(const std::string& name) {
   auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
   EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
   return s ? *s : Scenario{};
 }
 
-struct Outcome {
+struct SessionOutcome {
   double distance = 0;
   std::uint64_t contact_steps = 0;
   std::uint64_t steps = 0;
   std::vector<Pose> poses;  // every step
 };
 
-Outcome run(const Scenario& scenario, kernel::Duration duration) {
+SessionOutcome run_session(const Scenario& scenario, kernel::Duration duration) {
   kernel::VirtualTimeExecutor executor;
   auto session = ScenarioSession::create(scenario, executor);
   EXPECT_TRUE(session.ok()) << (session ? "" : session.error());
   if (!session) return {};
-  Outcome out;
+  SessionOutcome out;
   (*session)->runner().add_observer([&](const StepRecord& r) { out.poses.push_back(r.robots[0].state.pose); });
   (*session)->start();
   executor.run_for(duration);
@@ -81,21 +81,21 @@ TEST(MazeDemo, EveryShippedMazeTenMinutesMovingWithoutTouchingAWall) {
   ASSERT_GE(mazes.size(), 3u) << "keep several mazes";
   for (const std::string& name : mazes) {
     SCOPED_TRACE(name);
-    const Scenario sc = load(name);
-    const Outcome o = run(sc, 10min);
+    const Scenario sc = load_session(name);
+    const SessionOutcome o = run_session(sc, 10min);
     std::printf("%s: %.1f m, %llu contact steps\n", name.c_str(), o.distance / 100,
                 static_cast<unsigned long long>(o.contact_steps));
     EXPECT_EQ(o.steps, 20000u);  // 600 s at 30 ms
     EXPECT_EQ(o.contact_steps, 0u);
-    ASSERT_TRUE(kMeasuredM.contains(name)) << "a new maze: measure it and add its figure here";
-    EXPECT_TRUE(testing::near_measured(o.distance / 100, kMeasuredM.at(name), kMarginM));
+    ASSERT_TRUE(kSessionMeasuredM.contains(name)) << "a new maze: measure it and add its figure here";
+    EXPECT_TRUE(testing::near_measured(o.distance / 100, kSessionMeasuredM.at(name), kSessionMarginM));
   }
 }
 
 // A scenario hook between two task types whose ports disagree is refused when the session builds
 // the robot, naming both ends and both layouts.
 TEST(MazeDemo, AHookBetweenIncompatibleLayoutsIsAnError) {
-  Scenario s = load("maze.yaml");
+  Scenario s = load_session("maze.yaml");
   ASSERT_FALSE(s.robots.empty());
   TaskSpec layer;
   layer.name = "layer";
@@ -120,7 +120,7 @@ TEST(MazeDemo, ADeviceHookBetweenIncompatibleLayoutsIsAnError) {
       {"pose", "controller", {"'pose' (sensor)", "'controller' (mdl2e)", "carries pose"}},
   };
   for (const auto& [from, to, parts] : cases) {
-    Scenario s = load("maze.yaml");
+    Scenario s = load_session("maze.yaml");
     ASSERT_FALSE(s.robots.empty());
     HookSpec hook;
     hook.from = from;
@@ -135,8 +135,8 @@ TEST(MazeDemo, ADeviceHookBetweenIncompatibleLayoutsIsAnError) {
 }
 
 TEST(MazeDemo, SameSeedSameRunDifferentSeedDifferentRun) {
-  Scenario sc = load("maze.yaml");
-  const Outcome a = run(sc, 60s), b = run(sc, 60s);
+  Scenario sc = load_session("maze.yaml");
+  const SessionOutcome a = run_session(sc, 60s), b = run_session(sc, 60s);
   ASSERT_EQ(a.poses.size(), b.poses.size());
   for (std::size_t i = 0; i < a.poses.size(); ++i) {
     ASSERT_EQ(a.poses[i].x, b.poses[i].x) << "step " << i;
@@ -144,7 +144,7 @@ TEST(MazeDemo, SameSeedSameRunDifferentSeedDifferentRun) {
     ASSERT_EQ(a.poses[i].theta, b.poses[i].theta) << "step " << i;
   }
   sc.seed += 1;
-  const Outcome c = run(sc, 60s);
+  const SessionOutcome c = run_session(sc, 60s);
   bool differs = false;
   for (std::size_t i = 0; i < a.poses.size() && !differs; ++i) differs = a.poses[i].x != c.poses[i].x;
   EXPECT_TRUE(differs) << "the seed drives the sensor noise: another seed must give another run";
@@ -168,8 +168,8 @@ double right_wall_in_sight(const Scenario& scenario, kernel::Duration duration) 
 }
 
 TEST(MazeDemo, WallFollowingKeepsAWallOnItsRight) {
-  Scenario follower = load("wall_following.yaml");
-  const Outcome o = run(follower, 5min);
+  Scenario follower = load_session("wall_following.yaml");
+  const SessionOutcome o = run_session(follower, 5min);
   EXPECT_GT(o.distance, 1500.0) << "it drives along the wall, not on the spot";
   // Following a wall, measured: the wall is in the right sensor's sight 84% of the time; the
   // obstacle avoider in the same box, 1%. (The follower grazes a wall now and then: 7 contacts in
@@ -186,7 +186,7 @@ TEST(MazeDemo, WallFollowingKeepsAWallOnItsRight) {
 class ShellOnRunningRobot : public ::testing::Test {
  protected:
   void SetUp() override {
-    auto s = ScenarioSession::create(load("maze.yaml"), executor_);
+    auto s = ScenarioSession::create(load_session("maze.yaml"), executor_);
     ASSERT_TRUE(s.ok()) << (s ? "" : s.error());
     session_ = std::move(s).value();
     session_->runner().add_observer([this](const StepRecord& r) { speeds_.push_back(r.robots[0].state); });
