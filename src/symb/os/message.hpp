@@ -40,6 +40,9 @@ struct Payload {
   std::shared_ptr<const Blob> blob;
 
   Payload() : values{} {}
+  // A payload whose numbers are left unset, to be assigned over (a message taken out of a queue).
+  enum Unset { kUnset };
+  explicit Payload(Unset) {}
   Payload(const Payload& o) : count(o.count), blob(o.blob) { std::copy_n(o.values, count, values); }
   Payload(Payload&& o) noexcept : count(o.count), blob(std::move(o.blob)) { std::copy_n(o.values, count, values); }
   Payload& operator=(const Payload& o) {

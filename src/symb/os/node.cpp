@@ -76,7 +76,7 @@ TaskRecord::TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> 
       task(std::move(t)),
       priority(o.priority),
       period_ns(o.period.count()),
-      ports(o.ports.value_or(PortDeclaration{})),
+      ports(o.ports ? std::make_unique<const PortDeclaration>(*o.ports) : nullptr),
       random(n.seed(), fnv1a(name)),
       out_mu(concurrent),
       in_mu(concurrent),
@@ -137,6 +137,9 @@ void TaskRecord::apply_pending_parameters() {
 
 void TaskRecord::on_activity_input() {
   apply_pending_parameters();
+  // The message being handled, moved out of the queue (outside in_mu, so senders can queue more
+  // meanwhile). Its payload's numbers are left unset: only the ones a message carries are copied in.
+  Message handling{.source = {}, .port = 0, .hops = 0, .edge = 0, .time = {}, .payload = Payload(Payload::kUnset)};
   for (;;) {
     {
       std::lock_guard lock(in_mu);
@@ -193,25 +196,20 @@ kernel::ActivitySlot* TaskRecord::offer(const Message& m, std::uint32_t edge, in
   InHook* e = in_hook(edge);
   ++traffic.attempted;
   if (e != nullptr) ++e->traffic.attempted;
-  for (const auto& w : suppression) {
-    if (hook_priority < w.level && m.time < w.until) {
-      ++traffic.suppressed;
-      if (e != nullptr) ++e->traffic.suppressed;
-      return nullptr;
+  if (inputs) {
+    for (const auto& w : inputs->suppression) {
+      if (hook_priority < w.level && m.time < w.until) {
+        ++traffic.suppressed;
+        if (e != nullptr) ++e->traffic.suppressed;
+        return nullptr;
+      }
     }
   }
   if (suppress_window.count() > 0) {
     // Keep the window of this level, or the one that ends first, up to date.
     const kernel::Time until = m.time + suppress_window;
-    SuppressionWindow* target = &suppression[0];
-    for (auto& w : suppression) {
-      if (w.level == hook_priority || w.until <= m.time) {
-        target = &w;
-        break;
-      }
-      if (w.until < target->until) target = &w;
-    }
-    if (target->level != hook_priority || target->until < until) *target = {hook_priority, until};
+    SuppressionWindow& target = input_hooks().window_for(hook_priority, m.time);
+    if (target.level != hook_priority || target.until < until) target = {hook_priority, until};
   }
   if (queue.full()) {
     if (policy == QueuePolicy::kRefuse) {
@@ -236,23 +234,33 @@ kernel::ActivitySlot* TaskRecord::offer(const Message& m, std::uint32_t edge, in
   return slot;
 }
 
-std::uint32_t TaskRecord::add_in_hook(std::uint32_t serial) {
-  std::uint32_t slot_index;
-  if (!free_in_hooks.empty()) {
-    slot_index = free_in_hooks.back();
-    free_in_hooks.pop_back();
-  } else {
-    slot_index = static_cast<std::uint32_t>(in_hooks.size());
-    in_hooks.emplace_back();
+SuppressionWindow& InputHooks::window_for(int level, kernel::Time now) {
+  SuppressionWindow* target = &suppression[0];
+  for (auto& w : suppression) {
+    if (w.level == level || w.until <= now) return w;
+    if (w.until < target->until) target = &w;
   }
-  in_hooks[slot_index] = InHook{};
-  in_hooks[slot_index].serial = serial;
-  in_hooks[slot_index].hooked = true;
+  return *target;
+}
+
+std::uint32_t TaskRecord::add_in_hook(std::uint32_t serial) {
+  InputHooks& in = input_hooks();
+  std::uint32_t slot_index;
+  if (!in.free_slots.empty()) {
+    slot_index = in.free_slots.back();
+    in.free_slots.pop_back();
+  } else {
+    slot_index = static_cast<std::uint32_t>(in.slots.size());
+    in.slots.emplace_back();
+  }
+  in.slots[slot_index] = InHook{};
+  in.slots[slot_index].serial = serial;
+  in.slots[slot_index].hooked = true;
   return slot_index + 1;
 }
 
 void TaskRecord::end_in_hook(std::uint32_t edge, std::uint64_t sent_while_hooked, std::uint64_t skipped) {
-  InHook& e = in_hooks[edge - 1];
+  InHook& e = inputs->slots[edge - 1];
   e.hooked = false;
   e.sent = sent_while_hooked;
   e.skipped = skipped;
@@ -260,11 +268,11 @@ void TaskRecord::end_in_hook(std::uint32_t edge, std::uint64_t sent_while_hooked
 }
 
 void TaskRecord::retire_in_hook_if_done(std::uint32_t edge) {
-  InHook& e = in_hooks[edge - 1];
+  InHook& e = inputs->slots[edge - 1];
   if (e.hooked || e.serial == 0 || e.in_flight() != 0) return;
-  retired_hooks += HookTraffic{e.sent, e.skipped, e.traffic, 0};
+  inputs->retired += HookTraffic{e.sent, e.skipped, e.traffic, 0};
   e.serial = 0;
-  free_in_hooks.push_back(edge - 1);
+  inputs->free_slots.push_back(edge - 1);
 }
 
 }  // namespace detail
@@ -507,9 +515,11 @@ void Node::release(TaskRecord& r) {
       t.delivered = r.delivered.load();
       retired_ += t;
       // Every hook into it ended in remove(): what is left are their final counts.
-      retired_hooks_ += r.retired_hooks;
-      for (const auto& e : r.in_hooks)
-        if (e.serial != 0) retired_hooks_ += HookTraffic{e.sent, e.skipped, e.traffic, 0};
+      if (r.inputs) {
+        retired_hooks_ += r.inputs->retired;
+        for (const auto& e : r.inputs->slots)
+          if (e.serial != 0) retired_hooks_ += HookTraffic{e.sent, e.skipped, e.traffic, 0};
+      }
       retired_longest_chain_ = std::max(retired_longest_chain_, r.longest_chain.load(std::memory_order_relaxed));
     }
     auto& s = slots_[r.id.index];
@@ -619,7 +629,7 @@ std::optional<PortDeclaration> Node::ports(TaskId id) const {
   std::lock_guard lock(mu_);
   const TaskRecord* r = lookup_locked(id);
   if (r == nullptr) return std::nullopt;
-  return r->ports;
+  return r->ports ? *r->ports : PortDeclaration{};
 }
 
 std::optional<TaskInfo> Node::info(TaskId id) const {
@@ -649,8 +659,9 @@ namespace {
 
 // The declared ports of a hook's end, for check_layouts.
 PortEnd port_end(const TaskRecord& t) {
-  return {t.name, t.params ? std::string_view(t.params->type->name) : std::string_view("-"), t.ports.inputs,
-          t.ports.outputs};
+  const std::string_view type = t.params ? std::string_view(t.params->type->name) : std::string_view("-");
+  if (!t.ports) return {t.name, type, {}, {}};
+  return {t.name, type, t.ports->inputs, t.ports->outputs};
 }
 
 }  // namespace
@@ -752,7 +763,7 @@ HookTraffic Node::accounting(const TaskRecord& s, const detail::Hook& h) {
   a.skipped = h.skipped;
   TaskRecord& r = *h.receiver;
   std::lock_guard in(r.in_mu);
-  a.traffic = r.in_hooks[h.edge - 1].traffic;
+  a.traffic = r.inputs->slots[h.edge - 1].traffic;
   // Counted, not derived: a message lost between the counters would show here.
   for (std::size_t k = 0; k < r.queue.size(); ++k)
     if (r.queue.at(k).edge == h.edge) ++a.queued;
@@ -775,11 +786,12 @@ HookTraffic Node::hook_traffic() const {
     }
     TaskRecord& r = *s.record;
     std::lock_guard in(r.in_mu);
-    t += r.retired_hooks;
-    for (const auto& e : r.in_hooks) {
+    if (!r.inputs) continue;
+    t += r.inputs->retired;
+    for (const auto& e : r.inputs->slots) {
       if (e.serial == 0 || e.hooked) continue;  // live hooks were counted from their sender
       HookTraffic ended{e.sent, e.skipped, e.traffic, 0};
-      const auto edge = static_cast<std::uint32_t>(&e - r.in_hooks.data()) + 1;
+      const auto edge = static_cast<std::uint32_t>(&e - r.inputs->slots.data()) + 1;
       for (std::size_t k = 0; k < r.queue.size(); ++k)
         if (r.queue.at(k).edge == edge) ++ended.queued;
       t += ended;
@@ -795,15 +807,7 @@ Status Node::suppress(TaskId receiver, int level, kernel::Duration window) {
   if (r == nullptr) return no_task(receiver);
   const kernel::Time now = this->now();
   std::lock_guard in(r->in_mu);
-  detail::SuppressionWindow* target = &r->suppression[0];
-  for (auto& w : r->suppression) {
-    if (w.level == level || w.until <= now) {
-      target = &w;
-      break;
-    }
-    if (w.until < target->until) target = &w;
-  }
-  *target = {level, now + window};
+  r->input_hooks().window_for(level, now) = {level, now + window};
   return {};
 }
 
@@ -879,7 +883,9 @@ void Node::cut_cycle(TaskRecord& from) {
   bool closed = false;
   {
     std::lock_guard lock(mu_);
-    TaskId prev = from.handling.source;
+    // The message being handled is more than half way to kMaxHops: its source is `deep_source`.
+    const std::uint64_t handled = from.deep_source.load(std::memory_order_relaxed);
+    TaskId prev{static_cast<std::uint32_t>(handled >> 32), static_cast<std::uint32_t>(handled)};
     while (seen.size() < kMaxNames) {
       const TaskRecord* r = lookup_locked(prev);
       if (r == nullptr) break;

@@ -18,9 +18,8 @@ kernel::Status Task::on_parameter(std::string_view name, const ParamValue& value
     return kernel::Error{"a running " + what + " keeps its " + std::string(name) +
                          ": create a new task (and rehook) to change it"};
   }
-  for (std::size_t i = 0; i < bindings_count_; ++i)
-    if (bindings_[i].owner == live->owner)
-      return live->apply(bindings_[i].object, value, [&] { return on_parameter_changed(name); });
+  for (const Binding& b : bindings_)
+    if (b.owner == live->owner) return live->apply(b.object, value, [&] { return on_parameter_changed(name); });
   return kernel::Error{"task type '" + type->name + "' declares '" + std::string(name) +
                        "' live, but its task bound no options that hold it"};
 }

@@ -5,13 +5,13 @@
 // handler throws (that task only; the rest of the node goes on).
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/result.hpp"
@@ -92,12 +92,11 @@ class Task {
 
   // Declares where this task keeps its parameters: `options`, a member of the task, whose type is
   // the config struct of its type's ParamTable or one of that struct's bases. A running task's
-  // live parameters are written there. Call from the constructor; up to kMaxBindings structs.
+  // live parameters are written there. Call from the constructor.
   template <class Options>
   void bind_parameters(Options& options) {
-    if (bindings_count_ < bindings_.size()) bindings_[bindings_count_++] = {detail::type_tag<Options>(), &options};
+    bindings_.push_back({detail::type_tag<Options>(), &options});
   }
-  static constexpr std::size_t kMaxBindings = 3;
 
   // Services for handlers; valid from on_start() until on_stop() returns.
   Node& node() const;
@@ -137,8 +136,7 @@ class Task {
     void* object = nullptr;
   };
   detail::TaskRecord* record_ = nullptr;
-  std::array<Binding, kMaxBindings> bindings_{};
-  std::size_t bindings_count_ = 0;
+  std::vector<Binding> bindings_;  // a heap block only for a task that binds parameters
 };
 
 }  // namespace symb::os

@@ -28,7 +28,7 @@ struct TaskRecord;
 // pass (disabled, another port), counted here under out_mu.
 struct Hook {
   std::uint32_t serial = 0;
-  std::uint32_t edge = 0;         // the receiver's in_hooks slot + 1
+  std::uint32_t edge = 0;         // the receiver's InputHooks slot + 1
   std::uint64_t sent_before = 0;  // the sender's `sent` when the hook was made
   std::uint64_t skipped = 0;      // sends not offered: disabled, or another port
   std::int32_t priority = 0;
@@ -43,7 +43,7 @@ struct Hook {
 // A hook's accounting at its receiver, under the receiver's in_mu. Every message it queues is
 // tagged with the slot (Message::edge), so its fate (handled, overwritten, discarded) is counted
 // here too. When the hook goes, `sent` and `skipped` are copied from the sender's side; the slot
-// is freed (its counts folded into TaskRecord::retired_hooks) once none of its messages is queued.
+// is freed (its counts folded into InputHooks::retired) once none of its messages is queued.
 struct InHook {
   std::uint32_t serial = 0;  // 0: a free slot
   bool hooked = false;
@@ -58,6 +58,19 @@ struct InHook {
 struct SuppressionWindow {
   std::int32_t level = 0;
   kernel::Time until{0};
+};
+
+// The input side of a task that has (or had) hooks into it or a suppression window, under in_mu.
+// Made when the first is needed: a task nothing is hooked into does without these 160 bytes.
+struct InputHooks {
+  std::vector<InHook> slots;              // per hook into the task (see InHook)
+  std::vector<std::uint32_t> free_slots;  // free slots of `slots`
+  HookTraffic retired;                    // hooks into the task whose slot was freed
+  std::array<SuppressionWindow, 2> suppression{};
+
+  // The window to use for `level` at `now`: the one of this level, else one that has ended, else
+  // the one that ends first.
+  SuppressionWindow& window_for(int level, kernel::Time now);
 };
 
 // Parameter state of a task made from a registered type.
@@ -84,7 +97,12 @@ struct TaskRecord final : kernel::Activity {
   kernel::ActivitySlot* offer(const Message& m, std::uint32_t edge, int priority, QueuePolicy policy,
                               kernel::Duration suppress_window, bool* accepted = nullptr);
   // Under in_mu: the counters of hook slot `edge` (0: none).
-  InHook* in_hook(std::uint32_t edge) { return edge == 0 ? nullptr : &in_hooks[edge - 1]; }
+  InHook* in_hook(std::uint32_t edge) { return edge == 0 ? nullptr : &inputs->slots[edge - 1]; }
+  // Under in_mu: the input side's hook slots and windows, made on first use.
+  InputHooks& input_hooks() {
+    if (!inputs) inputs = std::make_unique<InputHooks>();
+    return *inputs;
+  }
   // Under in_mu: a slot for a new hook into this task; returns its `edge`.
   std::uint32_t add_in_hook(std::uint32_t serial);
   // Under in_mu: the hook of slot `edge` is gone; `sent` and `skipped` from the sender's side.
@@ -103,7 +121,8 @@ struct TaskRecord final : kernel::Activity {
   std::atomic<std::int64_t> period_ns;
   kernel::ActivitySlot* slot = nullptr;  // set under in_mu
   std::unique_ptr<ParamState> params;
-  const PortDeclaration ports;  // checked by every hook (port_layout.hpp); empty: unchecked
+  // Checked by every hook (port_layout.hpp); null: unchecked.
+  const std::unique_ptr<const PortDeclaration> ports;
   kernel::RandomStream random;
 
   // Output side: the hooks of this task as a sender.
@@ -122,15 +141,9 @@ struct TaskRecord final : kernel::Activity {
   // Input side, under in_mu.
   kernel::OptionalMutex in_mu;
   kernel::RingBuffer<Message> queue;
-  TrafficCounters traffic;                   // `delivered` is mirrored from `delivered` below when read
-  std::vector<InHook> in_hooks;              // per hook into this task (see InHook)
-  std::vector<std::uint32_t> free_in_hooks;  // free slots of in_hooks
-  HookTraffic retired_hooks;                 // hooks into this task whose slot was freed
-  std::array<SuppressionWindow, 2> suppression{};
+  TrafficCounters traffic;             // `delivered` is mirrored from `delivered` below when read
+  std::unique_ptr<InputHooks> inputs;  // see input_hooks()
   bool wake_pending = false;
-  // The message being handled, moved out of the queue (outside in_mu, so senders can queue
-  // more meanwhile). A member, not a local: a fresh Message would clear its payload each time.
-  Message handling;
   std::atomic<std::uint64_t> delivered{0};  // written by the task's own context only
 };
 
