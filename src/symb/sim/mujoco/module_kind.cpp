@@ -1,0 +1,107 @@
+#include "symb/sim/mujoco/module_kind.hpp"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+namespace symb::sim::mujoco {
+
+namespace {
+
+// The gap between the body's underside and the floor on a wheeled module; the casters fill it.
+constexpr double kWheeledClearance = 0.008;
+// How far above a connector's centre its face's IR sensor sits.
+constexpr double kIrAboveConnector = 0.02;
+
+// A connector and an IR sensor at the centre of each face; the side faces' on the front half,
+// whose hinge-free body keeps them level.
+void place_faces(ModuleKind& kind, double ir_range) {
+  const Vec3 s = kind.body.size;
+  const std::array<Vec3, 4> centres = {Vec3{s[0] / 2, 0, 0}, Vec3{-s[0] / 2, 0, 0}, Vec3{s[0] / 4, s[1] / 2, 0},
+                                       Vec3{s[0] / 4, -s[1] / 2, 0}};
+  for (std::size_t i = 0; i < kFaces.size(); ++i) {
+    kind.connectors.push_back({face_name(kFaces[i]), kFaces[i], centres[i]});
+    Vec3 ir = centres[i];
+    ir[2] += kIrAboveConnector;
+    kind.ir.push_back({kFaces[i], ir, ir_range});
+  }
+}
+
+}  // namespace
+
+const char* face_name(Face face) {
+  switch (face) {
+    case Face::front: return "front";
+    case Face::back: return "back";
+    case Face::left: return "left";
+    case Face::right: return "right";
+  }
+  return "?";
+}
+
+Vec3 face_normal(Face face) {
+  switch (face) {
+    case Face::front: return {1, 0, 0};
+    case Face::back: return {-1, 0, 0};
+    case Face::left: return {0, 1, 0};
+    case Face::right: return {0, -1, 0};
+  }
+  return {0, 0, 0};
+}
+
+ModuleKind standard_kind() {
+  ModuleKind kind;
+  kind.name = "cube";
+  place_faces(kind, 0.15);
+  return kind;
+}
+
+ModuleKind long_kind() {
+  ModuleKind kind;
+  kind.name = "long";
+  kind.body.size = {0.16, 0.10, 0.08};
+  kind.body.mass = 0.6;
+  kind.has_wheels = false;
+  kind.hinge.gain = 8.0;
+  kind.hinge.damping = 0.12;
+  place_faces(kind, 0.15);
+  return kind;
+}
+
+double rest_height(const ModuleKind& kind) {
+  return kind.body.size[2] / 2 + (kind.has_wheels ? kWheeledClearance : 0.0);
+}
+
+std::string check(const ModuleKind& kind) {
+  std::ostringstream why;
+  const auto& s = kind.body.size;
+  if (!(s[0] > 0 && s[1] > 0 && s[2] > 0)) why << "body size must be positive on every axis; ";
+  if (!(kind.body.mass > 0)) why << "body mass must be positive; ";
+  if (kind.has_wheels) {
+    const auto& w = kind.wheels;
+    if (!(w.radius > kWheeledClearance && w.radius < s[2] / 2 + kWheeledClearance))
+      why << "wheel radius must lie between the clearance (" << kWheeledClearance << " m) and half the body height; ";
+    if (!(w.width > 0 && w.width < s[1] / 2)) why << "wheel width must be positive and under half the body width; ";
+    if (!(w.mass > 0 && w.max_speed > 0 && w.gain > 0)) why << "wheel mass, max speed and gain must be positive; ";
+  }
+  const auto& h = kind.hinge;
+  const double axis_norm = std::sqrt(h.axis[0] * h.axis[0] + h.axis[1] * h.axis[1] + h.axis[2] * h.axis[2]);
+  if (!(axis_norm > 1e-9)) why << "hinge axis must not be zero; ";
+  if (!(h.range[0] < h.range[1])) why << "hinge range must be [low, high] with low < high; ";
+  if (!(h.gain > 0 && h.damping >= 0)) why << "hinge gain must be positive and damping not negative; ";
+  std::set<std::string> names;
+  for (const auto& c : kind.connectors) {
+    if (c.name.empty()) why << "a connector has no name; ";
+    if (!names.insert(c.name).second) why << "connector name '" << c.name << "' is used twice; ";
+  }
+  std::set<Face> ir_faces;
+  for (const auto& ir : kind.ir) {
+    if (!ir_faces.insert(ir.face).second) why << "two IR sensors on face " << face_name(ir.face) << "; ";
+    if (!(ir.range > 0)) why << "IR range must be positive; ";
+  }
+  std::string text = why.str();
+  if (text.size() >= 2) text.resize(text.size() - 2);
+  return text;
+}
+
+}  // namespace symb::sim::mujoco
