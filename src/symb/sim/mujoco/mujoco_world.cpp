@@ -1,0 +1,500 @@
+#include "symb/sim/mujoco/mujoco_world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <sstream>
+#include <stdexcept>
+
+#include <mujoco/mujoco.h>
+
+namespace symb::sim::mujoco {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// A ray that meets its own module goes on from just past the hit (m).
+constexpr double kRayStepPast = 1e-6;
+
+// MuJoCo reports warnings only through one process-wide function pointer; by default it prints
+// them and appends them to MUJOCO_LOG.TXT in the working folder. The world reads the same warnings
+// from its own mjData's counters and returns them as errors, so the printing is switched off,
+// once, and only when nobody else has installed a handler.
+void quiet_mujoco_warnings() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (mju_user_warning == nullptr) mju_user_warning = [](const char*) {};
+  });
+}
+
+Vec3 rotate(const mjtNum* mat, const Vec3& v) {
+  Vec3 out;
+  mju_rotVecMat(out.data(), v.data(), mat);
+  return out;
+}
+
+double distance(const Vec3& a, const Vec3& b) {
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+double opposed_angle(const Vec3& na, const Vec3& nb) {
+  const double dot = -(na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2]);
+  return std::acos(std::clamp(dot, -1.0, 1.0));
+}
+
+std::string mm(double metres) {
+  std::ostringstream out;
+  out.precision(3);
+  out << std::fixed << metres * 1000 << " mm";
+  return out.str();
+}
+
+std::string deg(double radians) {
+  std::ostringstream out;
+  out.precision(3);
+  out << std::fixed << radians * 180 / kPi << " deg";
+  return out.str();
+}
+
+// The warnings that mean the run can no longer be trusted.
+constexpr std::array<std::pair<int, const char*>, 5> kFatalWarnings = {{
+    {mjWARN_BADQPOS, "a bad number in the positions (qpos)"},
+    {mjWARN_BADQVEL, "a bad number in the speeds (qvel)"},
+    {mjWARN_BADQACC, "a bad number in the accelerations (qacc): the simulation diverged"},
+    {mjWARN_CNSTRFULL, "more constraint rows than njmax reserves"},
+    {mjWARN_CONTACTFULL, "more contacts than nconmax reserves"},
+}};
+
+}  // namespace
+
+// Outside the anonymous namespace: MujocoWorld::State, which has external linkage, holds one.
+struct DataDeleter {
+  void operator()(mjData* data) const { mj_deleteData(data); }
+};
+
+const char* state_name(ConnectorState state) {
+  switch (state) {
+    case ConnectorState::free: return "free";
+    case ConnectorState::aligned: return "aligned";
+    case ConnectorState::docked: return "docked";
+  }
+  return "?";
+}
+
+const char* change_name(DockChange change) {
+  switch (change) {
+    case DockChange::latched: return "latched";
+    case DockChange::unlatched: return "unlatched";
+    case DockChange::refused: return "refused";
+  }
+  return "?";
+}
+
+double Pose3::yaw() const {
+  const auto& q = quaternion;
+  return std::atan2(2 * (q[0] * q[3] + q[1] * q[2]), 1 - 2 * (q[2] * q[2] + q[3] * q[3]));
+}
+
+struct MujocoWorld::State {
+  struct Connector {
+    int body = -1;  // the module's base or tail
+    bool open = true;
+    std::size_t weld = kNoIndex;  // the weld holding it, when docked
+    std::size_t other_module = kNoIndex;
+    std::size_t other_connector = kNoIndex;
+  };
+  struct Module {
+    int base = -1, tail = -1;
+    int free_qpos = -1, free_dof = -1;
+    int hinge_qpos = -1, hinge_dof = -1, hinge_actuator = -1;
+    int wheel_actuator[2] = {-1, -1};
+    std::vector<Connector> connectors;
+  };
+  struct Weld {
+    int equality = -1;
+    bool in_use = false;
+  };
+
+  std::vector<ModuleSpec> specs;
+  std::string mjcf;
+  ModelPtr model;
+  std::unique_ptr<mjData, DataDeleter> data;
+  std::vector<Module> modules;
+  std::vector<std::size_t> body_module;  // per MuJoCo body: its module, or kNoIndex
+  std::vector<Weld> welds;
+  std::vector<DockEvent> log;
+  std::uint64_t steps = 0;
+  std::string failure;
+
+  const Module& at(std::size_t module) const {
+    if (module >= modules.size())
+      throw std::out_of_range("module " + std::to_string(module) + " (the world has " + std::to_string(modules.size()) +
+                              ")");
+    return modules[module];
+  }
+  const Connector& at(std::size_t module, std::size_t connector) const {
+    const Module& m = at(module);
+    if (connector >= m.connectors.size())
+      throw std::out_of_range("connector " + std::to_string(connector) + " of module '" + specs[module].name +
+                              "' (it has " + std::to_string(m.connectors.size()) + ")");
+    return m.connectors[connector];
+  }
+  Connector& at(std::size_t module, std::size_t connector) {
+    return const_cast<Connector&>(static_cast<const State*>(this)->at(module, connector));
+  }
+  std::string label(std::size_t module, std::size_t connector) const {
+    return specs[module].name + "." + specs[module].kind.connectors[connector].name;
+  }
+  // Bodies' poses for the current qpos: mj_step leaves them one step behind its new qpos. Only
+  // derived quantities change, so the next step's result is the same with or without it.
+  void refresh() { mj_kinematics(model.get(), data.get()); }
+
+  Vec3 point(int body, const Vec3& local) const {
+    Vec3 p = rotate(data->xmat + 9 * body, local);
+    for (int i = 0; i < 3; ++i) p[i] += data->xpos[3 * body + i];
+    return p;
+  }
+  Vec3 position(std::size_t module, std::size_t connector) const {
+    return point(at(module, connector).body, specs[module].kind.connectors[connector].position);
+  }
+  Vec3 normal(std::size_t module, std::size_t connector) const {
+    return rotate(data->xmat + 9 * at(module, connector).body,
+                  face_normal(specs[module].kind.connectors[connector].face));
+  }
+  // The other modules' connector nearest to this one (lowest indices on a tie).
+  std::optional<std::pair<std::size_t, std::size_t>> nearest(std::size_t module, std::size_t connector) const {
+    const Vec3 p = position(module, connector);
+    std::optional<std::pair<std::size_t, std::size_t>> best;
+    double best_distance = 0;
+    for (std::size_t m = 0; m < modules.size(); ++m) {
+      if (m == module) continue;
+      for (std::size_t c = 0; c < modules[m].connectors.size(); ++c) {
+        const double dd = distance(p, position(m, c));
+        if (!best || dd < best_distance) {
+          best = {m, c};
+          best_distance = dd;
+        }
+      }
+    }
+    return best;
+  }
+};
+
+MujocoWorld::MujocoWorld(std::unique_ptr<State> state) : s_(std::move(state)) {}
+MujocoWorld::MujocoWorld(MujocoWorld&&) noexcept = default;
+MujocoWorld& MujocoWorld::operator=(MujocoWorld&&) noexcept = default;
+MujocoWorld::~MujocoWorld() = default;
+
+kernel::Result<MujocoWorld> MujocoWorld::make(std::vector<ModuleSpec> modules, ModelOptions options) {
+  quiet_mujoco_warnings();
+  auto text = mjcf_text(modules, options);
+  if (!text) return kernel::Error{text.error()};
+  auto model = load_mjcf(*text);
+  if (!model) return kernel::Error{model.error()};
+  auto s = std::make_unique<State>();
+  s->specs = std::move(modules);
+  s->mjcf = std::move(text).value();
+  s->model = std::move(model).value();
+  const mjModel* m = s->model.get();
+  s->data.reset(mj_makeData(m));
+  if (!s->data) return kernel::Error{"MuJoCo could not allocate the model's data (nstack too large?)"};
+
+  auto id = [&](int type, const std::string& name) -> int { return mj_name2id(m, type, name.c_str()); };
+  s->body_module.assign(static_cast<std::size_t>(m->nbody), kNoIndex);
+  for (std::size_t i = 0; i < s->specs.size(); ++i) {
+    const ModuleSpec& spec = s->specs[i];
+    const std::string& n = spec.name;
+    State::Module mod;
+    mod.base = id(mjOBJ_BODY, n + ".base");
+    mod.tail = id(mjOBJ_BODY, n + ".tail");
+    const int free = id(mjOBJ_JOINT, n + ".free");
+    mod.free_qpos = m->jnt_qposadr[free];
+    mod.free_dof = m->jnt_dofadr[free];
+    const int hinge = id(mjOBJ_JOINT, n + ".hinge");
+    mod.hinge_qpos = m->jnt_qposadr[hinge];
+    mod.hinge_dof = m->jnt_dofadr[hinge];
+    mod.hinge_actuator = id(mjOBJ_ACTUATOR, n + ".hinge");
+    s->body_module[static_cast<std::size_t>(mod.base)] = i;
+    s->body_module[static_cast<std::size_t>(mod.tail)] = i;
+    if (spec.kind.has_wheels) {
+      mod.wheel_actuator[0] = id(mjOBJ_ACTUATOR, n + ".wheel_l");
+      mod.wheel_actuator[1] = id(mjOBJ_ACTUATOR, n + ".wheel_r");
+      s->body_module[static_cast<std::size_t>(id(mjOBJ_BODY, n + ".wheel_l"))] = i;
+      s->body_module[static_cast<std::size_t>(id(mjOBJ_BODY, n + ".wheel_r"))] = i;
+    }
+    for (const auto& c : spec.kind.connectors) {
+      State::Connector con;
+      con.body = c.position[0] < 0 ? mod.tail : mod.base;
+      mod.connectors.push_back(con);
+    }
+    s->modules.push_back(std::move(mod));
+  }
+  for (std::size_t k = 0; k < options.spare_welds; ++k)
+    s->welds.push_back({id(mjOBJ_EQUALITY, "spare_weld_" + std::to_string(k)), false});
+  mj_forward(m, s->data.get());
+  return MujocoWorld(std::move(s));
+}
+
+const std::string& MujocoWorld::mjcf() const { return s_->mjcf; }
+std::size_t MujocoWorld::module_count() const { return s_->modules.size(); }
+const ModuleSpec& MujocoWorld::module(std::size_t module) const {
+  s_->at(module);
+  return s_->specs[module];
+}
+
+std::optional<std::size_t> MujocoWorld::find_module(std::string_view name) const {
+  for (std::size_t i = 0; i < s_->specs.size(); ++i)
+    if (s_->specs[i].name == name) return i;
+  return std::nullopt;
+}
+
+std::optional<std::size_t> MujocoWorld::find_connector(std::size_t module, std::string_view name) const {
+  const auto& connectors = this->module(module).kind.connectors;
+  for (std::size_t i = 0; i < connectors.size(); ++i)
+    if (connectors[i].name == name) return i;
+  return std::nullopt;
+}
+
+kernel::Status MujocoWorld::step(std::uint64_t substeps) {
+  if (!s_->failure.empty()) return kernel::Error{"the world has failed and does not step: " + s_->failure};
+  const mjModel* m = s_->model.get();
+  mjData* d = s_->data.get();
+  for (std::uint64_t i = 0; i < substeps; ++i) {
+    std::array<int, kFatalWarnings.size()> before{};
+    for (std::size_t w = 0; w < kFatalWarnings.size(); ++w) before[w] = d->warning[kFatalWarnings[w].first].number;
+    mj_step(m, d);
+    ++s_->steps;
+    for (std::size_t w = 0; w < kFatalWarnings.size(); ++w) {
+      const auto& warning = d->warning[kFatalWarnings[w].first];
+      if (warning.number == before[w]) continue;
+      std::ostringstream why;
+      why << "step " << s_->steps << " (t = " << time() << " s): " << kFatalWarnings[w].second << " (MuJoCo's index "
+          << warning.lastinfo << ")";
+      s_->failure = why.str();
+      return kernel::Error{s_->failure};
+    }
+  }
+  s_->refresh();
+  return {};
+}
+
+std::uint64_t MujocoWorld::steps() const { return s_->steps; }
+double MujocoWorld::time() const { return static_cast<double>(s_->steps) * kTimestep; }
+bool MujocoWorld::failed() const { return !s_->failure.empty(); }
+
+kernel::Status MujocoWorld::set_wheels(std::size_t module, double left, double right) {
+  const auto& mod = s_->at(module);
+  const ModuleKind& kind = s_->specs[module].kind;
+  if (!kind.has_wheels)
+    return kernel::Error{"module '" + s_->specs[module].name + "' (kind '" + kind.name + "') has no wheels"};
+  const double limit = kind.wheels.max_speed;
+  const double speeds[2] = {left, right};
+  for (int w = 0; w < 2; ++w)
+    s_->data->ctrl[mod.wheel_actuator[w]] = std::clamp(speeds[w], -limit, limit) / kind.wheels.radius;
+  return {};
+}
+
+void MujocoWorld::set_hinge_target(std::size_t module, double angle) {
+  const auto& mod = s_->at(module);
+  const auto& range = s_->specs[module].kind.hinge.range;
+  s_->data->ctrl[mod.hinge_actuator] = std::clamp(angle, range[0], range[1]);
+}
+
+double MujocoWorld::hinge_angle(std::size_t module) const { return s_->data->qpos[s_->at(module).hinge_qpos]; }
+double MujocoWorld::hinge_speed(std::size_t module) const { return s_->data->qvel[s_->at(module).hinge_dof]; }
+
+Pose3 MujocoWorld::pose(std::size_t module) const {
+  const int body = s_->at(module).base;
+  Pose3 pose;
+  for (int i = 0; i < 3; ++i) pose.position[static_cast<std::size_t>(i)] = s_->data->xpos[3 * body + i];
+  for (int i = 0; i < 4; ++i) pose.quaternion[static_cast<std::size_t>(i)] = s_->data->xquat[4 * body + i];
+  return pose;
+}
+
+kernel::Status MujocoWorld::place(std::size_t module, const StartPose& where) {
+  const auto& mod = s_->at(module);
+  for (std::size_t c = 0; c < mod.connectors.size(); ++c)
+    if (mod.connectors[c].weld != kNoIndex)
+      return kernel::Error{"place " + s_->specs[module].name + " refused: " + s_->label(module, c) + " is docked"};
+  mjtNum* q = s_->data->qpos + mod.free_qpos;
+  q[0] = where.x;
+  q[1] = where.y;
+  q[2] = rest_height(s_->specs[module].kind);
+  q[3] = std::cos(where.yaw / 2);
+  q[4] = 0;
+  q[5] = 0;
+  q[6] = std::sin(where.yaw / 2);
+  std::fill_n(s_->data->qvel + mod.free_dof, 6, 0.0);
+  s_->refresh();
+  return {};
+}
+
+std::optional<double> MujocoWorld::ir(std::size_t module, Face face) const {
+  const auto& mod = s_->at(module);
+  const ModuleKind& kind = s_->specs[module].kind;
+  const auto sensor = std::find_if(kind.ir.begin(), kind.ir.end(), [&](const IrSpec& ir) { return ir.face == face; });
+  if (sensor == kind.ir.end()) return std::nullopt;
+  const int body = sensor->position[0] < 0 ? mod.tail : mod.base;
+  Vec3 origin = s_->point(body, sensor->position);
+  const Vec3 direction = rotate(s_->data->xmat + 9 * body, face_normal(face));
+  // Each pass skips one of the module's own geoms; it has at most as many as the model has.
+  double travelled = 0;
+  for (int pass = 0; pass <= s_->model->ngeom; ++pass) {
+    int geom = -1;
+    const double hit = mj_ray(s_->model.get(), s_->data.get(), origin.data(), direction.data(), nullptr, 1,
+                              pass == 0 ? body : -1, &geom);
+    if (hit < 0 || geom < 0 || travelled + hit > sensor->range) return std::nullopt;
+    const int hit_body = s_->model->geom_bodyid[geom];
+    if (s_->body_module[static_cast<std::size_t>(hit_body)] != module) return travelled + hit;
+    const double skip = hit + kRayStepPast;
+    for (int i = 0; i < 3; ++i) origin[static_cast<std::size_t>(i)] += skip * direction[static_cast<std::size_t>(i)];
+    travelled += skip;
+  }
+  return std::nullopt;
+}
+
+Vec3 MujocoWorld::connector_position(std::size_t module, std::size_t connector) const {
+  return s_->position(module, connector);
+}
+Vec3 MujocoWorld::connector_normal(std::size_t module, std::size_t connector) const {
+  return s_->normal(module, connector);
+}
+void MujocoWorld::set_open(std::size_t module, std::size_t connector, bool open) {
+  s_->at(module, connector).open = open;
+}
+bool MujocoWorld::is_open(std::size_t module, std::size_t connector) const { return s_->at(module, connector).open; }
+
+ConnectorState MujocoWorld::connector_state(std::size_t module, std::size_t connector) const {
+  if (s_->at(module, connector).weld != kNoIndex) return ConnectorState::docked;
+  const auto other = s_->nearest(module, connector);
+  if (!other || s_->at(other->first, other->second).weld != kNoIndex) return ConnectorState::free;
+  const double dd = distance(s_->position(module, connector), s_->position(other->first, other->second));
+  const double angle = opposed_angle(s_->normal(module, connector), s_->normal(other->first, other->second));
+  return dd <= kLatchPositionTolerance && angle <= kLatchAngleTolerance ? ConnectorState::aligned
+                                                                        : ConnectorState::free;
+}
+
+std::optional<std::pair<std::size_t, std::size_t>> MujocoWorld::docked_to(std::size_t module,
+                                                                          std::size_t connector) const {
+  const auto& c = s_->at(module, connector);
+  if (c.weld == kNoIndex) return std::nullopt;
+  return std::pair{c.other_module, c.other_connector};
+}
+
+kernel::Status MujocoWorld::latch(std::size_t module, std::size_t connector) {
+  State& s = *s_;
+  auto& self = s.at(module, connector);
+  DockEvent event;
+  event.step = s.steps;
+  event.time = time();
+  event.module = module;
+  event.connector = connector;
+  auto refuse = [&](std::string why) -> kernel::Status {
+    event.change = DockChange::refused;
+    event.reason = why;
+    s.log.push_back(event);
+    return kernel::Error{"latch " + s.label(module, connector) + " refused: " + why};
+  };
+  if (!s.failure.empty()) return refuse("the world has failed");
+  if (self.weld != kNoIndex)
+    return refuse("it is already docked to " + s.label(self.other_module, self.other_connector));
+  if (!self.open) return refuse("it is closed");
+  const auto other = s.nearest(module, connector);
+  if (!other) return refuse("there is no other module");
+  const auto [om, oc] = *other;
+  auto& partner = s.at(om, oc);
+  event.other_module = om;
+  event.other_connector = oc;
+  const Vec3 pa = s.position(module, connector), pb = s.position(om, oc);
+  event.distance = distance(pa, pb);
+  event.angle = opposed_angle(s.normal(module, connector), s.normal(om, oc));
+  const std::string partner_label = s.label(om, oc);
+  if (partner.weld != kNoIndex)
+    return refuse("the nearest connector, " + partner_label + ", is already docked to " +
+                  s.label(partner.other_module, partner.other_connector));
+  if (!partner.open) return refuse("the nearest connector, " + partner_label + ", is closed");
+  if (event.distance > kLatchPositionTolerance)
+    return refuse("position: " + partner_label + " is " + mm(event.distance) + " away, " +
+                  mm(event.distance - kLatchPositionTolerance) + " beyond the tolerance of " +
+                  mm(kLatchPositionTolerance));
+  if (event.angle > kLatchAngleTolerance)
+    return refuse("angle: " + partner_label + " faces it " + deg(event.angle) + " off, " +
+                  deg(event.angle - kLatchAngleTolerance) + " beyond the tolerance of " + deg(kLatchAngleTolerance));
+  const auto weld = std::find_if(s.welds.begin(), s.welds.end(), [](const State::Weld& w) { return !w.in_use; });
+  if (weld == s.welds.end()) return refuse("all " + std::to_string(s.welds.size()) + " spare welds are in use");
+
+  // Retarget the weld (MuJoCo 2.2.2 eq_data: [0:3] the anchor in body 2's frame, [3:6] the same
+  // point in body 1's frame, [6:10] the relative orientation neg(q1) * q2, [10] torque scale) to
+  // hold the pose the bodies have now, anchored midway between the connectors.
+  mjModel* m = s.model.get();
+  const mjData* d = s.data.get();
+  const int b1 = self.body, b2 = partner.body;
+  const int eq = weld->equality;
+  m->eq_obj1id[eq] = b1;
+  m->eq_obj2id[eq] = b2;
+  mjtNum* data = m->eq_data + mjNEQDATA * eq;
+  mjtNum anchor[3], offset[3];
+  for (int i = 0; i < 3; ++i) anchor[i] = (pa[static_cast<std::size_t>(i)] + pb[static_cast<std::size_t>(i)]) / 2;
+  for (int i = 0; i < 3; ++i) offset[i] = anchor[i] - d->xpos[3 * b2 + i];
+  mju_rotVecMatT(data, offset, d->xmat + 9 * b2);
+  for (int i = 0; i < 3; ++i) offset[i] = anchor[i] - d->xpos[3 * b1 + i];
+  mju_rotVecMatT(data + 3, offset, d->xmat + 9 * b1);
+  mjtNum inverse[4];
+  mju_negQuat(inverse, d->xquat + 4 * b1);
+  mju_mulQuat(data + 6, inverse, d->xquat + 4 * b2);
+  data[10] = 1;
+  m->eq_active[eq] = 1;
+  weld->in_use = true;
+  const std::size_t weld_index = static_cast<std::size_t>(weld - s.welds.begin());
+  self.weld = partner.weld = weld_index;
+  self.other_module = om;
+  self.other_connector = oc;
+  partner.other_module = module;
+  partner.other_connector = connector;
+  event.change = DockChange::latched;
+  event.reason = "weld " + std::to_string(weld_index);
+  s.log.push_back(event);
+  return {};
+}
+
+kernel::Status MujocoWorld::unlatch(std::size_t module, std::size_t connector) {
+  State& s = *s_;
+  auto& self = s.at(module, connector);
+  DockEvent event;
+  event.step = s.steps;
+  event.time = time();
+  event.module = module;
+  event.connector = connector;
+  if (self.weld == kNoIndex) {
+    event.change = DockChange::refused;
+    event.reason = "it is not docked";
+    s.log.push_back(event);
+    return kernel::Error{"unlatch " + s.label(module, connector) + " refused: it is not docked"};
+  }
+  const std::size_t weld = self.weld;
+  auto& partner = s.at(self.other_module, self.other_connector);
+  event.other_module = self.other_module;
+  event.other_connector = self.other_connector;
+  event.distance = distance(s.position(module, connector), s.position(self.other_module, self.other_connector));
+  event.angle = opposed_angle(s.normal(module, connector), s.normal(self.other_module, self.other_connector));
+  s.model->eq_active[s.welds[weld].equality] = 0;
+  s.welds[weld].in_use = false;
+  for (auto* c : {&self, &partner}) {
+    c->weld = kNoIndex;
+    c->other_module = kNoIndex;
+    c->other_connector = kNoIndex;
+  }
+  event.change = DockChange::unlatched;
+  event.reason = "weld " + std::to_string(weld);
+  s.log.push_back(event);
+  return {};
+}
+
+const std::vector<DockEvent>& MujocoWorld::docking_log() const { return s_->log; }
+
+std::size_t MujocoWorld::spare_welds_free() const {
+  return static_cast<std::size_t>(
+      std::count_if(s_->welds.begin(), s_->welds.end(), [](const State::Weld& w) { return !w.in_use; }));
+}
+
+}  // namespace symb::sim::mujoco

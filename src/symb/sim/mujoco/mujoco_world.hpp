@@ -1,0 +1,137 @@
+// MujocoWorld: the 3D world of robot modules on MuJoCo 2.2.2. It owns the compiled model and its
+// running state, steps them by whole 2 ms steps, takes each module's wheel speeds and hinge
+// target, gives its hinge angle and speed, its IR range per face and its pose, and docks modules
+// by their connectors at runtime.
+//
+// Docking. Each connector has an open flag (set by its owner; open by default) and a state:
+//   free     not docked, and no other module's undocked connector faces it within the tolerances;
+//   aligned  not docked, and one does (latching it would succeed if both are open);
+//   docked   welded to another module's connector.
+// latch(m, c) looks for the other module's connector nearest to c. It succeeds only when both are
+// open and undocked, their centres lie within kLatchPositionTolerance of each other and their
+// outward normals are opposite within kLatchAngleTolerance; then a spare weld of the model is
+// retargeted to the two bodies, given their current relative pose (so nothing jumps) and switched
+// on. Otherwise it is refused, and the error says which bound failed and by how much. unlatch
+// switches the weld off and returns it to the pool. Every latch, unlatch and refusal is appended
+// to the docking log with the step, the time, both connectors and the measured distance and angle.
+//
+// Handles: modules and connectors are indices (the order of the specs, the order of the kind's
+// connectors), never pointers. Nothing is global; the same specs and the same calls give the same
+// run bit for bit. A handle out of range is a programming error: std::out_of_range.
+//
+// Divergence: MuJoCo, on finding a bad acceleration, resets its state (time included) and only
+// counts a warning. step() checks those counters after every substep: on a bad position, speed or
+// acceleration, or a full constraint or contact buffer, it stops and returns the error, and every
+// later step() refuses. It loops on step counts, never on MuJoCo's time.
+//
+//   auto world = MujocoWorld::make({{"a", standard_kind(), {0, 0, 0}}, {"b", standard_kind(), {0.11, 0, M_PI}}});
+//   world->set_wheels(0, 0.05, 0.05);
+//   if (auto s = world->step(500); !s) report(s.error());  // one simulated second
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "symb/kernel/result.hpp"
+#include "symb/sim/mujoco/mjcf_model.hpp"
+#include "symb/sim/mujoco/module_kind.hpp"
+
+struct mjData_;
+
+namespace symb::sim::mujoco {
+
+// Two connectors latch only when their centres are at most this far apart (m): about what a
+// mechanical docking guide of a 10 cm module draws in.
+inline constexpr double kLatchPositionTolerance = 0.015;
+// ... and their outward normals are opposite within this angle (rad, 10 degrees).
+inline constexpr double kLatchAngleTolerance = 10.0 * 3.14159265358979323846 / 180.0;
+
+inline constexpr std::size_t kNoIndex = static_cast<std::size_t>(-1);
+
+enum class ConnectorState { free, aligned, docked };
+const char* state_name(ConnectorState state);
+
+struct Pose3 {
+  Vec3 position{};                                  // of the module frame's origin, world frame
+  std::array<double, 4> quaternion = {1, 0, 0, 0};  // w, x, y, z: module frame to world
+  double yaw() const;                               // heading about z, rad
+};
+
+enum class DockChange { latched, unlatched, refused };
+const char* change_name(DockChange change);
+
+struct DockEvent {
+  std::uint64_t step = 0;
+  double time = 0;  // s
+  DockChange change = DockChange::refused;
+  std::size_t module = kNoIndex;  // the one asked to latch or unlatch
+  std::size_t connector = kNoIndex;
+  std::size_t other_module = kNoIndex;  // the partner, when there was one
+  std::size_t other_connector = kNoIndex;
+  double distance = -1;  // m between the connectors' centres, when measured
+  double angle = -1;     // rad between one's normal and the other's reversed, when measured
+  std::string reason;    // for a refusal, why; else which weld
+};
+
+class MujocoWorld {
+ public:
+  // Builds the model text, compiles it from memory and computes the first instant; or why not.
+  static kernel::Result<MujocoWorld> make(std::vector<ModuleSpec> modules, ModelOptions options = {});
+
+  MujocoWorld(MujocoWorld&&) noexcept;
+  MujocoWorld& operator=(MujocoWorld&&) noexcept;
+  ~MujocoWorld();
+
+  const std::string& mjcf() const;  // the model's text, for MuJoCo's own viewer
+  std::size_t module_count() const;
+  const ModuleSpec& module(std::size_t module) const;
+  std::optional<std::size_t> find_module(std::string_view name) const;
+  std::optional<std::size_t> find_connector(std::size_t module, std::string_view name) const;
+
+  // Advances by `substeps` steps of kTimestep. An error on divergence (see above); the world is
+  // then failed and stays so. Afterwards every reading describes the new instant.
+  kernel::Status step(std::uint64_t substeps);
+  std::uint64_t steps() const;
+  double time() const;  // steps() * kTimestep, s
+  bool failed() const;
+
+  // Rim speeds in m/s, clamped to the kind's max_speed; act from the next step on. An error for a
+  // module without wheels.
+  kernel::Status set_wheels(std::size_t module, double left, double right);
+  // The hinge's position servo target, rad, clamped to the kind's range.
+  void set_hinge_target(std::size_t module, double angle);
+  double hinge_angle(std::size_t module) const;  // rad
+  double hinge_speed(std::size_t module) const;  // rad/s
+  Pose3 pose(std::size_t module) const;
+  // Puts the module at rest at `where` on the floor (its hinge keeps its angle), as a person sets
+  // a robot down or takes it away. Refused while any of its connectors is docked.
+  kernel::Status place(std::size_t module, const StartPose& where);
+  // The distance (m) from the face's IR sensor to the first thing its ray meets that is not the
+  // module itself, or nothing when that is beyond the sensor's range or the face has no sensor.
+  std::optional<double> ir(std::size_t module, Face face) const;
+
+  Vec3 connector_position(std::size_t module, std::size_t connector) const;  // world frame
+  Vec3 connector_normal(std::size_t module, std::size_t connector) const;    // outward, unit
+  void set_open(std::size_t module, std::size_t connector, bool open);
+  bool is_open(std::size_t module, std::size_t connector) const;
+  ConnectorState connector_state(std::size_t module, std::size_t connector) const;
+  // The connector this one is docked to, as {module, connector}; nothing when not docked.
+  std::optional<std::pair<std::size_t, std::size_t>> docked_to(std::size_t module, std::size_t connector) const;
+
+  kernel::Status latch(std::size_t module, std::size_t connector);
+  kernel::Status unlatch(std::size_t module, std::size_t connector);
+  const std::vector<DockEvent>& docking_log() const;
+  std::size_t spare_welds_free() const;
+
+ private:
+  struct State;
+  explicit MujocoWorld(std::unique_ptr<State> state);
+  std::unique_ptr<State> s_;
+};
+
+}  // namespace symb::sim::mujoco
