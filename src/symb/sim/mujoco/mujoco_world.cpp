@@ -161,6 +161,21 @@ struct MujocoWorld::State {
     return rotate(data->xmat + 9 * at(module, connector).body,
                   face_normal(specs[module].kind.connectors[connector].face));
   }
+  // A log entry for `module`'s connector now, with the partner's distance and angle when there is one.
+  DockEvent event_between(std::size_t module, std::size_t connector, std::size_t other_module,
+                          std::size_t other_connector) const {
+    DockEvent event;
+    event.step = steps;
+    event.time = static_cast<double>(steps) * kTimestep;
+    event.module = module;
+    event.connector = connector;
+    if (other_module == kNoIndex) return event;
+    event.other_module = other_module;
+    event.other_connector = other_connector;
+    event.distance = distance(position(module, connector), position(other_module, other_connector));
+    event.angle = opposed_angle(normal(module, connector), normal(other_module, other_connector));
+    return event;
+  }
   // The other modules' connector nearest to this one (lowest indices on a tie).
   std::optional<std::pair<std::size_t, std::size_t>> nearest(std::size_t module, std::size_t connector) const {
     const Vec3 p = position(module, connector);
@@ -368,10 +383,9 @@ ConnectorState MujocoWorld::connector_state(std::size_t module, std::size_t conn
   if (s_->at(module, connector).weld != kNoIndex) return ConnectorState::docked;
   const auto other = s_->nearest(module, connector);
   if (!other || s_->at(other->first, other->second).weld != kNoIndex) return ConnectorState::free;
-  const double dd = distance(s_->position(module, connector), s_->position(other->first, other->second));
-  const double angle = opposed_angle(s_->normal(module, connector), s_->normal(other->first, other->second));
-  return dd <= kLatchPositionTolerance && angle <= kLatchAngleTolerance ? ConnectorState::aligned
-                                                                        : ConnectorState::free;
+  const DockEvent e = s_->event_between(module, connector, other->first, other->second);
+  return e.distance <= kLatchPositionTolerance && e.angle <= kLatchAngleTolerance ? ConnectorState::aligned
+                                                                                  : ConnectorState::free;
 }
 
 std::optional<std::pair<std::size_t, std::size_t>> MujocoWorld::docked_to(std::size_t module,
@@ -384,11 +398,7 @@ std::optional<std::pair<std::size_t, std::size_t>> MujocoWorld::docked_to(std::s
 kernel::Status MujocoWorld::latch(std::size_t module, std::size_t connector) {
   State& s = *s_;
   auto& self = s.at(module, connector);
-  DockEvent event;
-  event.step = s.steps;
-  event.time = time();
-  event.module = module;
-  event.connector = connector;
+  DockEvent event = s.event_between(module, connector, kNoIndex, kNoIndex);
   auto refuse = [&](std::string why) -> kernel::Status {
     event.change = DockChange::refused;
     event.reason = why;
@@ -403,11 +413,8 @@ kernel::Status MujocoWorld::latch(std::size_t module, std::size_t connector) {
   if (!other) return refuse("there is no other module");
   const auto [om, oc] = *other;
   auto& partner = s.at(om, oc);
-  event.other_module = om;
-  event.other_connector = oc;
+  event = s.event_between(module, connector, om, oc);
   const Vec3 pa = s.position(module, connector), pb = s.position(om, oc);
-  event.distance = distance(pa, pb);
-  event.angle = opposed_angle(s.normal(module, connector), s.normal(om, oc));
   const std::string partner_label = s.label(om, oc);
   if (partner.weld != kNoIndex)
     return refuse("the nearest connector, " + partner_label + ", is already docked to " +
@@ -460,11 +467,7 @@ kernel::Status MujocoWorld::latch(std::size_t module, std::size_t connector) {
 kernel::Status MujocoWorld::unlatch(std::size_t module, std::size_t connector) {
   State& s = *s_;
   auto& self = s.at(module, connector);
-  DockEvent event;
-  event.step = s.steps;
-  event.time = time();
-  event.module = module;
-  event.connector = connector;
+  DockEvent event = s.event_between(module, connector, self.other_module, self.other_connector);
   if (self.weld == kNoIndex) {
     event.change = DockChange::refused;
     event.reason = "it is not docked";
@@ -473,10 +476,6 @@ kernel::Status MujocoWorld::unlatch(std::size_t module, std::size_t connector) {
   }
   const std::size_t weld = self.weld;
   auto& partner = s.at(self.other_module, self.other_connector);
-  event.other_module = self.other_module;
-  event.other_connector = self.other_connector;
-  event.distance = distance(s.position(module, connector), s.position(self.other_module, self.other_connector));
-  event.angle = opposed_angle(s.normal(module, connector), s.normal(self.other_module, self.other_connector));
   s.model->eq_active[s.welds[weld].equality] = 0;
   s.welds[weld].in_use = false;
   for (auto* c : {&self, &partner}) {

@@ -29,12 +29,14 @@
 //   if (auto s = world->step(500); !s) report(s.error());  // one simulated second
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "symb/kernel/result.hpp"
