@@ -54,21 +54,21 @@ struct DockRig {
 
 TEST(MujocoDocking, LatchesJustInsideThePositionTolerance) {
   DockRig rig(kLatchPositionTolerance - kMjMillimetre);
-  EXPECT_EQ(rig.world.connector_state(DockRig::kA, rig.front_a), ConnectorState::aligned);
+  EXPECT_EQ(rig.world.connector_state(DockRig::kA, rig.front_a), ConnectorState::kAligned);
   const std::size_t spare = rig.world.spare_welds_free();
 
   const auto latched = rig.world.latch(DockRig::kA, rig.front_a);
   ASSERT_TRUE(latched.ok()) << latched.error();
   const DockEvent& event = rig.world.docking_log().back();
-  EXPECT_EQ(event.change, DockChange::latched);
+  EXPECT_EQ(event.change, DockChange::kLatched);
   EXPECT_EQ(event.other_module, DockRig::kB);
   EXPECT_EQ(event.other_connector, rig.front_b);
   // Measured: 14.115 mm (each module settles 0.06 mm back from where it was put).
   EXPECT_GT(event.distance, kLatchPositionTolerance - 1.5 * kMjMillimetre);
   EXPECT_LE(event.distance, kLatchPositionTolerance);
   EXPECT_LT(event.angle, kMjDegree);
-  EXPECT_EQ(rig.world.connector_state(DockRig::kA, rig.front_a), ConnectorState::docked);
-  EXPECT_EQ(rig.world.connector_state(DockRig::kB, rig.front_b), ConnectorState::docked);
+  EXPECT_EQ(rig.world.connector_state(DockRig::kA, rig.front_a), ConnectorState::kDocked);
+  EXPECT_EQ(rig.world.connector_state(DockRig::kB, rig.front_b), ConnectorState::kDocked);
   const auto partner = rig.world.docked_to(DockRig::kB, rig.front_b);
   ASSERT_TRUE(partner.has_value());
   EXPECT_EQ(partner->first, DockRig::kA);
@@ -78,7 +78,7 @@ TEST(MujocoDocking, LatchesJustInsideThePositionTolerance) {
 
 TEST(MujocoDocking, RefusedJustOutsideThePositionTolerance) {
   DockRig rig(kLatchPositionTolerance + kMjMillimetre);
-  EXPECT_EQ(rig.world.connector_state(DockRig::kA, rig.front_a), ConnectorState::free);
+  EXPECT_EQ(rig.world.connector_state(DockRig::kA, rig.front_a), ConnectorState::kFree);
   const std::size_t spare = rig.world.spare_welds_free();
 
   const auto latched = rig.world.latch(DockRig::kA, rig.front_a);
@@ -86,11 +86,11 @@ TEST(MujocoDocking, RefusedJustOutsideThePositionTolerance) {
   EXPECT_NE(latched.error().find("position"), std::string::npos) << latched.error();
   EXPECT_NE(latched.error().find("beyond the tolerance"), std::string::npos) << latched.error();
   const DockEvent& event = rig.world.docking_log().back();
-  EXPECT_EQ(event.change, DockChange::refused);
+  EXPECT_EQ(event.change, DockChange::kRefused);
   // Measured: 16.115 mm.
   EXPECT_GT(event.distance, kLatchPositionTolerance);
   EXPECT_LT(event.distance, kLatchPositionTolerance + 1.5 * kMjMillimetre);
-  EXPECT_EQ(rig.world.connector_state(DockRig::kA, rig.front_a), ConnectorState::free);
+  EXPECT_EQ(rig.world.connector_state(DockRig::kA, rig.front_a), ConnectorState::kFree);
   EXPECT_EQ(rig.world.spare_welds_free(), spare);
 }
 
@@ -103,7 +103,7 @@ TEST(MujocoDocking, LatchesJustInsideTheAngleTolerance) {
   const auto latched = rig.world.latch(DockRig::kA, rig.front_a);
   ASSERT_TRUE(latched.ok()) << latched.error();
   const DockEvent& event = rig.world.docking_log().back();
-  EXPECT_EQ(event.change, DockChange::latched);
+  EXPECT_EQ(event.change, DockChange::kLatched);
   // Measured: 9.018 deg, the connectors 11.11 mm apart.
   EXPECT_GT(event.angle, kLatchAngleTolerance - 1.5 * kMjDegree);
   EXPECT_LE(event.angle, kLatchAngleTolerance);
@@ -116,7 +116,7 @@ TEST(MujocoDocking, RefusedJustOutsideTheAngleTolerance) {
   ASSERT_FALSE(latched.ok());
   EXPECT_NE(latched.error().find("angle"), std::string::npos) << latched.error();
   const DockEvent& event = rig.world.docking_log().back();
-  EXPECT_EQ(event.change, DockChange::refused);
+  EXPECT_EQ(event.change, DockChange::kRefused);
   EXPECT_LE(event.distance, kLatchPositionTolerance);  // only the angle failed
   // Measured: 11.033 deg, the connectors 11.12 mm apart.
   EXPECT_GT(event.angle, kLatchAngleTolerance);
@@ -146,8 +146,8 @@ TEST(MujocoDocking, ClosedOrAlreadyDockedConnectorsAreRefused) {
   }
   std::vector<DockChange> changes;
   for (const auto& e : w.docking_log()) changes.push_back(e.change);
-  EXPECT_EQ(changes, (std::vector<DockChange>{DockChange::refused, DockChange::refused, DockChange::latched,
-                                              DockChange::refused, DockChange::refused}));
+  EXPECT_EQ(changes, (std::vector<DockChange>{DockChange::kRefused, DockChange::kRefused, DockChange::kLatched,
+                                              DockChange::kRefused, DockChange::kRefused}));
   EXPECT_FALSE(w.unlatch(DockRig::kA, *w.find_connector(DockRig::kA, "back")).ok());
 }
 
@@ -185,9 +185,9 @@ TEST(MujocoDocking, UnlatchingPartsThePair) {
   ASSERT_TRUE(w.step(500).ok());
   const auto parted = w.unlatch(DockRig::kB, rig.front_b);  // either side may unlatch
   ASSERT_TRUE(parted.ok()) << parted.error();
-  EXPECT_EQ(w.docking_log().back().change, DockChange::unlatched);
+  EXPECT_EQ(w.docking_log().back().change, DockChange::kUnlatched);
   // Still face to face, so aligned (latchable again) until they part.
-  EXPECT_EQ(w.connector_state(DockRig::kA, rig.front_a), ConnectorState::aligned);
+  EXPECT_EQ(w.connector_state(DockRig::kA, rig.front_a), ConnectorState::kAligned);
   EXPECT_FALSE(w.docked_to(DockRig::kA, rig.front_a).has_value());
   EXPECT_EQ(w.spare_welds_free(), spare);
   ASSERT_TRUE(w.step(250).ok());  // b rolls out the speed it had; its wheels brake it
@@ -198,7 +198,7 @@ TEST(MujocoDocking, UnlatchingPartsThePair) {
   // Measured: a moved 85.4 mm in that second, b 0.00001 mm.
   EXPECT_GT(moved_a, 0.03);
   EXPECT_LT(moved_b, 0.0001);
-  EXPECT_EQ(w.connector_state(DockRig::kA, rig.front_a), ConnectorState::free);
+  EXPECT_EQ(w.connector_state(DockRig::kA, rig.front_a), ConnectorState::kFree);
 }
 
 // A fixed script: dock, drive, bend, unlatch, drive on. Returns every pose and angle on the way.
@@ -270,33 +270,33 @@ TEST(MujocoWorld, IrSeesAModuleInFrontAndNothingWhenItIsRemoved) {
   auto& w = world.value();
   ASSERT_TRUE(w.step(kMjSettleSteps).ok());
   auto face_gap = [&] { return w.pose(1).position[0] - w.pose(0).position[0] - length; };
-  auto seen = w.ir(0, Face::front);
+  auto seen = w.ir(0, Face::kFront);
   ASSERT_TRUE(seen.has_value());
   // Measured: 50.084 mm for a gap of 50.000 mm between the faces' centres (the settled bodies
   // lean a little, and the sensor sits 2 cm above the centre).
   EXPECT_NEAR(*seen, face_gap(), kMjMillimetre);
   EXPECT_NEAR(*seen, 0.05, 2 * kMjMillimetre);
   // Nothing behind or beside it, and its own wheels and tail do not count.
-  for (const Face face : {Face::back, Face::left, Face::right})
+  for (const Face face : {Face::kBack, Face::kLeft, Face::kRight})
     EXPECT_FALSE(w.ir(0, face).has_value()) << face_name(face);
-  const auto b_back = w.ir(1, Face::back);
+  const auto b_back = w.ir(1, Face::kBack);
   ASSERT_TRUE(b_back.has_value());  // b sees a behind it
   EXPECT_NEAR(*b_back, face_gap(), kMjMillimetre);
 
   ASSERT_TRUE(w.place(1, {1.0, 1.0, 0}).ok());
   ASSERT_TRUE(w.step(10).ok());
-  EXPECT_FALSE(w.ir(0, Face::front).has_value());
+  EXPECT_FALSE(w.ir(0, Face::kFront).has_value());
 
   ASSERT_TRUE(w.place(1, {length + 0.08, 0, 0}).ok());
   ASSERT_TRUE(w.step(kMjSettleSteps).ok());
-  seen = w.ir(0, Face::front);
+  seen = w.ir(0, Face::kFront);
   ASSERT_TRUE(seen.has_value());
   EXPECT_NEAR(*seen, face_gap(), kMjMillimetre);
   EXPECT_NEAR(*seen, 0.08, 2 * kMjMillimetre);  // measured: 80.096 mm for a gap of 80.011 mm
 
   ASSERT_TRUE(w.place(1, {length + kind.ir.front().range + 0.01, 0, 0}).ok());  // just out of range
   ASSERT_TRUE(w.step(10).ok());
-  EXPECT_FALSE(w.ir(0, Face::front).has_value());
+  EXPECT_FALSE(w.ir(0, Face::kFront).has_value());
 }
 
 TEST(MujocoWorld, DivergingModelReportsAnErrorInsteadOfSpinning) {

@@ -31,20 +31,20 @@ void place_faces(ModuleKind& kind, double ir_range) {
 
 const char* face_name(Face face) {
   switch (face) {
-    case Face::front: return "front";
-    case Face::back: return "back";
-    case Face::left: return "left";
-    case Face::right: return "right";
+    case Face::kFront: return "front";
+    case Face::kBack: return "back";
+    case Face::kLeft: return "left";
+    case Face::kRight: return "right";
   }
   return "?";
 }
 
 Vec3 face_normal(Face face) {
   switch (face) {
-    case Face::front: return {1, 0, 0};
-    case Face::back: return {-1, 0, 0};
-    case Face::left: return {0, 1, 0};
-    case Face::right: return {0, -1, 0};
+    case Face::kFront: return {1, 0, 0};
+    case Face::kBack: return {-1, 0, 0};
+    case Face::kLeft: return {0, 1, 0};
+    case Face::kRight: return {0, -1, 0};
   }
   return {0, 0, 0};
 }

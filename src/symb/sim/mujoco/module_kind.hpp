@@ -21,8 +21,8 @@ namespace symb::sim::mujoco {
 using Vec3 = std::array<double, 3>;
 
 // The four side faces of a module's box.
-enum class Face { front, back, left, right };
-inline constexpr std::array<Face, 4> kFaces = {Face::front, Face::back, Face::left, Face::right};
+enum class Face { kFront, kBack, kLeft, kRight };
+inline constexpr std::array<Face, 4> kFaces = {Face::kFront, Face::kBack, Face::kLeft, Face::kRight};
 const char* face_name(Face face);
 // The face's outward normal in the module frame (unit, horizontal).
 Vec3 face_normal(Face face);
@@ -49,12 +49,12 @@ struct HingeSpec {
 
 struct ConnectorSpec {
   std::string name;  // unique within the kind
-  Face face = Face::front;
+  Face face = Face::kFront;
   Vec3 position{};  // on the face, in the module frame (straight hinge); x < 0 lies on the tail
 };
 
 struct IrSpec {
-  Face face = Face::front;
+  Face face = Face::kFront;
   Vec3 position{};      // ray origin on the face, in the module frame
   double range = 0.15;  // beyond this the sensor sees nothing
 };

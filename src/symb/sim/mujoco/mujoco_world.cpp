@@ -27,6 +27,12 @@ void quiet_mujoco_warnings() {
   });
 }
 
+// Row `index` of a MuJoCo array of `width` numbers a row (xpos is nbody x 3, xmat nbody x 9, ...).
+template <class T>
+T* row(T* array, int width, int index) {
+  return array + static_cast<std::ptrdiff_t>(width) * index;
+}
+
 Vec3 rotate(const mjtNum* mat, const Vec3& v) {
   Vec3 out;
   mju_rotVecMat(out.data(), v.data(), mat);
@@ -74,18 +80,18 @@ struct DataDeleter {
 
 const char* state_name(ConnectorState state) {
   switch (state) {
-    case ConnectorState::free: return "free";
-    case ConnectorState::aligned: return "aligned";
-    case ConnectorState::docked: return "docked";
+    case ConnectorState::kFree: return "free";
+    case ConnectorState::kAligned: return "aligned";
+    case ConnectorState::kDocked: return "docked";
   }
   return "?";
 }
 
 const char* change_name(DockChange change) {
   switch (change) {
-    case DockChange::latched: return "latched";
-    case DockChange::unlatched: return "unlatched";
-    case DockChange::refused: return "refused";
+    case DockChange::kLatched: return "latched";
+    case DockChange::kUnlatched: return "unlatched";
+    case DockChange::kRefused: return "refused";
   }
   return "?";
 }
@@ -150,15 +156,15 @@ struct MujocoWorld::State {
   void refresh() { mj_kinematics(model.get(), data.get()); }
 
   Vec3 point(int body, const Vec3& local) const {
-    Vec3 p = rotate(data->xmat + 9 * body, local);
-    for (int i = 0; i < 3; ++i) p[i] += data->xpos[3 * body + i];
+    Vec3 p = rotate(row(data->xmat, 9, body), local);
+    for (int i = 0; i < 3; ++i) p[i] += row(data->xpos, 3, body)[i];
     return p;
   }
   Vec3 position(std::size_t module, std::size_t connector) const {
     return point(at(module, connector).body, specs[module].kind.connectors[connector].position);
   }
   Vec3 normal(std::size_t module, std::size_t connector) const {
-    return rotate(data->xmat + 9 * at(module, connector).body,
+    return rotate(row(data->xmat, 9, at(module, connector).body),
                   face_normal(specs[module].kind.connectors[connector].face));
   }
   // A log entry for `module`'s connector now, with the partner's distance and angle when there is one.
@@ -321,8 +327,8 @@ double MujocoWorld::hinge_speed(std::size_t module) const { return s_->data->qve
 Pose3 MujocoWorld::pose(std::size_t module) const {
   const int body = s_->at(module).base;
   Pose3 pose;
-  for (int i = 0; i < 3; ++i) pose.position[static_cast<std::size_t>(i)] = s_->data->xpos[3 * body + i];
-  for (int i = 0; i < 4; ++i) pose.quaternion[static_cast<std::size_t>(i)] = s_->data->xquat[4 * body + i];
+  for (int i = 0; i < 3; ++i) pose.position[static_cast<std::size_t>(i)] = row(s_->data->xpos, 3, body)[i];
+  for (int i = 0; i < 4; ++i) pose.quaternion[static_cast<std::size_t>(i)] = row(s_->data->xquat, 4, body)[i];
   return pose;
 }
 
@@ -351,7 +357,7 @@ std::optional<double> MujocoWorld::ir(std::size_t module, Face face) const {
   if (sensor == kind.ir.end()) return std::nullopt;
   const int body = sensor->position[0] < 0 ? mod.tail : mod.base;
   Vec3 origin = s_->point(body, sensor->position);
-  const Vec3 direction = rotate(s_->data->xmat + 9 * body, face_normal(face));
+  const Vec3 direction = rotate(row(s_->data->xmat, 9, body), face_normal(face));
   // Each pass skips one of the module's own geoms; it has at most as many as the model has.
   double travelled = 0;
   for (int pass = 0; pass <= s_->model->ngeom; ++pass) {
@@ -380,12 +386,12 @@ void MujocoWorld::set_open(std::size_t module, std::size_t connector, bool open)
 bool MujocoWorld::is_open(std::size_t module, std::size_t connector) const { return s_->at(module, connector).open; }
 
 ConnectorState MujocoWorld::connector_state(std::size_t module, std::size_t connector) const {
-  if (s_->at(module, connector).weld != kNoIndex) return ConnectorState::docked;
+  if (s_->at(module, connector).weld != kNoIndex) return ConnectorState::kDocked;
   const auto other = s_->nearest(module, connector);
-  if (!other || s_->at(other->first, other->second).weld != kNoIndex) return ConnectorState::free;
+  if (!other || s_->at(other->first, other->second).weld != kNoIndex) return ConnectorState::kFree;
   const DockEvent e = s_->event_between(module, connector, other->first, other->second);
-  return e.distance <= kLatchPositionTolerance && e.angle <= kLatchAngleTolerance ? ConnectorState::aligned
-                                                                                  : ConnectorState::free;
+  return e.distance <= kLatchPositionTolerance && e.angle <= kLatchAngleTolerance ? ConnectorState::kAligned
+                                                                                  : ConnectorState::kFree;
 }
 
 std::optional<std::pair<std::size_t, std::size_t>> MujocoWorld::docked_to(std::size_t module,
@@ -399,8 +405,8 @@ kernel::Status MujocoWorld::latch(std::size_t module, std::size_t connector) {
   State& s = *s_;
   auto& self = s.at(module, connector);
   DockEvent event = s.event_between(module, connector, kNoIndex, kNoIndex);
-  auto refuse = [&](std::string why) -> kernel::Status {
-    event.change = DockChange::refused;
+  auto refuse = [&](const std::string& why) -> kernel::Status {
+    event.change = DockChange::kRefused;
     event.reason = why;
     s.log.push_back(event);
     return kernel::Error{"latch " + s.label(module, connector) + " refused: " + why};
@@ -439,16 +445,16 @@ kernel::Status MujocoWorld::latch(std::size_t module, std::size_t connector) {
   const int eq = weld->equality;
   m->eq_obj1id[eq] = b1;
   m->eq_obj2id[eq] = b2;
-  mjtNum* data = m->eq_data + mjNEQDATA * eq;
+  mjtNum* data = row(m->eq_data, mjNEQDATA, eq);
   mjtNum anchor[3], offset[3];
   for (int i = 0; i < 3; ++i) anchor[i] = (pa[static_cast<std::size_t>(i)] + pb[static_cast<std::size_t>(i)]) / 2;
-  for (int i = 0; i < 3; ++i) offset[i] = anchor[i] - d->xpos[3 * b2 + i];
-  mju_rotVecMatT(data, offset, d->xmat + 9 * b2);
-  for (int i = 0; i < 3; ++i) offset[i] = anchor[i] - d->xpos[3 * b1 + i];
-  mju_rotVecMatT(data + 3, offset, d->xmat + 9 * b1);
+  for (int i = 0; i < 3; ++i) offset[i] = anchor[i] - row(d->xpos, 3, b2)[i];
+  mju_rotVecMatT(data, offset, row(d->xmat, 9, b2));
+  for (int i = 0; i < 3; ++i) offset[i] = anchor[i] - row(d->xpos, 3, b1)[i];
+  mju_rotVecMatT(data + 3, offset, row(d->xmat, 9, b1));
   mjtNum inverse[4];
-  mju_negQuat(inverse, d->xquat + 4 * b1);
-  mju_mulQuat(data + 6, inverse, d->xquat + 4 * b2);
+  mju_negQuat(inverse, row(d->xquat, 4, b1));
+  mju_mulQuat(data + 6, inverse, row(d->xquat, 4, b2));
   data[10] = 1;
   m->eq_active[eq] = 1;
   weld->in_use = true;
@@ -458,7 +464,7 @@ kernel::Status MujocoWorld::latch(std::size_t module, std::size_t connector) {
   self.other_connector = oc;
   partner.other_module = module;
   partner.other_connector = connector;
-  event.change = DockChange::latched;
+  event.change = DockChange::kLatched;
   event.reason = "weld " + std::to_string(weld_index);
   s.log.push_back(event);
   return {};
@@ -469,7 +475,7 @@ kernel::Status MujocoWorld::unlatch(std::size_t module, std::size_t connector) {
   auto& self = s.at(module, connector);
   DockEvent event = s.event_between(module, connector, self.other_module, self.other_connector);
   if (self.weld == kNoIndex) {
-    event.change = DockChange::refused;
+    event.change = DockChange::kRefused;
     event.reason = "it is not docked";
     s.log.push_back(event);
     return kernel::Error{"unlatch " + s.label(module, connector) + " refused: it is not docked"};
@@ -483,7 +489,7 @@ kernel::Status MujocoWorld::unlatch(std::size_t module, std::size_t connector) {
     c->other_module = kNoIndex;
     c->other_connector = kNoIndex;
   }
-  event.change = DockChange::unlatched;
+  event.change = DockChange::kUnlatched;
   event.reason = "weld " + std::to_string(weld);
   s.log.push_back(event);
   return {};

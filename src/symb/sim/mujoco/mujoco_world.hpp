@@ -55,7 +55,7 @@ inline constexpr double kLatchAngleTolerance = 10.0 * 3.14159265358979323846 / 1
 
 inline constexpr std::size_t kNoIndex = static_cast<std::size_t>(-1);
 
-enum class ConnectorState { free, aligned, docked };
+enum class ConnectorState { kFree, kAligned, kDocked };
 const char* state_name(ConnectorState state);
 
 struct Pose3 {
@@ -64,13 +64,13 @@ struct Pose3 {
   double yaw() const;                               // heading about z, rad
 };
 
-enum class DockChange { latched, unlatched, refused };
+enum class DockChange { kLatched, kUnlatched, kRefused };
 const char* change_name(DockChange change);
 
 struct DockEvent {
   std::uint64_t step = 0;
   double time = 0;  // s
-  DockChange change = DockChange::refused;
+  DockChange change = DockChange::kRefused;
   std::size_t module = kNoIndex;  // the one asked to latch or unlatch
   std::size_t connector = kNoIndex;
   std::size_t other_module = kNoIndex;  // the partner, when there was one
