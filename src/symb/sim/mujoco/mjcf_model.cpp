@@ -1,10 +1,13 @@
 #include "symb/sim/mujoco/mjcf_model.hpp"
 
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <set>
 #include <sstream>
+#include <utility>
 
 #include <mujoco/mujoco.h>
 
@@ -40,65 +43,118 @@ bool valid_name(const std::string& name) {
   return true;
 }
 
-// Numbers are written with 17 significant digits so the model holds exactly the doubles given.
-struct Xml {
-  std::ostringstream out;
-  Xml() { out.precision(17); }
-  Xml& v3(double x, double y, double z) {
-    out << x << ' ' << y << ' ' << z;
-    return *this;
+// The shortest text that reads back as the same double: the model holds exactly the numbers given.
+std::string num(double value) {
+  std::array<char, 32> text{};
+  const auto end = std::to_chars(text.data(), text.data() + text.size(), value).ptr;
+  return {text.data(), end};
+}
+
+std::string nums(std::initializer_list<double> values) {
+  std::string text;
+  for (const double v : values) text += (text.empty() ? "" : " ") + num(v);
+  return text;
+}
+
+using Attributes = std::vector<std::pair<const char*, std::string>>;
+
+// Writes indented XML elements. Attribute values are names checked by valid_name() with fixed
+// suffixes, and numbers: none needs escaping.
+class XmlWriter {
+ public:
+  void open(const char* tag, const Attributes& attributes = {}) {
+    start(tag, attributes);
+    text_ += ">\n";
+    open_.push_back(tag);
   }
+  void leaf(const char* tag, const Attributes& attributes) {
+    start(tag, attributes);
+    text_ += "/>\n";
+  }
+  void close() {
+    const char* tag = open_.back();
+    open_.pop_back();
+    text_.append(2 * open_.size(), ' ');
+    text_ += std::string("</") + tag + ">\n";
+  }
+  const std::string& text() const { return text_; }
+
+ private:
+  void start(const char* tag, const Attributes& attributes) {
+    text_.append(2 * open_.size(), ' ');
+    text_ += std::string("<") + tag;
+    for (const auto& [name, value] : attributes) text_ += std::string(" ") + name + "=\"" + value + "\"";
+  }
+  std::string text_;
+  std::vector<const char*> open_;
 };
 
-void write_module(Xml& xml, const ModuleSpec& module) {
+void write_module(XmlWriter& xml, const ModuleSpec& module) {
   const ModuleKind& k = module.kind;
   const std::string& n = module.name;
   const double lx = k.body.size[0], ly = k.body.size[1], lz = k.body.size[2];
-  const double half_mass = k.body.mass / 2;
+  const std::string half_mass = num(k.body.mass / 2);
   const double h = rest_height(k);
   const double clearance = h - lz / 2;
-  auto& o = xml.out;
+  const double caster_x = lx / 2 - clearance - 0.004;
+  const double yaw = module.start.yaw;
 
-  o << "    <body name=\"" << n << ".base\" pos=\"";
-  xml.v3(module.start.x, module.start.y, h);
-  o << "\" quat=\"" << std::cos(module.start.yaw / 2) << " 0 0 " << std::sin(module.start.yaw / 2) << "\">\n";
-  o << "      <freejoint name=\"" << n << ".free\"/>\n";
-  o << "      <geom name=\"" << n << ".base\" type=\"box\" size=\"";
-  xml.v3(lx / 4, ly / 2, lz / 2);
-  o << "\" pos=\"" << lx / 4 << " 0 0\" mass=\"" << half_mass << "\" friction=\"" << kBodyFriction << "\"/>\n";
+  xml.open("body", {{"name", n + ".base"},
+                    {"pos", nums({module.start.x, module.start.y, h})},
+                    {"quat", nums({std::cos(yaw / 2), 0, 0, std::sin(yaw / 2)})}});
+  xml.leaf("freejoint", {{"name", n + ".free"}});
+  xml.leaf("geom", {{"name", n + ".base"},
+                    {"type", "box"},
+                    {"size", nums({lx / 4, ly / 2, lz / 2})},
+                    {"pos", nums({lx / 4, 0, 0})},
+                    {"mass", half_mass},
+                    {"friction", kBodyFriction}});
   if (k.has_wheels) {
-    o << "      <geom name=\"" << n << ".caster_f\" type=\"sphere\" size=\"" << clearance << "\" pos=\"";
-    xml.v3(lx / 2 - clearance - 0.004, 0, -lz / 2);
-    o << "\" mass=\"" << kCasterMass << "\" friction=\"" << kCasterFriction << "\"/>\n";
+    xml.leaf("geom", {{"name", n + ".caster_f"},
+                      {"type", "sphere"},
+                      {"size", num(clearance)},
+                      {"pos", nums({caster_x, 0, -lz / 2})},
+                      {"mass", num(kCasterMass)},
+                      {"friction", kCasterFriction}});
     const double wy = ly / 2 - k.wheels.width / 2;
     const double wz = -lz / 2 - clearance + k.wheels.radius;
     for (const auto& [side, y] : std::array<std::pair<const char*, double>, 2>{{{"l", wy}, {"r", -wy}}}) {
-      o << "      <body name=\"" << n << ".wheel_" << side << "\" pos=\"";
-      xml.v3(0, y, wz);
-      o << "\">\n";
-      o << "        <joint name=\"" << n << ".wheel_" << side << "\" type=\"hinge\" axis=\"0 1 0\" armature=\""
-        << kArmature << "\"/>\n";
-      o << "        <geom name=\"" << n << ".wheel_" << side << "\" type=\"cylinder\" size=\"" << k.wheels.radius << ' '
-        << k.wheels.width / 2 << "\" zaxis=\"0 1 0\" mass=\"" << k.wheels.mass << "\" friction=\"" << kWheelFriction
-        << "\"/>\n";
-      o << "      </body>\n";
+      const std::string wheel = n + ".wheel_" + side;
+      xml.open("body", {{"name", wheel}, {"pos", nums({0, y, wz})}});
+      xml.leaf("joint", {{"name", wheel}, {"type", "hinge"}, {"axis", "0 1 0"}, {"armature", num(kArmature)}});
+      xml.leaf("geom", {{"name", wheel},
+                        {"type", "cylinder"},
+                        {"size", nums({k.wheels.radius, k.wheels.width / 2})},
+                        {"zaxis", "0 1 0"},
+                        {"mass", num(k.wheels.mass)},
+                        {"friction", kWheelFriction}});
+      xml.close();
     }
   }
-  o << "      <body name=\"" << n << ".tail\">\n";
-  o << "        <joint name=\"" << n << ".hinge\" type=\"hinge\" axis=\"";
-  xml.v3(k.hinge.axis[0], k.hinge.axis[1], k.hinge.axis[2]);
-  o << "\" limited=\"true\" range=\"" << k.hinge.range[0] << ' ' << k.hinge.range[1] << "\" damping=\""
-    << k.hinge.damping << "\" armature=\"" << kArmature << "\"/>\n";
-  o << "        <geom name=\"" << n << ".tail\" type=\"box\" size=\"";
-  xml.v3(lx / 4, ly / 2, lz / 2);
-  o << "\" pos=\"" << -lx / 4 << " 0 0\" mass=\"" << half_mass << "\" friction=\"" << kBodyFriction << "\"/>\n";
+  xml.open("body", {{"name", n + ".tail"}});
+  xml.leaf("joint", {{"name", n + ".hinge"},
+                     {"type", "hinge"},
+                     {"axis", nums({k.hinge.axis[0], k.hinge.axis[1], k.hinge.axis[2]})},
+                     {"limited", "true"},
+                     {"range", nums({k.hinge.range[0], k.hinge.range[1]})},
+                     {"damping", num(k.hinge.damping)},
+                     {"armature", num(kArmature)}});
+  xml.leaf("geom", {{"name", n + ".tail"},
+                    {"type", "box"},
+                    {"size", nums({lx / 4, ly / 2, lz / 2})},
+                    {"pos", nums({-lx / 4, 0, 0})},
+                    {"mass", half_mass},
+                    {"friction", kBodyFriction}});
   if (k.has_wheels) {
-    o << "        <geom name=\"" << n << ".caster_b\" type=\"sphere\" size=\"" << clearance << "\" pos=\"";
-    xml.v3(-(lx / 2 - clearance - 0.004), 0, -lz / 2);
-    o << "\" mass=\"" << kCasterMass << "\" friction=\"" << kCasterFriction << "\"/>\n";
+    xml.leaf("geom", {{"name", n + ".caster_b"},
+                      {"type", "sphere"},
+                      {"size", num(clearance)},
+                      {"pos", nums({-caster_x, 0, -lz / 2})},
+                      {"mass", num(kCasterMass)},
+                      {"friction", kCasterFriction}});
   }
-  o << "      </body>\n";
-  o << "    </body>\n";
+  xml.close();
+  xml.close();
 }
 
 }  // namespace
@@ -107,8 +163,7 @@ kernel::Result<std::string> mjcf_text(const std::vector<ModuleSpec>& modules, co
   if (modules.empty()) return kernel::Error{"a model needs at least one module"};
   if (options.spare_welds == 0) return kernel::Error{"a model needs at least one spare weld to dock"};
   if (!(options.weld_time_constant >= 2 * kTimestep))
-    return kernel::Error{"weld time constant must be at least two time steps (" + std::to_string(2 * kTimestep) +
-                         " s)"};
+    return kernel::Error{"weld time constant must be at least two time steps (" + num(2 * kTimestep) + " s)"};
   std::set<std::string> names;
   for (std::size_t i = 0; i < modules.size(); ++i) {
     const auto& m = modules[i];
@@ -128,41 +183,48 @@ kernel::Result<std::string> mjcf_text(const std::vector<ModuleSpec>& modules, co
   // The dense solver's matrices are rows x rows and rows x dofs; twice that, and slack.
   const std::size_t nstack = 2 * njmax * (njmax + nv) + 200000;
 
-  Xml xml;
-  auto& o = xml.out;
-  o << "<mujoco model=\"symbricator organism\">\n";
-  o << "  <compiler angle=\"radian\"/>\n";
-  o << "  <option timestep=\"" << kTimestep << "\" integrator=\"Euler\"/>\n";
-  o << "  <size njmax=\"" << njmax << "\" nconmax=\"" << nconmax << "\" nstack=\"" << nstack << "\"/>\n";
-  o << "  <worldbody>\n";
-  o << "    <geom name=\"floor\" type=\"plane\" size=\"0 0 1\" friction=\"" << kFloorFriction << "\"/>\n";
+  XmlWriter xml;
+  xml.open("mujoco", {{"model", "symbricator organism"}});
+  xml.leaf("compiler", {{"angle", "radian"}});
+  xml.leaf("option", {{"timestep", num(kTimestep)}, {"integrator", "Euler"}});
+  xml.leaf(
+      "size",
+      {{"njmax", std::to_string(njmax)}, {"nconmax", std::to_string(nconmax)}, {"nstack", std::to_string(nstack)}});
+  xml.open("worldbody");
+  xml.leaf("geom", {{"name", "floor"}, {"type", "plane"}, {"size", "0 0 1"}, {"friction", kFloorFriction}});
   for (const auto& m : modules) write_module(xml, m);
-  o << "  </worldbody>\n";
-  o << "  <contact>\n";
+  xml.close();
+  xml.open("contact");
   for (const auto& m : modules) {
     if (!m.kind.has_wheels) continue;
     for (const char* side : {"l", "r"})
-      o << "    <exclude body1=\"" << m.name << ".tail\" body2=\"" << m.name << ".wheel_" << side << "\"/>\n";
+      xml.leaf("exclude", {{"body1", m.name + ".tail"}, {"body2", m.name + ".wheel_" + side}});
   }
-  o << "  </contact>\n";
-  o << "  <equality>\n";
+  xml.close();
+  xml.open("equality");
   for (std::size_t k = 0; k < options.spare_welds; ++k)
-    o << "    <weld name=\"spare_weld_" << k << "\" body1=\"" << modules.front().name
-      << ".base\" active=\"false\" solref=\"" << options.weld_time_constant << " 1\"/>\n";
-  o << "  </equality>\n";
-  o << "  <actuator>\n";
+    xml.leaf("weld", {{"name", "spare_weld_" + std::to_string(k)},
+                      {"body1", modules.front().name + ".base"},
+                      {"active", "false"},
+                      {"solref", nums({options.weld_time_constant, 1})}});
+  xml.close();
+  xml.open("actuator");
   for (const auto& m : modules) {
     const auto& hinge = m.kind.hinge;
-    o << "    <position name=\"" << m.name << ".hinge\" joint=\"" << m.name << ".hinge\" kp=\"" << hinge.gain
-      << "\" ctrllimited=\"true\" ctrlrange=\"" << hinge.range[0] << ' ' << hinge.range[1] << "\"/>\n";
+    xml.leaf("position", {{"name", m.name + ".hinge"},
+                          {"joint", m.name + ".hinge"},
+                          {"kp", num(hinge.gain)},
+                          {"ctrllimited", "true"},
+                          {"ctrlrange", nums({hinge.range[0], hinge.range[1]})}});
     if (!m.kind.has_wheels) continue;
-    for (const char* side : {"l", "r"})
-      o << "    <velocity name=\"" << m.name << ".wheel_" << side << "\" joint=\"" << m.name << ".wheel_" << side
-        << "\" kv=\"" << m.kind.wheels.gain << "\"/>\n";
+    for (const char* side : {"l", "r"}) {
+      const std::string wheel = m.name + ".wheel_" + side;
+      xml.leaf("velocity", {{"name", wheel}, {"joint", wheel}, {"kv", num(m.kind.wheels.gain)}});
+    }
   }
-  o << "  </actuator>\n";
-  o << "</mujoco>\n";
-  return o.str();
+  xml.close();
+  xml.close();
+  return xml.text();
 }
 
 void ModelDeleter::operator()(mjModel_* model) const { mj_deleteModel(model); }
