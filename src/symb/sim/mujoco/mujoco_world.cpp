@@ -258,6 +258,7 @@ kernel::Result<MujocoWorld> MujocoWorld::make(std::vector<ModuleSpec> modules, M
 
 const std::string& MujocoWorld::mjcf() const { return s_->mjcf; }
 std::size_t MujocoWorld::module_count() const { return s_->modules.size(); }
+std::size_t MujocoWorld::degrees_of_freedom() const { return static_cast<std::size_t>(s_->model->nv); }
 const ModuleSpec& MujocoWorld::module(std::size_t module) const {
   s_->at(module);
   return s_->specs[module];

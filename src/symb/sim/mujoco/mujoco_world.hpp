@@ -91,6 +91,9 @@ class MujocoWorld {
 
   const std::string& mjcf() const;  // the model's text, for MuJoCo's own viewer
   std::size_t module_count() const;
+  // The model's degrees of freedom (MuJoCo's nv): 9 for a wheeled module, 7 without wheels. From
+  // 60 on, MuJoCo 2.2.2 solves with sparse matrices instead of dense ones.
+  std::size_t degrees_of_freedom() const;
   const ModuleSpec& module(std::size_t module) const;
   std::optional<std::size_t> find_module(std::string_view name) const;
   std::optional<std::size_t> find_connector(std::size_t module, std::string_view name) const;
