@@ -16,17 +16,23 @@
 // to the docking log with the step, the time, both connectors and the measured distance and angle.
 //
 // Handles: modules and connectors are indices (the order of the specs, the order of the kind's
-// connectors), never pointers. Nothing is global; the same specs and the same calls give the same
-// run bit for bit. A handle out of range is a programming error: std::out_of_range.
+// connectors), never pointers. A handle out of range is a programming error: std::out_of_range.
+// Nothing is global but one thing MuJoCo owns: its warning printer, switched off once for the
+// process (mujoco_world.cpp says why). The same specs and the same calls give the same run bit for
+// bit. A world moves but does not copy; use it from one thread at a time.
 //
 // Divergence: MuJoCo, on finding a bad acceleration, resets its state (time included) and only
 // counts a warning. step() checks those counters after every substep: on a bad position, speed or
 // acceleration, or a full constraint or contact buffer, it stops and returns the error, and every
 // later step() refuses. It loops on step counts, never on MuJoCo's time.
 //
-//   auto world = MujocoWorld::make({{"a", standard_kind(), {0, 0, 0}}, {"b", standard_kind(), {0.11, 0, M_PI}}});
-//   world->set_wheels(0, 0.05, 0.05);
-//   if (auto s = world->step(500); !s) report(s.error());  // one simulated second
+//   auto made = MujocoWorld::make({{"a", standard_kind(), {0, 0, 0}},
+//                                  {"b", standard_kind(), {0.11, 0, std::numbers::pi}}});
+//   if (!made) return report(made.error());
+//   MujocoWorld& world = made.value();
+//   world.set_hinge_target(0, 0.3);
+//   if (auto s = world.latch(0, *world.find_connector(0, "front")); !s) report(s.error());
+//   if (auto s = world.step(500); !s) report(s.error());  // one simulated second
 #pragma once
 
 #include <array>
