@@ -1,8 +1,6 @@
-// Scenario files -> Scenario. yaml-cpp does the YAML; everything after that is a walk over the
-// tree that knows the schema, so each value is read exactly once and an error can name the line
-// and column of the value that caused it. Internally a failure is thrown as `Failure` (the walk
-// is deep and every step can fail); parse_scenario catches it and everything yaml-cpp throws,
-// so no exception leaves this file.
+// Scenario files -> Scenario: a walk over the YAML tree that knows the scenario's schema, on the
+// sim layer's YAML scaffold (yaml_document.hpp: bounds, located failures, keys checked against a
+// schema, scalars read in range), which also keeps every exception inside this file.
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -23,6 +21,7 @@
 
 #include "symb/kernel/random_stream.hpp"
 #include "symb/sim/scenario.hpp"
+#include "symb/sim/yaml_document.hpp"
 
 namespace symb::sim {
 namespace {
@@ -47,20 +46,10 @@ constexpr std::size_t kMaxTotalParams = 200000;
 constexpr double kMaxPlacementCandidates = 10000;
 constexpr std::uint64_t kPlacementStream = 0x5ce7a810;
 
-struct Failure {
-  std::string message;
-};
-
-// The text of a value for an error message: short and printable.
-std::string shown(std::string_view s) {
-  std::string out;
-  for (char ch : s.substr(0, 40)) {
-    const auto c = static_cast<unsigned char>(ch);
-    out += (c >= 0x20 && c < 0x7f) ? ch : '?';
-  }
-  if (s.size() > 40) out += "...";
-  return out;
-}
+using yaml::Failure;
+using yaml::Map;
+using yaml::shown;
+using yaml::Source;
 
 bool is_scenario_name(std::string_view n) {
   if (n.empty() || n.size() > 63) return false;
@@ -84,243 +73,10 @@ double segment_distance(double x, double y, double x1, double y1, double x2, dou
   return std::hypot(x - (x1 + t * dx), y - (y1 + t * dy));
 }
 
-// Locations and failures for one file.
-class Source {
+// The scenario's own kinds of value on top of the shared scalar reader.
+class Reader : public yaml::Reader {
  public:
-  Source(std::string_view file, std::string_view text) : file_(file) {
-    // Marks past the end (yaml-cpp reports "end of stream" after the last newline) are pulled
-    // back onto the last line, so every error names a line the file has.
-    lines_ = 1;
-    std::size_t last_start = 0;
-    for (std::size_t i = 0; i < text.size(); ++i)
-      if (text[i] == '\n' && i + 1 < text.size()) {
-        ++lines_;
-        last_start = i + 1;
-      }
-    std::size_t end = text.size();
-    while (end > last_start && (text[end - 1] == '\n' || text[end - 1] == '\r')) --end;
-    last_line_length_ = static_cast<int>(end - last_start);
-  }
-
-  const std::string& file() const { return file_; }
-
-  SourceLocation at(const YAML::Mark& m, int column_offset = 0) const {
-    SourceLocation loc{file_, 1, 1};
-    if (m.is_null() || m.line < 0) return loc;
-    if (m.line + 1 > lines_) {
-      loc.line = lines_;
-      loc.column = last_line_length_ + 1;
-      return loc;
-    }
-    loc.line = m.line + 1;
-    loc.column = std::max(0, m.column) + 1 + column_offset;
-    return loc;
-  }
-  SourceLocation at(const YAML::Node& n) const { return at(n.Mark()); }
-
-  [[noreturn]] void fail(const SourceLocation& where, const std::string& what) const {
-    throw Failure{where.str() + ": " + what};
-  }
-  [[noreturn]] void fail(const YAML::Node& n, const std::string& what) const { fail(at(n), what); }
-
- private:
-  std::string file_;
-  int lines_ = 1;
-  int last_line_length_ = 0;
-};
-
-// Zeroth pass, over the bytes: flow collections ('[' and '{') nested deeper than kMaxNesting.
-// yaml-cpp's scanner reads a flow collection ahead before it hands over its first event (any '['
-// may start a simple key), about 2.5 us a byte: a MiB of '[' cost 2.5 s before the event pass
-// could stop it; this finds the first bracket past the bound in a millisecond. It counts only the
-// brackets that open a collection (any in flow context; in block context one that starts a value
-// or a line), skips quoted scalars, comments and block scalars ('|', '>'), and stops counting at
-// anything it cannot place (an unterminated quote), so it never rejects a file that nests less;
-// the event pass below stays the authority. Returns the 1-based line and column of the bracket.
-std::optional<std::pair<int, int>> flow_too_deep(std::string_view t) {
-  int depth = 0, line = 1;
-  std::size_t line_start = 0;
-  char prev = '\n';              // the last character that is not a blank on this line; '\n' at its start
-  bool blank_before = true;      // a blank (or the line start) comes right before i
-  int block_scalar_indent = -1;  // >= 0: inside a block scalar's lines, indented more than this
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    const char c = t[i];
-    if (c == '\n') {
-      ++line;
-      line_start = i + 1;
-      prev = '\n';
-      blank_before = true;
-      if (block_scalar_indent >= 0) {  // skip the scalar's lines: blank ones or indented deeper
-        std::size_t k = i + 1;
-        for (;;) {
-          std::size_t e = k;
-          while (e < t.size() && t[e] == ' ') ++e;
-          if (e < t.size() && t[e] != '\n' && t[e] != '\r' && static_cast<int>(e - k) <= block_scalar_indent) break;
-          const std::size_t nl = t.find('\n', e);
-          if (nl == std::string_view::npos) return std::nullopt;
-          ++line;
-          k = nl + 1;
-        }
-        line_start = k;
-        i = k - 1;
-        block_scalar_indent = -1;
-      }
-      continue;
-    }
-    if (c == ' ' || c == '\t' || c == '\r') {
-      blank_before = true;
-      continue;
-    }
-    const bool token_start = blank_before || prev == '[' || prev == '{' || prev == ',';
-    if (c == '#' && blank_before) {
-      const std::size_t nl = t.find('\n', i);
-      if (nl == std::string_view::npos) return std::nullopt;
-      i = nl - 1;
-      continue;
-    }
-    if ((c == '\'' || c == '"') && token_start) {
-      std::size_t k = i + 1;
-      for (;; ++k) {
-        if (k >= t.size()) return std::nullopt;
-        if (t[k] == '\n') {
-          ++line;
-          line_start = k + 1;
-        } else if (c == '"' && t[k] == '\\') {
-          ++k;
-        } else if (t[k] == c) {
-          if (c == '\'' && k + 1 < t.size() && t[k + 1] == '\'') {
-            ++k;
-            continue;
-          }
-          break;
-        }
-      }
-      i = k;
-      prev = c;
-      blank_before = false;
-      continue;
-    }
-    if ((c == '|' || c == '>') && depth == 0 && blank_before && prev == ':') {
-      std::size_t indent = 0;
-      while (line_start + indent < t.size() && t[line_start + indent] == ' ') ++indent;
-      block_scalar_indent = static_cast<int>(indent);
-    } else if ((c == '[' || c == '{') &&
-               (depth > 0 || (blank_before && (prev == '\n' || prev == ':' || prev == '-' || prev == '?')))) {
-      if (++depth > kMaxNesting) return std::pair{line, static_cast<int>(i - line_start) + 1};
-    } else if ((c == ']' || c == '}') && depth > 0) {
-      --depth;
-    }
-    prev = c;
-    blank_before = false;
-  }
-  return std::nullopt;
-}
-
-// First pass over the events: nesting depth and document count, before any tree is built.
-// yaml-cpp recurses once per level (it stops itself at 2000); this stops at kMaxNesting.
-class ShapeCheck : public YAML::EventHandler {
- public:
-  explicit ShapeCheck(const Source& src) : src_(src) {}
-  void OnDocumentStart(const YAML::Mark& m) override {
-    if (++documents_ > 1) src_.fail(src_.at(m), "a scenario file holds one YAML document; this is a second one");
-  }
-  void OnDocumentEnd() override {}
-  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
-  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
-    enter(m);
-  }
-  void OnSequenceEnd() override { --depth_; }
-  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
-    enter(m);
-  }
-  void OnMapEnd() override { --depth_; }
-
- private:
-  void enter(const YAML::Mark& m) {
-    if (++depth_ > kMaxNesting)
-      src_.fail(src_.at(m), "nested more than " + std::to_string(kMaxNesting) + " levels deep");
-  }
-  const Source& src_;
-  int documents_ = 0;
-  int depth_ = 0;
-};
-
-// A mapping whose keys are checked against a schema: known, plain, each once.
-class Map {
- public:
-  Map(const Source& src, const YAML::Node& node, std::string_view what, std::initializer_list<std::string_view> keys)
-      : src_(src), node_(node), what_(what) {
-    if (!node.IsMap()) src.fail(node, std::string(what) + " must be a mapping (key: value, ...)" + got(node));
-    const std::vector<std::string_view> known(keys);
-    for (const auto& kv : node) {
-      const YAML::Node& k = kv.first;
-      if (!k.IsScalar()) src.fail(k, "a key in " + std::string(what) + " must be a plain name");
-      const std::string& name = k.Scalar();
-      if (std::find(known.begin(), known.end(), name) == known.end()) {
-        std::string msg = "unknown key '" + shown(name) + "' in " + std::string(what);
-        if (auto hint = os::closest_name(name, known); !hint.empty()) {
-          msg += " (did you mean '" + hint + "'?)";
-        } else {
-          msg += " (known keys:";
-          for (auto kn : known) msg += " " + std::string(kn);
-          msg += ")";
-        }
-        src.fail(k, msg);
-      }
-      for (const auto& e : entries_)
-        if (e.name == name)
-          src.fail(k, "key '" + name + "' given twice in " + std::string(what) + " (first at line " +
-                          std::to_string(src.at(e.key).line) + ")");
-      entries_.push_back({name, k, kv.second});
-    }
-  }
-
-  // The value of `key`; an undefined node when absent.
-  YAML::Node get(std::string_view key) const {
-    for (const auto& e : entries_)
-      if (e.name == key) return e.value;
-    return YAML::Node(YAML::NodeType::Undefined);
-  }
-  bool has(std::string_view key) const { return get(key).IsDefined(); }
-  YAML::Node require(std::string_view key) const {
-    YAML::Node v = get(key);
-    if (!v.IsDefined()) src_.fail(node_, std::string(what_) + " needs '" + std::string(key) + "'");
-    return v;
-  }
-  const YAML::Node& node() const { return node_; }
-
-  static std::string got(const YAML::Node& n) {
-    switch (n.Type()) {
-      case YAML::NodeType::Null: return ", got nothing";
-      case YAML::NodeType::Scalar: return ", got '" + shown(n.Scalar()) + "'";
-      case YAML::NodeType::Sequence: return ", got a sequence";
-      case YAML::NodeType::Map: return ", got a mapping";
-      default: return "";
-    }
-  }
-
- private:
-  struct Entry {
-    std::string name;
-    YAML::Node key;
-    YAML::Node value;
-  };
-  const Source& src_;
-  YAML::Node node_;
-  std::string what_;
-  std::vector<Entry> entries_;
-};
-
-class Reader {
- public:
-  explicit Reader(const Source& src) : src_(src) {}
-
-  std::string text(const YAML::Node& n, std::string_view what) const {
-    if (!n.IsScalar()) src_.fail(n, std::string(what) + " must be a single value" + Map::got(n));
-    return n.Scalar();
-  }
+  explicit Reader(const Source& src) : yaml::Reader(src) {}
 
   std::string name(const YAML::Node& n, std::string_view what) const {
     std::string s = text(n, what);
@@ -339,48 +95,6 @@ class Reader {
     return s;
   }
 
-  double number(const YAML::Node& n, std::string_view what, double lo, double hi) const {
-    const std::string s = text(n, what);
-    std::string_view v = s;
-    if (!v.empty() && v.front() == '+') v.remove_prefix(1);
-    double d = 0;
-    auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
-    if (v.empty() || ec != std::errc() || end != v.data() + v.size() || !std::isfinite(d))
-      src_.fail(n, std::string(what) + " must be a finite number, got '" + shown(s) + "'");
-    if (d < lo || d > hi)
-      src_.fail(n, std::string(what) + " must be in " + fmt(lo) + ".." + fmt(hi) + ", got " + shown(s));
-    return d;
-  }
-
-  std::int64_t integer(const YAML::Node& n, std::string_view what, std::int64_t lo, std::int64_t hi) const {
-    const std::string s = text(n, what);
-    std::string_view v = s;
-    if (!v.empty() && v.front() == '+') v.remove_prefix(1);
-    std::int64_t i = 0;
-    auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), i);
-    if (v.empty() || ec != std::errc() || end != v.data() + v.size() || i < lo || i > hi)
-      src_.fail(n, std::string(what) + " must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) +
-                       ", got '" + shown(s) + "'");
-    return i;
-  }
-
-  std::uint64_t unsigned_integer(const YAML::Node& n, std::string_view what) const {
-    const std::string s = text(n, what);
-    std::uint64_t u = 0;
-    auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), u);
-    if (s.empty() || ec != std::errc() || end != s.data() + s.size())
-      src_.fail(n, std::string(what) + " must be an unsigned integer (0.." +
-                       std::to_string(std::numeric_limits<std::uint64_t>::max()) + "), got '" + shown(s) + "'");
-    return u;
-  }
-
-  bool boolean(const YAML::Node& n, std::string_view what) const {
-    const std::string s = text(n, what);
-    if (s == "true" || s == "True" || s == "TRUE") return true;
-    if (s == "false" || s == "False" || s == "FALSE") return false;
-    src_.fail(n, std::string(what) + " must be true or false, got '" + shown(s) + "'");
-  }
-
   kernel::Duration duration(const YAML::Node& n, std::string_view what, kernel::Duration lo,
                             kernel::Duration hi) const {
     const std::string s = text(n, what);
@@ -392,33 +106,13 @@ class Reader {
     return *d;
   }
 
-  // A list that may also be written as nothing at all (`tasks:` with no entries).
-  std::vector<YAML::Node> list(const YAML::Node& n, std::string_view what, std::size_t max) const {
-    std::vector<YAML::Node> out;
-    if (!n.IsDefined() || n.IsNull()) return out;
-    if (!n.IsSequence()) src_.fail(n, std::string(what) + " must be a list (- item, or [a, b])" + Map::got(n));
-    if (n.size() > max)
-      src_.fail(n, std::string(what) + " has " + std::to_string(n.size()) + " entries; at most " + std::to_string(max) +
-                       " are allowed");
-    for (const auto& item : n) out.push_back(item);
-    return out;
-  }
-
   std::pair<double, double> point(const YAML::Node& n, std::string_view what, const WorldSpec& w) const {
     auto xy = list(n, what, 2);
     if (!n.IsSequence() || xy.size() != 2) src_.fail(n, std::string(what) + " must be a point [x, y]" + Map::got(n));
     return {number(xy[0], "x", 0, w.width), number(xy[1], "y", 0, w.height)};
   }
 
-  static std::string fmt(double v) {
-    std::ostringstream o;
-    o << v;
-    return o.str();
-  }
   static std::string fmt_duration(kernel::Duration d) { return os::format_param_value(os::ParamValue{d}); }
-
- private:
-  const Source& src_;
 };
 
 struct Parser {
@@ -884,55 +578,22 @@ struct Parser {
 }  // namespace
 
 kernel::Result<Scenario> parse_scenario(std::string_view yaml_text, std::string_view file_name) {
-  const Source src(file_name, yaml_text);
-  const SourceLocation start{src.file(), 1, 1};
-  try {
-    if (yaml_text.size() > kMaxScenarioBytes)
-      return Error{start.str() + ": the file has " + std::to_string(yaml_text.size()) +
-                   " bytes; a scenario may have at most 1 MiB"};
-    if (const auto deep = flow_too_deep(yaml_text))
-      return Error{SourceLocation{src.file(), deep->first, deep->second}.str() + ": nested more than " +
-                   std::to_string(kMaxNesting) + " levels deep"};
-    const std::string text(yaml_text);
-    {
-      std::istringstream in(text);
-      YAML::Parser events(in);
-      ShapeCheck shape(src);
-      while (events.HandleNextDocument(shape)) {
-      }
-    }
-    Parser p(src);
-    p.sc.file = std::string(file_name);
-    const std::string dir = std::filesystem::path(p.sc.file).parent_path().string();
-    p.sc.base_dir = dir.empty() ? "." : dir;
-    p.top(YAML::Load(text));
-    return std::move(p.sc);
-  } catch (const Failure& f) {
-    return Error{f.message};
-  } catch (const YAML::Exception& e) {
-    return Error{src.at(e.mark).str() + ": invalid YAML: " + e.msg};
-  } catch (const std::exception& e) {
-    return Error{start.str() + ": cannot read the scenario: " + e.what()};
-  } catch (...) {
-    return Error{start.str() + ": cannot read the scenario"};
-  }
+  return yaml::parse_document<Scenario>(yaml_text, file_name, "a scenario", kMaxScenarioBytes, kMaxNesting,
+                                        [&](const Source& src, const YAML::Node& root) {
+                                          Parser p(src);
+                                          p.sc.file = std::string(file_name);
+                                          const std::string dir =
+                                              std::filesystem::path(p.sc.file).parent_path().string();
+                                          p.sc.base_dir = dir.empty() ? "." : dir;
+                                          p.top(root);
+                                          return std::move(p.sc);
+                                        });
 }
 
 kernel::Result<Scenario> load_scenario(const std::string& path) {
-  const std::string where = SourceLocation{path}.str();
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status))
-    return Error{where + ": cannot open the scenario file" + (ec ? " (" + ec.message() + ")" : std::string())};
-  if (!std::filesystem::is_regular_file(status)) return Error{where + ": not a regular file"};
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{where + ": cannot open the scenario file"};
-  std::string text(kMaxScenarioBytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (in.bad()) return Error{where + ": cannot read the scenario file"};
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  if (text.size() > kMaxScenarioBytes) return Error{where + ":1:1: the file is larger than 1 MiB"};
-  auto sc = parse_scenario(text, path);
+  auto text = yaml::read_text_file(path, kMaxScenarioBytes, "scenario");
+  if (!text) return Error{text.error()};
+  auto sc = parse_scenario(*text, path);
   if (!sc) return sc;
   Scenario out = std::move(sc).value();
   const std::string dir = std::filesystem::path(path).parent_path().string();
