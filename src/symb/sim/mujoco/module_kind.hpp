@@ -30,6 +30,8 @@ Vec3 face_normal(Face face);
 struct BodySpec {
   Vec3 size = {0.10, 0.10, 0.08};  // full box extent along x, y, z
   double mass = 0.40;              // both halves together, wheels not included
+
+  friend bool operator==(const BodySpec&, const BodySpec&) = default;
 };
 
 struct WheelSpec {
@@ -38,6 +40,8 @@ struct WheelSpec {
   double mass = 0.02;       // each
   double max_speed = 0.15;  // rim speed, m/s; commands beyond it are clamped
   double gain = 0.004;      // velocity servo, N*m per rad/s of speed error
+
+  friend bool operator==(const WheelSpec&, const WheelSpec&) = default;
 };
 
 struct HingeSpec {
@@ -45,18 +49,24 @@ struct HingeSpec {
   std::array<double, 2> range = {-1.2, 1.2};  // rad; the joint is limited to it
   double gain = 4.0;                          // position servo, N*m per rad of error
   double damping = 0.06;                      // N*m per rad/s, keeps the servo from ringing
+
+  friend bool operator==(const HingeSpec&, const HingeSpec&) = default;
 };
 
 struct ConnectorSpec {
   std::string name;  // unique within the kind
   Face face = Face::kFront;
   Vec3 position{};  // on the face, in the module frame (straight hinge); x < 0 lies on the tail
+
+  friend bool operator==(const ConnectorSpec&, const ConnectorSpec&) = default;
 };
 
 struct IrSpec {
   Face face = Face::kFront;
   Vec3 position{};      // ray origin on the face, in the module frame
   double range = 0.15;  // beyond this the sensor sees nothing
+
+  friend bool operator==(const IrSpec&, const IrSpec&) = default;
 };
 
 struct ModuleKind {
@@ -67,6 +77,8 @@ struct ModuleKind {
   HingeSpec hinge;
   std::vector<ConnectorSpec> connectors;
   std::vector<IrSpec> ir;  // one per face at most
+
+  friend bool operator==(const ModuleKind&, const ModuleKind&) = default;
 };
 
 // The module: a cube about 10 cm wide (10 x 10 x 8 cm, 0.44 kg with its wheels) that
