@@ -38,11 +38,7 @@ class KindFileWalk {
                 "the module kind is empty: it needs name, body, wheels, hinge, connectors and ir");
     Map m(src_, root, "the module kind", {"name", "body", "wheels", "hinge", "connectors", "ir"});
     ModuleKind k;
-    const YAML::Node name = m.require("name");
-    k.name = rd_.text(name, "name");
-    if (!kernel::is_identifier(k.name, 63))
-      src_.fail(name, "name '" + shown(k.name) +
-                          "' is not a valid kind name: 1 to 63 letters, digits or '_', starting with a letter or '_'");
+    k.name = name(m.require("name"), "name");
     body(m.require("body"), k.body);
     wheels(m.require("wheels"), k);
     hinge(m.require("hinge"), k.hinge);
@@ -54,6 +50,14 @@ class KindFileWalk {
   }
 
  private:
+  std::string name(const YAML::Node& n, std::string_view what) const {
+    std::string s = rd_.text(n, what);
+    if (!kernel::is_identifier(s, 63))
+      src_.fail(n, std::string(what) + " '" + shown(s) +
+                       "' is not a valid name: 1 to 63 letters, digits or '_', starting with a letter or '_'");
+    return s;
+  }
+
   Vec3 vec3(const YAML::Node& n, std::string_view what, double lo, double hi) const {
     const auto v = rd_.list(n, what, 3);
     if (!n.IsSequence() || v.size() != 3) src_.fail(n, std::string(what) + " is [x, y, z]" + Map::got(n));
@@ -146,19 +150,16 @@ class KindFileWalk {
     for (const YAML::Node& item : rd_.list(n, "connectors", kMaxConnectors)) {
       Map m(src_, item, "a connector", {"name", "face", "position"});
       ConnectorSpec c;
-      const YAML::Node name = m.require("name");
-      c.name = rd_.text(name, "connector name");
-      if (!kernel::is_identifier(c.name, 63))
-        src_.fail(name, "connector name '" + shown(c.name) +
-                            "' is not a valid name: 1 to 63 letters, digits or '_', starting with a letter or '_'");
+      const YAML::Node name_node = m.require("name");
+      c.name = name(name_node, "connector name");
       for (std::size_t i = 0; i < k.connectors.size(); ++i)
         if (k.connectors[i].name == c.name)
-          src_.fail(name, "connector name '" + c.name + "' is used twice (first at line " +
-                              std::to_string(src_.at(names[i]).line) + ")");
+          src_.fail(name_node, "connector name '" + c.name + "' is used twice (first at line " +
+                                   std::to_string(src_.at(names[i]).line) + ")");
       c.face = face(m.require("face"));
       c.position = on_face(m.require("position"), "connector position (m)", c.face, k.body);
       k.connectors.push_back(std::move(c));
-      names.push_back(name);
+      names.push_back(name_node);
     }
   }
 
