@@ -141,7 +141,8 @@ TEST(ModuleKindFile, BoundsOnSizeAndCounts) {
 }
 
 // Mutants of the shipped files: bytes replaced, deleted, duplicated or swapped by a seeded
-// stream. Each must load as a kind check() accepts, or fail at a line the file has.
+// stream. Each must load as a kind check() accepts and a world runs, or fail at a line the file
+// has.
 TEST(ModuleKindFile, MutantsLoadOrFailInsideTheFile) {
   const std::string alphabet = "0123456789-.,:[]{}#&*! \n\tabcefnrx'\"e+";
   std::size_t loaded = 0, refused = 0;
@@ -165,6 +166,10 @@ TEST(ModuleKindFile, MutantsLoadOrFailInsideTheFile) {
       if (k.ok()) {
         ++loaded;
         EXPECT_EQ(check(*k), "") << "seed " << seed;
+        // What loads, a world takes and runs (0.2 s).
+        auto world = MujocoWorld::make({{"a", *k, {0, 0, 0}}});
+        ASSERT_TRUE(world.ok()) << "seed " << seed << ": " << world.error() << "\n" << text;
+        EXPECT_TRUE(world.value().step(100).ok()) << "seed " << seed << "\n" << text;
         continue;
       }
       ++refused;
@@ -178,6 +183,8 @@ TEST(ModuleKindFile, MutantsLoadOrFailInsideTheFile) {
       EXPECT_GE(loc.at->column, 1u) << e;
     }
   }
+  ::testing::Test::RecordProperty("loaded", static_cast<int>(loaded));
+  ::testing::Test::RecordProperty("refused", static_cast<int>(refused));
   // Both outcomes happen: the mutants reach the checks, not only the YAML scanner.
   EXPECT_GT(loaded, 0u);
   EXPECT_GT(refused, 0u);
@@ -193,6 +200,32 @@ TEST(ModuleKindFile, LoadedKindsRunInAWorld) {
     w.set_hinge_target(0, 0.4);
     auto st = w.step(500);  // 1 s of 2 ms steps
     EXPECT_TRUE(st.ok()) << name << ": " << st.error();
+  }
+}
+
+// The ends of the ranges the file allows still make a world that runs: a 2 cm module of 10 g on
+// the weakest servos, and a 2 m one of 100 kg on the strongest.
+TEST(ModuleKindFile, KindsAtTheEndsOfTheRangesRun) {
+  const std::vector<std::string> kinds = {
+      "name: tiny\nbody: {size: [0.01, 0.01, 0.01], mass: 0.001}\n"
+      "wheels: {radius: 0.009, width: 0.001, mass: 0.001, max_speed: 0.001, gain: 0.000001}\n"
+      "hinge: {axis: [0, 1, 0], range: [-3.14159, 3.14159], gain: 0.001, damping: 0}\n"
+      "connectors: [{name: f, face: front, position: [0.005, 0, 0]}]\nir: []\n",
+      "name: huge\nbody: {size: [2, 2, 2], mass: 100}\n"
+      "wheels: {radius: 1.0, width: 0.9, mass: 100, max_speed: 10, gain: 100}\n"
+      "hinge: {axis: [1, 1, 1], range: [-0.1, 0.1], gain: 1000, damping: 100}\n"
+      "connectors: [{name: b, face: back, position: [-1, 1, 1]}]\n"
+      "ir: [{face: left, position: [1, 1, -1], range: 5}]\n",
+  };
+  for (const std::string& text : kinds) {
+    auto kind = parse_module_kind(text, "k.yaml");
+    ASSERT_TRUE(kind.ok()) << kind.error();
+    auto world = MujocoWorld::make({{"a", *kind, {0, 0, 0}}, {"b", *kind, {5, 0, 0}}});
+    ASSERT_TRUE(world.ok()) << kind->name << ": " << world.error();
+    MujocoWorld& w = world.value();
+    w.set_hinge_target(0, 0.05);
+    auto st = w.step(500);
+    EXPECT_TRUE(st.ok()) << kind->name << ": " << st.error();
   }
 }
 
