@@ -400,7 +400,7 @@ TEST(MujocoDevices, ADivergingWorldStopsTheRunnerWithTheError) {
   rig.ex.run_for(1s);  // returns: the tasks go on without the world
   EXPECT_FALSE(rig.runner->running());
   const std::string error = rig.runner->error();
-  EXPECT_NE(error.find("runner 'world' stopped: world step failed: step "), std::string::npos) << error;
+  EXPECT_NE(error.find("world runner 'world' stopped: world step failed: step "), std::string::npos) << error;
   EXPECT_NE(error.find("diverged"), std::string::npos) << error;
   EXPECT_TRUE(rig.world.failed());
   // Measured: the first tick fails, at step 12 of its 15 (the servo cannot even hold the module

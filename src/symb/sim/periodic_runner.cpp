@@ -7,7 +7,7 @@ namespace symb::sim {
 PeriodicRunner::PeriodicRunner(kernel::Executor& executor, Options options)
     : executor_(executor), options_(std::move(options)) {
   if (options_.period <= kernel::Duration::zero() || options_.period > std::chrono::seconds(1))
-    throw std::invalid_argument("runner '" + options_.name + "': the period must be in (0, 1 s]");
+    throw std::invalid_argument("world runner '" + options_.name + "': the period must be in (0, 1 s]");
 }
 
 PeriodicRunner::~PeriodicRunner() { halt(); }
@@ -23,7 +23,7 @@ void PeriodicRunner::halt() {
 kernel::Status PeriodicRunner::start() {
   {
     std::lock_guard lock(state_mu_);
-    if (attached_) return kernel::Error{"runner '" + options_.name + "' is already running"};
+    if (attached_) return kernel::Error{"world runner '" + options_.name + "' is already running"};
     attached_ = true;
     error_.clear();
   }
@@ -79,7 +79,7 @@ void PeriodicRunner::on_activity_tick() {
   try {
     st = step_once(executor_.clock().now());
   } catch (const std::exception& e) {
-    st = kernel::Error{std::string("threw: ") + e.what()};
+    st = kernel::Error{e.what()};
   }
   if (!st) {
     fail(st.error());
@@ -91,7 +91,7 @@ void PeriodicRunner::on_activity_tick() {
 
 void PeriodicRunner::fail(const std::string& why) {
   kernel::ActivitySlot* slot = nullptr;
-  std::string text = "runner '" + options_.name + "' stopped: " + why;
+  std::string text = "world runner '" + options_.name + "' stopped: " + why;
   {
     std::lock_guard lock(state_mu_);
     error_ = text;

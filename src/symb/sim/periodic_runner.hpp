@@ -51,7 +51,7 @@ class PeriodicRunner : private kernel::Activity {
  protected:
   kernel::Executor& executor() const { return executor_; }
   // One tick at node time `now`. An error (or an exception) stops the runner, and error() keeps
-  // "<kind> '<name>' stopped: <the error>".
+  // "world runner '<name>' stopped: <the error>".
   virtual kernel::Status step_once(kernel::Time now) = 0;
   // Called once on the runner's context after a failed step, with the text error() now gives.
   virtual void on_failed(const std::string& /*error*/) {}

@@ -17,13 +17,13 @@ static_assert(kTimestep == 0.002, "kMjRunnerStepNs must follow the model's time 
 
 MujocoRunner::MujocoRunner(kernel::Executor& executor, MujocoWorld& world, Options options)
     : PeriodicRunner(executor, std::move(options)),
-      world_(world),
       access_(std::make_shared<WorldAccess>(world)),
       period_ns_(std::chrono::duration_cast<std::chrono::nanoseconds>(this->options().period).count()) {
-  const std::size_t n = world_.module_count();
+  // The world is read here, before the runner can tick; afterwards only under access_'s lock.
+  const std::size_t n = world.module_count();
   record_.modules.resize(n);
   for (std::size_t m = 0; m < n; ++m) {
-    const ModuleKind& kind = world_.module(m).kind;
+    const ModuleKind& kind = world.module(m).kind;
     ir_.push_back(std::make_shared<MujocoIrSensor>("ir"));
     hinge_state_.push_back(std::make_shared<MujocoHingeSensor>("hinge_state"));
     hinge_.push_back(std::make_shared<MujocoHinge>("hinge", kind.hinge.range));

@@ -116,7 +116,6 @@ class MujocoRunner final : public PeriodicRunner {
   kernel::Status step_once(kernel::Time now) override;
   void on_failed(const std::string& error) override;
 
-  MujocoWorld& world_;  // touched only under access_'s world lock
   std::shared_ptr<WorldAccess> access_;
   const std::int64_t period_ns_;
   std::uint64_t steps_done_ = 0;  // by this runner; only its tick touches it
