@@ -349,6 +349,56 @@ TEST(MujocoDevices, ARefusedLatchAnswersWithTheWorldsReason) {
   EXPECT_NE(front_a->ioctl("wobble").error().find("wobble"), std::string::npos);
 }
 
+TEST(MujocoDevices, APeriodOfNoWholeStepsNeverDrifts) {
+  // 25 ms is 12.5 steps: the ticks take 12 and 13 in turn, and the world keeps the node's time.
+  kernel::VirtualTimeExecutor ex;
+  auto made = MujocoWorld::make({{"a", standard_kind(), {0, 0, 0}}});
+  ASSERT_TRUE(made.ok()) << made.error();
+  MujocoWorld world = std::move(made).value();
+  MujocoRunner runner(ex, world, PeriodicRunner::Options{.period = 25ms});
+  std::vector<std::uint64_t> steps;
+  runner.add_observer([&](const MujocoStepRecord& r) {
+    steps.push_back(r.step);
+    EXPECT_LE(std::abs(static_cast<double>(r.step) * kTimestep - std::chrono::duration<double>(r.time).count()),
+              kTimestep);
+  });
+  ASSERT_TRUE(runner.start());
+  ex.run_for(1s);
+  ASSERT_EQ(steps.size(), 40U);
+  EXPECT_EQ(steps[0], 12U);
+  EXPECT_EQ(steps[1], 25U);
+  EXPECT_EQ(steps.back(), 500U);
+  EXPECT_EQ(world.steps(), 500U);
+}
+
+TEST(MujocoDevices, DockingThroughTheWorldIsLoggedAtTheNextTick) {
+  // A shell or a scenario docks through with_world, not through a device: the runner's next tick
+  // writes it to both nodes' logs all the same.
+  DeviceRig rig(dev_face_to_face(0.005));
+  ASSERT_TRUE(rig.runner->start());
+  rig.ex.run_for(150ms);
+  bool latched = false;
+  ASSERT_TRUE(
+      rig.runner->with_world([&](MujocoWorld& w) { latched = w.latch(1, *w.find_connector(1, "front")).ok(); }));
+  ASSERT_TRUE(latched);
+  EXPECT_FALSE(dev_has_line(rig.log_lines(0), "latched"));
+  rig.ex.run_for(30ms);
+  EXPECT_TRUE(dev_has_line(rig.log_lines(0), "connector_front: latched front to b.front (latched by b)"))
+      << dev_joined(rig.log_lines(0));
+  EXPECT_TRUE(dev_has_line(rig.log_lines(1), "connector_front: latched front to a.front"));
+}
+
+TEST(MujocoDevices, AConnectorThatOutlivesItsRunnerSaysTheWorldIsGone) {
+  DeviceRig rig(dev_face_to_face(0.005));
+  auto front = rig.runner->connector(0, "front");
+  EXPECT_EQ(front->ioctl("state").value(), "aligned, open");
+  rig.runner.reset();
+  const auto answer = front->ioctl("latch");
+  ASSERT_FALSE(answer.ok());
+  EXPECT_NE(answer.error().find("the world is gone"), std::string::npos) << answer.error();
+  EXPECT_FALSE(front->ioctl("open").ok());
+}
+
 // A fixed task graph on two modules: a waves its hinge to random targets from its node's stream
 // and drives; b drives in a curve. Returns every tick's poses and hinge angles.
 std::vector<double> dev_seeded_run(std::uint64_t seed) {
