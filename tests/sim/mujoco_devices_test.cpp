@@ -19,6 +19,7 @@
 #include "symb/os/node.hpp"
 #include "symb/robot/actuator.hpp"
 #include "symb/robot/ports.hpp"
+#include "symb/robot/robot_task_types.hpp"
 #include "symb/robot/sensor.hpp"
 #include "symb/sim/mujoco/mujoco_runner.hpp"
 #include "symb/sim/robot_system.hpp"
@@ -397,6 +398,34 @@ TEST(MujocoDevices, AConnectorThatOutlivesItsRunnerSaysTheWorldIsGone) {
   ASSERT_FALSE(answer.ok());
   EXPECT_NE(answer.error().find("the world is gone"), std::string::npos) << answer.error();
   EXPECT_FALSE(front->ioctl("open").ok());
+}
+
+TEST(MujocoDevices, TaskTypesByNameFindTheModulesDevices) {
+  // The robot layer's `sensor` and `actuator_sink` types, created by name as a shell or a scenario
+  // does, bind to the module's devices through the runner's lookups.
+  DeviceRig rig(dev_face_to_face(0.005));
+  os::TaskTypeRegistry types;
+  ASSERT_TRUE(robot::register_robot_task_types(types, rig.runner->device_lookups(0)).ok());
+  os::Node node(rig.ex, os::NodeConfig{"a_by_name", 3, 64, &types});
+  auto create = [&](std::string_view type, const std::string& device) {
+    const std::vector<os::ParamAssignment> params{{"device", device, 1}};
+    return node.create(type, device, params);
+  };
+  ASSERT_TRUE(create("actuator_sink", "hinge").ok());
+  ASSERT_TRUE(create("actuator_sink", "wheels").ok());
+  ASSERT_TRUE(create("sensor", "hinge_state").ok());
+  ASSERT_TRUE(create("sensor", "connector_front").ok());
+  const auto missing = create("sensor", "connector_top");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.error().find("connector_top"), std::string::npos) << missing.error();
+  EXPECT_FALSE(create("actuator_sink", "ir").ok());  // a sensor is no actuator
+  ASSERT_TRUE(rig.runner->start());
+  rig.ex.run_for(90ms);
+  EXPECT_TRUE(rig.runner->hinge_sensor(0)->has_listener());
+  EXPECT_TRUE(rig.runner->connector(0, "front")->has_listener());
+  EXPECT_TRUE(rig.runner->hinge(0)->is_open());  // opened by its sink at start
+  ASSERT_TRUE(rig.runner->connector(0, "front")->latest().has_value());
+  node.clear();
 }
 
 // A fixed task graph on two modules: a waves its hinge to random targets from its node's stream

@@ -90,6 +90,25 @@ std::vector<std::shared_ptr<io::Device>> MujocoRunner::devices(std::size_t modul
   return all;
 }
 
+robot::RobotDevices MujocoRunner::device_lookups(std::size_t module) const {
+  std::vector<std::shared_ptr<robot::Sensor>> sensors{ir_sensor(module), hinge_sensor(module)};
+  for (const auto& c : connectors_[module]) sensors.push_back(c);
+  std::vector<std::shared_ptr<robot::Actuator>> actuators{hinge(module)};
+  if (wheels_[module]) actuators.push_back(wheels_[module]);
+  robot::RobotDevices lookups;
+  lookups.sensor = [sensors](std::string_view name) -> std::shared_ptr<robot::Sensor> {
+    for (const auto& s : sensors)
+      if (s->name() == name) return s;
+    return nullptr;
+  };
+  lookups.actuator = [actuators](std::string_view name) -> std::shared_ptr<robot::Actuator> {
+    for (const auto& a : actuators)
+      if (a->name() == name) return a;
+    return nullptr;
+  };
+  return lookups;
+}
+
 void MujocoRunner::add_observer(MujocoStepObserver observer) {
   std::lock_guard lock(observers_mu_);
   observers_.push_back(std::move(observer));

@@ -44,6 +44,7 @@
 #include "symb/kernel/executor.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
+#include "symb/robot/robot_task_types.hpp"
 #include "symb/sim/mujoco/mujoco_devices.hpp"
 #include "symb/sim/mujoco/mujoco_world.hpp"
 #include "symb/sim/mujoco/world_access.hpp"
@@ -97,6 +98,11 @@ class MujocoRunner final : public PeriodicRunner {
   std::shared_ptr<MujocoConnector> connector(std::size_t module, std::string_view name) const;
   // Every device of the module, for a shell's `devices` list.
   std::vector<std::shared_ptr<io::Device>> devices(std::size_t module) const;
+  // The module's devices by name for the robot task types (robot_task_types.hpp), so a shell, a
+  // scenario or a genome creates `sensor device=hinge_state` or `actuator_sink device=hinge` on
+  // the module's node as on a Thymio's: sensors ir, hinge_state, connector_<name>; actuators
+  // hinge, wheels. The lookups hold the devices, not the runner.
+  robot::RobotDevices device_lookups(std::size_t module) const;
 
   // See the header's Nodes paragraph. Throws std::out_of_range for a bad module.
   void set_node(std::size_t module, os::Node* node) { access_->set_node(module, node); }
