@@ -5,12 +5,9 @@
 namespace symb::sim {
 
 WorldRunner::WorldRunner(kernel::Executor& executor, World& world, Options options)
-    : executor_(executor),
+    : PeriodicRunner(executor, std::move(options)),
       world_(world),
-      options_(std::move(options)),
-      dt_(std::chrono::duration<double>(options_.period).count()) {
-  if (options_.period <= kernel::Duration::zero() || options_.period > std::chrono::seconds(1))
-    throw std::invalid_argument("world runner: the period must be in (0, 1 s]");
+      dt_(std::chrono::duration<double>(this->options().period).count()) {
   const std::size_t n = world_.robot_count();
   for (std::size_t i = 0; i < n; ++i) {
     ir_.push_back(std::make_shared<SimIrSensor>("ir"));
@@ -21,13 +18,7 @@ WorldRunner::WorldRunner(kernel::Executor& executor, World& world, Options optio
   record_.robots.resize(n);
 }
 
-WorldRunner::~WorldRunner() {
-  stop();
-  // stop() waits under the thread executor; a virtual-time executor outside its run has released
-  // us already. Anything else would be a runner destroyed from inside a handler.
-  std::unique_lock lock(state_mu_);
-  released_cv_.wait(lock, [&] { return !attached_; });
-}
+WorldRunner::~WorldRunner() { halt(); }
 
 std::shared_ptr<SimIrSensor> WorldRunner::ir_sensor(std::size_t robot) const {
   if (robot >= ir_.size()) throw std::out_of_range("world runner: no robot " + std::to_string(robot));
@@ -55,77 +46,7 @@ void WorldRunner::add_observer(StepObserver observer) {
   has_observers_.store(true, std::memory_order_release);
 }
 
-kernel::Status WorldRunner::start() {
-  {
-    std::lock_guard lock(state_mu_);
-    if (attached_) return kernel::Error{"world runner '" + options_.name + "' is already running"};
-    attached_ = true;
-    error_.clear();
-  }
-  // Not under state_mu_: attach() calls on_activity_attached(), and a thread executor may already
-  // run the first handler.
-  executor_.attach(*this, kernel::ActivityOptions{options_.priority, options_.period, options_.name});
-  return {};
-}
-
-void WorldRunner::stop() {
-  kernel::ActivitySlot* slot = nullptr;
-  {
-    std::lock_guard lock(state_mu_);
-    if (!attached_) return;
-    slot = slot_;
-    slot_ = nullptr;  // the slot is the executor's again once we are released
-  }
-  if (slot != nullptr) slot->detach();
-  if (executor_.concurrent() && std::this_thread::get_id() != runner_thread_.load()) {
-    std::unique_lock lock(state_mu_);
-    released_cv_.wait(lock, [&] { return !attached_; });
-  }
-}
-
-bool WorldRunner::running() const {
-  std::lock_guard lock(state_mu_);
-  return attached_ && slot_ != nullptr;
-}
-
-std::string WorldRunner::error() const {
-  std::lock_guard lock(state_mu_);
-  return error_;
-}
-
-void WorldRunner::on_activity_attached(kernel::ActivitySlot& slot) {
-  std::lock_guard lock(state_mu_);
-  slot_ = &slot;
-}
-
-void WorldRunner::on_activity_start() { runner_thread_.store(std::this_thread::get_id()); }
-
-void WorldRunner::on_activity_released() {
-  std::lock_guard lock(state_mu_);
-  slot_ = nullptr;
-  attached_ = false;
-  runner_thread_.store(std::thread::id{});
-  // Notified under the lock: a waiter may destroy the runner as soon as it gets the lock back.
-  released_cv_.notify_all();
-}
-
-void WorldRunner::on_activity_tick() {
-  try {
-    tick();
-  } catch (const std::exception& e) {
-    kernel::ActivitySlot* slot = nullptr;
-    {
-      std::lock_guard lock(state_mu_);
-      error_ = std::string("world runner '") + options_.name + "' stopped: " + e.what();
-      slot = slot_;
-      slot_ = nullptr;
-    }
-    if (slot != nullptr) slot->detach();
-  }
-}
-
-void WorldRunner::tick() {
-  const kernel::Time now = executor_.clock().now();
+kernel::Status WorldRunner::step_once(kernel::Time now) {
   {
     std::lock_guard lock(world_mu_);
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
@@ -151,9 +72,10 @@ void WorldRunner::tick() {
   }
   // One writer (this handler): a plain store, not a locked read-modify-write per step.
   steps_.store(steps_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
-  if (!has_observers_.load(std::memory_order_acquire)) return;
+  if (!has_observers_.load(std::memory_order_acquire)) return {};
   std::lock_guard lock(observers_mu_);
   for (const StepObserver& observer : observers_) observer(record_);
+  return {};
 }
 
 }  // namespace symb::sim

@@ -23,18 +23,16 @@
 #pragma once
 
 #include <atomic>
-#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
-#include <string>
-#include <thread>
 #include <vector>
 
 #include "symb/kernel/executor.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
+#include "symb/sim/periodic_runner.hpp"
 #include "symb/sim/sim_drivers.hpp"
 #include "symb/sim/world.hpp"
 
@@ -56,14 +54,9 @@ struct StepRecord {
 // observers; it may call with_world() and stop().
 using StepObserver = std::function<void(const StepRecord&)>;
 
-class WorldRunner final : private kernel::Activity {
+// The life cycle (start, stop, running, error, the period and priority) is PeriodicRunner's.
+class WorldRunner final : public PeriodicRunner {
  public:
-  struct Options {
-    kernel::Duration period = std::chrono::milliseconds(30);  // 33.33 Hz, the paper's control rate
-    int priority = 100;                                       // above every control task
-    std::string name = "world";
-  };
-
   // `executor` and `world` must outlive the runner. Throws std::invalid_argument unless the period
   // is in (0, 1 s]. Makes one SimIrSensor ("ir") and one SimWheels ("wheels") per robot.
   WorldRunner(kernel::Executor& executor, World& world) : WorldRunner(executor, world, Options{}) {}
@@ -71,8 +64,6 @@ class WorldRunner final : private kernel::Activity {
   // Stops the runner and waits until the executor has let go of it. Destroy it outside the
   // executor's handlers (from the thread that runs a virtual-time executor, between runs).
   ~WorldRunner() override;
-  WorldRunner(const WorldRunner&) = delete;
-  WorldRunner& operator=(const WorldRunner&) = delete;
 
   std::size_t robot_count() const { return ir_.size(); }
   // The robot's devices, to hand to its node's tasks. Throw std::out_of_range for a bad index.
@@ -84,20 +75,8 @@ class WorldRunner final : private kernel::Activity {
   // Any time, any thread.
   void add_observer(StepObserver observer);
 
-  // Attaches the runner to the executor: the first step comes one period later. Fails when it is
-  // already running.
-  kernel::Status start();
-  // Detaches it. Under the thread executor, called from another thread, returns once the last
-  // tick has finished; otherwise (from the runner's own observer, or under the virtual-time
-  // executor inside a run) the last tick may still be under way. A stopped runner may start again.
-  void stop();
-  bool running() const;
-
-  // Steps done by this runner.
+  // Steps done by this runner (observers see the step they are told of counted already).
   std::uint64_t steps() const { return steps_.load(std::memory_order_acquire); }
-  const Options& options() const { return options_; }
-  // Why the runner stopped on its own (the world threw), or empty.
-  std::string error() const;
 
   // Runs `fn(world)` with the world locked: safe against a step running on another thread.
   template <class F>
@@ -107,18 +86,10 @@ class WorldRunner final : private kernel::Activity {
   }
 
  private:
-  void on_activity_attached(kernel::ActivitySlot& slot) override;
-  void on_activity_start() override;
-  void on_activity_input() override {}
-  void on_activity_tick() override;
-  void on_activity_stop() override {}
-  void on_activity_released() override;
-  void tick();
+  kernel::Status step_once(kernel::Time now) override;
 
-  kernel::Executor& executor_;
   World& world_;
-  const Options options_;
-  const double dt_;  // options_.period in seconds
+  const double dt_;  // options().period in seconds
   std::vector<std::shared_ptr<SimIrSensor>> ir_;
   std::vector<std::shared_ptr<SimWheels>> wheels_;
   std::vector<std::shared_ptr<SimPoseSensor>> pose_;
@@ -130,13 +101,6 @@ class WorldRunner final : private kernel::Activity {
   std::mutex observers_mu_;
   std::vector<StepObserver> observers_;
   std::atomic<bool> has_observers_{false};  // lets a step without observers skip their lock
-
-  mutable std::mutex state_mu_;  // slot_, attached_, error_
-  std::condition_variable released_cv_;
-  kernel::ActivitySlot* slot_ = nullptr;
-  bool attached_ = false;  // between attach and on_activity_released
-  std::string error_;
-  std::atomic<std::thread::id> runner_thread_{};
   std::atomic<std::uint64_t> steps_{0};
 };
 
