@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -12,7 +13,6 @@ namespace symb::sim::mujoco {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // A ray that meets its own module goes on from just past the hit (m).
 constexpr double kRayStepPast = 1e-6;
 
@@ -58,7 +58,7 @@ std::string mm(double metres) {
 std::string deg(double radians) {
   std::ostringstream out;
   out.precision(3);
-  out << std::fixed << radians * 180 / kPi << " deg";
+  out << std::fixed << radians * 180 / std::numbers::pi << " deg";
   return out.str();
 }
 

@@ -39,6 +39,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -57,7 +58,7 @@ namespace symb::sim::mujoco {
 // mechanical docking guide of a 10 cm module draws in.
 inline constexpr double kLatchPositionTolerance = 0.015;
 // ... and their outward normals are opposite within this angle (rad, 10 degrees).
-inline constexpr double kLatchAngleTolerance = 10.0 * 3.14159265358979323846 / 180.0;
+inline constexpr double kLatchAngleTolerance = 10.0 * std::numbers::pi / 180.0;
 
 inline constexpr std::size_t kNoIndex = static_cast<std::size_t>(-1);
 

@@ -1,6 +1,7 @@
 #include "symb/sim/mujoco/world_access.hpp"
 
 #include <cstdio>
+#include <numbers>
 #include <stdexcept>
 
 #include "symb/os/node.hpp"
@@ -61,7 +62,7 @@ std::string mj_access_measures(const DockEvent& e) {
     std::snprintf(text, sizeof text, "(step %llu)", static_cast<unsigned long long>(e.step));
   else
     std::snprintf(text, sizeof text, "(%.2f mm, %.2f deg apart, step %llu)", e.distance * 1000,
-                  e.angle * 180 / 3.14159265358979323846, static_cast<unsigned long long>(e.step));
+                  e.angle * 180 / std::numbers::pi, static_cast<unsigned long long>(e.step));
   return text;
 }
 
