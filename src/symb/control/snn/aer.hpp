@@ -67,6 +67,11 @@ inline const AerPacket* aer_of(const os::Message& m) { return os::blob_as<AerPac
 constexpr std::uint32_t aer_timestamp(kernel::Time t) {
   return static_cast<std::uint32_t>(static_cast<std::uint64_t>(t.count() / 1000));
 }
+// Back from an AER timestamp to node time (us): of the instants it may stand for (it wraps every
+// 2^32 us, 71 minutes), the one nearest `now_us`.
+constexpr std::int64_t unwrap_us(std::uint32_t timestamp, std::int64_t now_us) {
+  return now_us + static_cast<std::int32_t>(timestamp - static_cast<std::uint32_t>(now_us));
+}
 
 // The wire form above. decode_aer() errors say "byte OFFSET: message" (a short buffer, a count
 // that does not match the length, more than kMaxPacketEvents events); it never reads past `bytes`.

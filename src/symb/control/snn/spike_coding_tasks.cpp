@@ -15,11 +15,6 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// The node time (us) of a wrapping AER timestamp: the instant nearest `now_us`.
-std::int64_t unwrap_us(std::uint32_t timestamp, std::int64_t now_us) {
-  return now_us + static_cast<std::int32_t>(timestamp - static_cast<std::uint32_t>(now_us));
-}
-
 // One rate-limited warning per interval, counting the ones it stands for.
 // "N messages ignored, latest: why", at most once per interval.
 void warn_ignored(os::WarningLimiter& limiter, kernel::Time now, kernel::Duration interval, const std::string& why,
@@ -145,7 +140,7 @@ void SpikeDecoderTask::on_message(const os::Message& m) {
   for (const snn::AerEvent& e : packet->events) {
     const std::uint32_t channel = snn::aer_neuron(e.address);
     if (channel >= options_.channels) continue;
-    recent_.push_back({unwrap_us(e.timestamp_us, now_us), channel});
+    recent_.push_back({snn::unwrap_us(e.timestamp_us, now_us), channel});
     ++counted;
   }
   while (recent_.size() > kMaxWindowEvents) recent_.pop_front();

@@ -17,12 +17,6 @@ namespace {
 
 constexpr std::int64_t kNsPerMs = 1'000'000;
 
-// The node time (us) of an AER timestamp that wraps every 2^32 us: the instant nearest `now_us`.
-std::int64_t unwrap_us(std::uint32_t timestamp, std::int64_t now_us) {
-  const auto delta = static_cast<std::int32_t>(timestamp - static_cast<std::uint32_t>(now_us));
-  return now_us + delta;
-}
-
 std::int64_t floor_div(std::int64_t a, std::int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
 
 }  // namespace
@@ -95,7 +89,7 @@ void SpikingNetworkTask::on_message(const os::Message& m) {
     std::uint64_t accepted = 0, late = 0, dropped = 0;
     for (const snn::AerEvent& e : packet->events) {
       const std::uint32_t channel = snn::aer_neuron(e.address);
-      const std::int64_t at_us = unwrap_us(e.timestamp_us, now_us);
+      const std::int64_t at_us = snn::unwrap_us(e.timestamp_us, now_us);
       if (channel >= run_.grown.inputs.size() || at_us - now_us > kMaxLead.count() / 1000 ||
           queue_.size() >= kMaxQueuedEvents) {
         ++dropped;
