@@ -1,6 +1,8 @@
 // MDL2e byte code: compile -> encode -> decode gives the same program and listing; corrupted or
 // truncated byte code is rejected by decode()/verify(), never crashes.
+#include <limits>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -18,6 +20,8 @@ plan main loop until bump {
   atom forward(100) until near or not (bump and near)
   do avoid
   task start logger
+  device connector_front latch
+  device hinge set -0.25
   atom wheels(-1.5, 2.25)
 })";
 
@@ -35,9 +39,11 @@ TEST(Mdl2eBytecode, RoundTripAndDisassembly) {
   EXPECT_NE(listing.find("ATOM forward(100) interrupt=[near bump near AND NOT OR]"), std::string::npos) << listing;
   EXPECT_NE(listing.find("BEHAVIOUR avoid duration=800ms"), std::string::npos) << listing;
   EXPECT_NE(listing.find("TASK start logger"), std::string::npos) << listing;
+  EXPECT_NE(listing.find("DEVICE connector_front latch\n"), std::string::npos) << listing;
+  EXPECT_NE(listing.find("DEVICE hinge set -0.25\n"), std::string::npos) << listing;
   EXPECT_NE(listing.find("ATOM wheels(-1.5, 2.25)"), std::string::npos) << listing;
   EXPECT_NE(listing.find("INTERRUPT 0 near = sensor[2] > 2000"), std::string::npos) << listing;
-  EXPECT_LT(bytes.size(), 400u);  // compact
+  EXPECT_LT(bytes.size(), 480u);  // compact
 }
 
 TEST(Mdl2eBytecode, DecodedProgramRunsLikeTheOriginal) {
@@ -92,6 +98,43 @@ TEST(Mdl2eBytecode, VerifyCatchesBadTrees) {
   Program bad_arity = p;
   bad_arity.nodes[1].arg = static_cast<std::uint16_t>(Primitive::kWheels);
   EXPECT_FALSE(verify(bad_arity).ok());
+}
+
+TEST(Mdl2eBytecode, VerifyCatchesBadDeviceActions) {
+  const Program p = testing::must_compile("plan p { device hinge set 0.5 atom stop }");
+  ASSERT_EQ(p.nodes[1].op, Op::kDevice);
+  ASSERT_TRUE(verify(p).ok());
+  Program bad_command = p;
+  bad_command.nodes[1].arg = static_cast<std::uint16_t>(p.strings.size());
+  EXPECT_FALSE(verify(bad_command).ok());
+  Program two_arguments = p;
+  two_arguments.params.push_back(1);
+  two_arguments.nodes[1].param_count = 2;
+  EXPECT_FALSE(verify(two_arguments).ok());
+  Program nan_argument = p;
+  nan_argument.params[nan_argument.nodes[1].param_offset] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(verify(nan_argument).ok());
+  Program timed = p;
+  timed.nodes[1].duration_ms = 5;
+  EXPECT_FALSE(verify(timed).ok());
+}
+
+TEST(Mdl2eBytecode, ADeviceActionIsAnInstantEventWithItsCommandAndArgument) {
+  const Program p = testing::must_compile("plan p { device connector_front latch device hinge set 0.5 atom stop }");
+  Interpreter in(p);
+  const Output out = in.step(testing::ms(0), {});
+  std::vector<const Event*> actions;
+  for (const Event& e : out.event_list())
+    if (e.kind == EventKind::kDeviceAction) actions.push_back(&e);
+  ASSERT_EQ(actions.size(), 2u);
+  EXPECT_EQ(actions[0]->name, "connector_front");
+  EXPECT_EQ(actions[0]->command, "latch");
+  EXPECT_FALSE(actions[0]->has_argument);
+  EXPECT_EQ(actions[1]->name, "hinge");
+  EXPECT_EQ(actions[1]->command, "set");
+  EXPECT_TRUE(actions[1]->has_argument);
+  EXPECT_EQ(actions[1]->argument, 0.5f);
+  EXPECT_EQ(testing::atom(out), "stop");
 }
 
 }  // namespace

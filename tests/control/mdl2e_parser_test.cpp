@@ -57,7 +57,7 @@ TEST(Mdl2eParser, SyntaxErrorsNameLineAndColumn) {
   EXPECT_EQ(mdl2e_error("plan p {\n  atom forward(100\n}"), "3:1: expected ')' to close the arguments, got '}'");
   EXPECT_EQ(mdl2e_error("plan p {\n  atom forward(100)\n"),
             "3:1: expected '}' to close the body, got the end of the program");
-  EXPECT_EQ(mdl2e_error("plan p { }"), "1:10: a body needs at least one atom, behaviour, 'do' or 'task'");
+  EXPECT_EQ(mdl2e_error("plan p { }"), "1:10: a body needs at least one atom, behaviour, 'do', 'task' or 'device'");
   EXPECT_EQ(mdl2e_error("plan p { atom stop }\n@"), "2:1: unexpected character '@'");
   EXPECT_EQ(mdl2e_error("plan p { atom stop }\x01"), "1:21: unexpected byte 0x01");
   EXPECT_EQ(mdl2e_error("plan p { atom stop until }"),
@@ -69,6 +69,13 @@ TEST(Mdl2eParser, SyntaxErrorsNameLineAndColumn) {
   EXPECT_EQ(mdl2e_error("sensor ir[0]\nplan p { atom stop }"), "1:11: channel size must be in 1..256, got '0'");
   EXPECT_EQ(mdl2e_error("plan p { task stop x }"),
             "1:15: expected start, suspend, resume or delete after 'task', got 'stop'");
+  EXPECT_EQ(mdl2e_error("plan p { device }"), "1:17: expected a device name, got '}'");
+  EXPECT_EQ(mdl2e_error("plan p { device connector_front }"),
+            "1:33: expected a command of device 'connector_front', got '}'");
+  EXPECT_EQ(mdl2e_error("plan p { device hinge set 2 3 }"),
+            "1:29: expected 'atom', 'behaviour', 'do', 'task', 'device' or '}', got '3'");
+  EXPECT_EQ(mdl2e_error("plan p { device hinge set 2e9 }"), "1:27: argument takes no unit, got '2e9'");
+  EXPECT_EQ(mdl2e_error("plan p { device hinge set 2000000 }"), "1:27: argument must be within +-1000000");
   EXPECT_EQ(mdl2e_error("plan p { atom stop } 12"),
             "1:22: expected 'sensor', 'interrupt', 'behaviour' or 'plan', got '12'");
   EXPECT_EQ(mdl2e_error("plan p { atom wheels(1.) }"), "1:24: expected a digit after the decimal point");

@@ -121,18 +121,19 @@ struct Mdl2eRig {
   Mdl2eRecorder* rec = nullptr;
   os::TaskId sensor_id, ctl_id, rec_id;
 
-  explicit Mdl2eRig(std::string_view source, int ctl_priority = 2, Mdl2eTaskOptions options = {}) {
+  explicit Mdl2eRig(std::string_view source, int ctl_priority = 2, Mdl2eTaskOptions options = {},
+                    DeviceLookup devices = {}) {
     auto s = std::make_unique<Mdl2eSensor>();
     sensor = s.get();
     sensor_id = *node.create("ir", std::move(s), {.priority = 1, .period = 10ms});
     auto r = std::make_unique<Mdl2eRecorder>();
     rec = r.get();
     rec_id = *node.create("rec", std::move(r), {.queue_capacity = 64});
-    ctl_id = add_controller("ctl", source, ctl_priority, options);
+    ctl_id = add_controller("ctl", source, ctl_priority, options, std::move(devices));
   }
-  os::TaskId add_controller(std::string name, std::string_view source, int priority = 2,
-                            Mdl2eTaskOptions options = {}) {
-    auto c = Mdl2eTask::create(compile(source), options);
+  os::TaskId add_controller(std::string name, std::string_view source, int priority = 2, Mdl2eTaskOptions options = {},
+                            DeviceLookup devices = {}) {
+    auto c = Mdl2eTask::create(compile(source), options, std::move(devices));
     EXPECT_TRUE(c.ok()) << (c.ok() ? std::string() : c.error());
     ctl = c->get();
     auto id = *node.create(std::move(name), std::move(c).value(),
@@ -347,6 +348,77 @@ plan p {
   EXPECT_EQ(s.task_actions, 5u);  // start of a running task counts as done
   EXPECT_EQ(s.task_action_failures, 1u);
   EXPECT_EQ(rig.warnings("ghost"), 1u);
+}
+
+// A docking connector as a program sees it: `latch` and `unlatch`, and `grip` with a force in
+// 0..10; it keeps what it was told.
+class Mdl2eConnector : public io::Device {
+ public:
+  std::vector<std::string> heard;
+  Mdl2eConnector() : io::Device("connector_front") {
+    add_ioctl({"latch", std::nullopt, "dock"}, [this](const os::ParamValue*) -> kernel::Result<std::string> {
+      heard.push_back("latch");
+      return std::string("docked");
+    });
+    add_ioctl({"unlatch", std::nullopt, "undock"}, [this](const os::ParamValue*) -> kernel::Result<std::string> {
+      heard.push_back("unlatch");
+      return kernel::Error{"not docked"};
+    });
+    os::ParamSpec force{
+        .name = "force", .type = os::ParamType::kReal, .default_value = 0.0, .min = 0, .max = 10, .doc = "N"};
+    add_ioctl({"grip", force, "grip"}, [this](const os::ParamValue* v) -> kernel::Result<std::string> {
+      heard.push_back("grip " + std::to_string(std::get<double>(*v)));
+      return std::string("ok");
+    });
+  }
+  kernel::Status open() override { return {}; }
+  void close() override {}
+  bool is_open() const override { return true; }
+};
+
+TEST(Mdl2eTask, DeviceActionsSendTheirCommandToTheRobotsDeviceAndFailuresAreOnlyWarned) {
+  auto connector = std::make_shared<Mdl2eConnector>();
+  DeviceLookup devices = [connector](std::string_view name) -> std::shared_ptr<io::Device> {
+    return name == "connector_front" ? connector : nullptr;
+  };
+  Mdl2eRig rig(R"(
+sensor ir[7]
+plan p {
+  device connector_front latch
+  atom forward(10) for 100ms
+  device connector_front grip 2.5
+  device connector_front unlatch
+  device connector_back latch
+  device connector_front grip 11
+  atom forward(30)
+}
+)",
+               2, {}, devices);
+  rig.sensor->script(ms(10), kClearIr);
+  rig.ex.run_until(ms(10));
+  EXPECT_EQ(connector->heard, std::vector<std::string>{"latch"});
+  EXPECT_EQ(rig.rec->last().left, 10);
+  rig.ex.run_until(ms(120));
+  EXPECT_EQ(connector->heard, (std::vector<std::string>{"latch", "grip 2.500000", "unlatch"}));
+  EXPECT_EQ(rig.rec->last().left, 30);
+  const Mdl2eStats s = rig.ctl->stats();
+  EXPECT_EQ(s.task_actions, 2u);          // latch, grip 2.5
+  EXPECT_EQ(s.task_action_failures, 3u);  // refused unlatch, missing connector_back, grip out of range
+  EXPECT_EQ(rig.warnings("device connector_front unlatch not done: not docked"), 1u);
+  EXPECT_EQ(rig.node.info(rig.ctl_id)->state, os::TaskState::kRunning);
+  std::size_t infos = 0;
+  for (const auto& e : rig.node.log().since(0))
+    if (e.level == os::LogLevel::kInfo && e.text == "device connector_front latch: docked") ++infos;
+  EXPECT_EQ(infos, 1u);
+}
+
+TEST(Mdl2eTask, DeviceActionsWithoutDevicesFailWithAWarning) {
+  Mdl2eRig rig("sensor ir[7]\nplan p {\n  device connector_front latch\n  atom forward(30)\n}\n");
+  rig.sensor->script(ms(10), kClearIr);
+  rig.ex.run_until(ms(10));
+  EXPECT_EQ(rig.ctl->stats().task_action_failures, 1u);
+  EXPECT_EQ(rig.warnings("no device named 'connector_front'"), 1u);
+  EXPECT_EQ(rig.rec->last().left, 30);
 }
 
 TEST(Mdl2eTask, SuspendedItSendsNothingAndResumedItGoesOn) {

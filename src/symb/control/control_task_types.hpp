@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 
+#include "symb/io/device.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/task_type_registry.hpp"
 
@@ -22,6 +23,9 @@ struct ControlResources {
   // The text of the program `reference` names, or an error saying why not. Called when a task is
   // created, on the creating thread. Missing: every creation fails with an error saying so.
   std::function<kernel::Result<std::string>(std::string_view reference)> read_program;
+  // The robot's device called `name` (an MDL2e program's `device NAME COMMAND` actions), or null.
+  // Missing: a robot without devices; every device action fails with a warning.
+  std::function<std::shared_ptr<io::Device>(std::string_view name)> device;
 };
 
 // A reference as errors quote it: cut after 120 characters, so a program pasted whole into a

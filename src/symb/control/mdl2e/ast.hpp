@@ -40,12 +40,15 @@ enum class CmpOp : std::uint8_t { kLt, kGt, kLe, kGe };
 
 // One entry in a behaviour's or plan's body.
 struct Item {
-  enum class Kind : std::uint8_t { kAtom, kBehaviour, kCall, kTask };
+  enum class Kind : std::uint8_t { kAtom, kBehaviour, kCall, kTask, kDevice };
   Kind kind = Kind::kAtom;
   Loc loc;
-  std::string name;  // kAtom: primitive; kBehaviour: label (may be empty); kCall: behaviour; kTask: task
+  // kAtom: primitive; kBehaviour: label (may be empty); kCall: behaviour; kTask: task; kDevice: device
+  std::string name;
   Loc name_loc;
-  std::vector<double> args;  // kAtom: primitive arguments
+  std::vector<double> args;  // kAtom: primitive arguments; kDevice: the command's argument, if any
+  std::string command;       // kDevice: the ioctl command
+  Loc command_loc;
   Loc args_loc;
   TaskOp task_op = TaskOp::kStart;
   Modifiers mods;

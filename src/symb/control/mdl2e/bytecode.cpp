@@ -189,6 +189,13 @@ kernel::Status verify(const Program& p) {
             d.duration_ms != 0)
           return fail(at + " is a bad task action");
         break;
+      case Op::kDevice:
+        if (d.arg >= p.strings.size() || d.param_count > 1 || d.first_child != kNoIndex || d.flags != 0 ||
+            d.expr != kNoIndex || d.duration_ms != 0)
+          return fail(at + " is a bad device action");
+        if (d.param_count == 1 && !std::isfinite(p.params[d.param_offset]))
+          return fail(at + " has a non-finite argument");
+        break;
       default: return fail(at + " has a bad opcode");
     }
   }
@@ -375,6 +382,10 @@ void dis_node(const Program& p, std::uint16_t id, int depth, std::string& out) {
     case Op::kTask:
       out +=
           "TASK " + std::string(task_action_name(static_cast<TaskAction>(d.arg))) + " " + std::string(p.string(d.name));
+      break;
+    case Op::kDevice:
+      out += "DEVICE " + std::string(p.string(d.name)) + " " + std::string(p.string(d.arg));
+      if (d.param_count == 1) out += " " + fmt_float(p.params[d.param_offset]);
       break;
   }
   if (d.duration_ms) out += " duration=" + std::to_string(d.duration_ms) + "ms";

@@ -25,7 +25,9 @@ inline constexpr int kMaxExprStack = 16;
 inline constexpr int kMaxInterrupts = 64;
 inline constexpr std::uint8_t kBytecodeVersion = 1;
 
-enum class Op : std::uint8_t { kAtom = 1, kBehaviour = 2, kTask = 3 };
+enum class Op : std::uint8_t { kAtom = 1, kBehaviour = 2, kTask = 3, kDevice = 4 };
+// Task and device actions happen in an instant: entered, carried out, left.
+constexpr bool is_action(Op op) { return op == Op::kTask || op == Op::kDevice; }
 enum class TaskAction : std::uint8_t { kStart = 0, kSuspend = 1, kResume = 2, kDelete = 3 };
 enum class Cmp : std::uint8_t { kLt = 0, kGt = 1, kLe = 2, kGe = 3 };
 // One RPN instruction byte; kBasic is followed by one byte, the basic interrupt's index.
@@ -48,9 +50,10 @@ std::string_view task_action_name(TaskAction a);
 
 struct Node {
   Op op = Op::kAtom;
-  std::uint8_t flags = 0;         // kFlagLoop
-  std::uint16_t name = 0;         // string id: behaviour label, primitive name, or (kTask) the task's name
-  std::uint16_t arg = 0;          // kAtom: Primitive; kTask: TaskAction
+  std::uint8_t flags = 0;  // kFlagLoop
+  // string id: behaviour label, primitive name, (kTask) the task's name or (kDevice) the device's
+  std::uint16_t name = 0;
+  std::uint16_t arg = 0;          // kAtom: Primitive; kTask: TaskAction; kDevice: the command's string id
   std::uint16_t expr = kNoIndex;  // offset of the interrupt's RPN in Program::code, or none
   std::uint32_t duration_ms = 0;  // 0: no timer
   std::uint16_t first_child = kNoIndex;

@@ -291,6 +291,21 @@ class Compiler {
         p_.nodes[id] = d;
         return {};
       }
+      case K::kDevice: {
+        if (depth > kMaxDepth)
+          return kernel::Error{at(it.loc) + "nested deeper than " + std::to_string(kMaxDepth) + " levels"};
+        if (auto s = new_node(it.loc, id); !s) return s;
+        Node d;
+        d.op = Op::kDevice;
+        d.name = intern(it.name);
+        d.arg = intern(it.command);
+        d.param_offset = static_cast<std::uint16_t>(p_.params.size());
+        d.param_count = static_cast<std::uint8_t>(it.args.size());
+        if (p_.params.size() + it.args.size() >= 60000) return kernel::Error{at(it.loc) + "too many arguments in all"};
+        for (double v : it.args) p_.params.push_back(static_cast<float>(v));
+        p_.nodes[id] = d;
+        return {};
+      }
     }
     return kernel::Error{at(it.loc) + "internal error: bad item"};
   }

@@ -9,6 +9,7 @@ std::string_view event_kind_name(EventKind kind) {
     case EventKind::kTimedOut: return "timed_out";
     case EventKind::kCompleted: return "completed";
     case EventKind::kTaskAction: return "task_action";
+    case EventKind::kDeviceAction: return "device_action";
     case EventKind::kPlanEnded: return "plan_ended";
     case EventKind::kTransitionLimit: return "transition_limit";
   }
@@ -69,23 +70,33 @@ void Interpreter::emit(Output& out, EventKind kind, std::uint16_t node) const {
     return;
   }
   Event& e = out.events[out.event_count++];
+  e = Event{};  // the array is reused from step to step: no field of an earlier event stays
   e.kind = kind;
   e.node = node;
   if (node != kNoIndex) {
     const Node& d = p_->nodes[node];
     e.name = p_->string(d.name);
     if (d.op == Op::kTask) e.task_action = static_cast<TaskAction>(d.arg);
+    if (d.op == Op::kDevice) {
+      e.command = p_->string(d.arg);
+      e.has_argument = d.param_count == 1;
+      e.argument = e.has_argument ? p_->params[d.param_offset] : 0.0f;
+    }
   }
 }
 
-// Pushes `node` and, for a behaviour, its first child down to an atom or task action.
+// Pushes `node` and, for a behaviour, its first child down to an atom or an action.
 void Interpreter::enter(std::uint16_t node, kernel::Time now, Output& out) {
   for (;;) {
     path_[depth_] = node;
     frames_[depth_] = Frame{now, 0};
     ++depth_;
     const Node& d = p_->nodes[node];
-    emit(out, d.op == Op::kTask ? EventKind::kTaskAction : EventKind::kStarted, node);
+    emit(out,
+         d.op == Op::kTask     ? EventKind::kTaskAction
+         : d.op == Op::kDevice ? EventKind::kDeviceAction
+                               : EventKind::kStarted,
+         node);
     if (d.op != Op::kBehaviour) return;
     node = d.first_child;
   }
@@ -134,8 +145,8 @@ Output Interpreter::step(kernel::Time now, const InterruptInputs& in) {
     EventKind why = EventKind::kCompleted;
     for (; i < depth_; ++i) {
       const Node& d = p_->nodes[path_[i]];
-      if (d.op == Op::kTask) {
-        why = EventKind::kCompleted;  // a task action is instantaneous; its event was emitted on entry
+      if (is_action(d.op)) {
+        why = EventKind::kCompleted;  // an action is instantaneous; its event was emitted on entry
         break;
       }
       if (d.expr != kNoIndex && eval(d.expr, in)) {
@@ -158,8 +169,8 @@ Output Interpreter::step(kernel::Time now, const InterruptInputs& in) {
     // do not drift with the step period and several can run out in one late step.
     kernel::Time at = now;
     if (why == EventKind::kTimedOut) at = frames_[i].start + std::chrono::milliseconds(d.duration_ms);
-    if (d.op == Op::kTask) at = frames_[i].start;
-    if (d.op != Op::kTask) emit(out, why, node);
+    if (is_action(d.op)) at = frames_[i].start;
+    if (!is_action(d.op)) emit(out, why, node);
     depth_ = i;
     finish_child(node, at, out);
   }

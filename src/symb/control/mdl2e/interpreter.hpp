@@ -34,6 +34,7 @@ enum class EventKind : std::uint8_t {
   kTimedOut,         // its timer ran out
   kCompleted,        // a behaviour's body finished (the last pass, if it loops)
   kTaskAction,       // carry out task_action on the task called `name`
+  kDeviceAction,     // send `command` (with `argument` when has_argument) to the device called `name`
   kPlanEnded,        // the plan is over; output is stop from now on
   kTransitionLimit,  // too many transitions in one step; the rest waits for the next step
 };
@@ -42,8 +43,11 @@ std::string_view event_kind_name(EventKind kind);
 struct Event {
   EventKind kind = EventKind::kStarted;
   std::uint16_t node = kNoIndex;
-  std::string_view name;  // the node's name (for kTaskAction: the task's name)
+  std::string_view name;  // the node's name (for kTaskAction: the task's name; kDeviceAction: the device's)
   TaskAction task_action = TaskAction::kStart;
+  std::string_view command;  // kDeviceAction
+  bool has_argument = false;
+  float argument = 0;
 };
 
 inline constexpr std::size_t kMaxEventsPerStep = 32;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string_view>
 
+#include "symb/kernel/source_text.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/node.hpp"
 
@@ -34,7 +35,7 @@ float condition_speed(double v, double limit, std::uint64_t& clamped) {
 }  // namespace
 
 kernel::Result<std::unique_ptr<Mdl2eTask>> Mdl2eTask::create(std::shared_ptr<const mdl2e::Program> program,
-                                                             Mdl2eTaskOptions options) {
+                                                             Mdl2eTaskOptions options, DeviceLookup devices) {
   if (!program) return Error{"mdl2e controller: no program"};
   if (auto st = mdl2e::verify(*program); !st) return Error{"mdl2e controller: bad program: " + st.error()};
   if (program->sensor_count > os::Payload::kInlineValues)
@@ -43,12 +44,13 @@ kernel::Result<std::unique_ptr<Mdl2eTask>> Mdl2eTask::create(std::shared_ptr<con
   if (!std::isfinite(options.speed_limit) || options.speed_limit <= 0)
     return Error{"mdl2e controller: speed_limit must be a positive number"};
   if (options.warn_interval.count() < 0) return Error{"mdl2e controller: warn_interval must not be negative"};
-  return std::unique_ptr<Mdl2eTask>(new Mdl2eTask(std::move(program), options));
+  return std::unique_ptr<Mdl2eTask>(new Mdl2eTask(std::move(program), options, std::move(devices)));
 }
 
-Mdl2eTask::Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOptions options)
+Mdl2eTask::Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOptions options, DeviceLookup devices)
     : program_(std::move(program)),
       options_(options),
+      devices_(std::move(devices)),
       interpreter_(*program_),
       sensors_(program_->sensor_count, 0.0),
       have_input_(program_->sensor_count == 0) {
@@ -155,6 +157,8 @@ void Mdl2eTask::step(bool at_tick) {
   for (const mdl2e::Event& e : out.event_list()) {
     if (e.kind == EventKind::kTaskAction) {
       carry_out(e);
+    } else if (e.kind == EventKind::kDeviceAction) {
+      carry_out_device(e);
     } else if (e.kind == EventKind::kPlanEnded && !plan_end_logged_) {
       plan_end_logged_ = true;
       log(os::LogLevel::kInfo,
@@ -202,13 +206,29 @@ void Mdl2eTask::carry_out(const mdl2e::Event& e) {
   } else {
     st = Error{"no task named '" + std::string(e.name) + "' on this node"};
   }
-  (st ? counters_.task_actions : counters_.task_action_failures).bump();
-  if (!st && action_warning_.note(now(), options_.warn_interval)) {
-    log(os::LogLevel::kWarn, "task " + std::string(action) + " " + std::string(e.name) + " not done: " + st.error() +
-                                 (action_warning_.count() > 1 ? " (" + count_text(action_warning_.count(), "failure") +
-                                                                    " since the last warning)"
-                                                              : std::string()));
-  }
+  if (!st) return action_failed("task " + std::string(action) + " " + std::string(e.name), st.error());
+  counters_.task_actions.bump();
+}
+
+// An ioctl on the robot's own device: a connector's `latch` is how a program docks.
+void Mdl2eTask::carry_out_device(const mdl2e::Event& e) {
+  const std::string what = "device " + std::string(e.name) + " " + std::string(e.command) +
+                           (e.has_argument ? " " + kernel::shortest_text(e.argument) : std::string());
+  std::shared_ptr<io::Device> device = devices_ ? devices_(e.name) : nullptr;
+  if (!device) return action_failed(what, "no device named '" + std::string(e.name) + "' on this robot");
+  auto reply = device->ioctl(e.command, e.has_argument ? kernel::shortest_text(e.argument) : std::string());
+  if (!reply) return action_failed(what, reply.error());
+  counters_.task_actions.bump();
+  log(os::LogLevel::kInfo, what + ": " + *reply);
+}
+
+void Mdl2eTask::action_failed(const std::string& what, const std::string& why) {
+  counters_.task_action_failures.bump();
+  if (!action_warning_.note(now(), options_.warn_interval)) return;
+  log(os::LogLevel::kWarn, what + " not done: " + why +
+                               (action_warning_.count() > 1
+                                    ? " (" + count_text(action_warning_.count(), "failure") + " since the last warning)"
+                                    : std::string()));
 }
 
 }  // namespace symb::control

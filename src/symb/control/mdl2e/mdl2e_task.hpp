@@ -37,6 +37,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -44,6 +45,7 @@
 
 #include "symb/control/mdl2e/bytecode.hpp"
 #include "symb/control/mdl2e/interpreter.hpp"
+#include "symb/io/device.hpp"
 #include "symb/kernel/counter.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
@@ -55,6 +57,9 @@ namespace symb::control {
 inline constexpr os::Port kSensorPort = 0;
 inline constexpr os::Port kExternalPort = 1;
 inline constexpr os::Port kWheelPort = 0;
+
+// The device a `device NAME COMMAND` action names, or null when the node has none by that name.
+using DeviceLookup = std::function<std::shared_ptr<io::Device>(std::string_view name)>;
 
 struct Mdl2eTaskOptions {
   double speed_limit = 500;  // > 0
@@ -78,8 +83,8 @@ struct Mdl2eStats {
   std::uint64_t not_finite = 0;            // a sensor vector with NaN or infinity
   std::uint64_t bad_external = 0;          // a malformed external bit message
   std::uint64_t other = 0;                 // a blob, or an unknown port
-  std::uint64_t task_actions = 0;          // task actions carried out
-  std::uint64_t task_action_failures = 0;  // missing task or refused action
+  std::uint64_t task_actions = 0;          // task and device actions carried out
+  std::uint64_t task_action_failures = 0;  // missing task or device, refused action or command
   std::uint64_t clamped = 0;               // wheel speeds cut to the speed limit
 };
 
@@ -99,8 +104,10 @@ class Mdl2eTask : public os::Task {
  public:
   // Checks the program (verify(), and at most Payload::kInlineValues sensor values, the most one
   // message carries) and the options; the error says what is wrong.
+  // `devices` finds the devices the program's `device` actions name (null or empty: there are
+  // none, and every device action fails with a warning).
   static kernel::Result<std::unique_ptr<Mdl2eTask>> create(std::shared_ptr<const mdl2e::Program> program,
-                                                           Mdl2eTaskOptions options = {});
+                                                           Mdl2eTaskOptions options = {}, DeviceLookup devices = {});
 
   const mdl2e::Program& program() const { return *program_; }
   // Safe from any thread.
@@ -112,14 +119,17 @@ class Mdl2eTask : public os::Task {
   void on_tick() override;
 
  private:
-  Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOptions options);
+  Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOptions options, DeviceLookup devices);
   void step(bool at_tick);
   void carry_out(const mdl2e::Event& e);
+  void carry_out_device(const mdl2e::Event& e);
+  void action_failed(const std::string& what, const std::string& why);
   struct Counters;
   void ignore(kernel::Counter Counters::*counter, const std::string& why);
 
   std::shared_ptr<const mdl2e::Program> program_;
   Mdl2eTaskOptions options_;
+  DeviceLookup devices_;
   mdl2e::Interpreter interpreter_;
   std::vector<double> sensors_;
   bool have_input_ = false;  // a sensor vector arrived (or the program needs none)

@@ -23,14 +23,15 @@ kernel::Status register_mdl2e_task_types(os::TaskTypeRegistry& registry, const C
       "runs an MDL2e program: sensor vectors in on port 0, external interrupt bits on port 1, [left, right] "
       "wheel speeds out on port 0 at every step",
       std::move(p),
-      [read_program = resources.read_program](const Mdl2eParams& o) -> kernel::Result<std::unique_ptr<Mdl2eTask>> {
+      [read_program = resources.read_program,
+       devices = resources.device](const Mdl2eParams& o) -> kernel::Result<std::unique_ptr<Mdl2eTask>> {
         if (o.program.empty()) return kernel::Error{"name the program to run: program=REFERENCE"};
         if (!read_program) return kernel::Error{"this node cannot read programs (no read_program)"};
         auto text = read_program(o.program);
         if (!text) return kernel::Error{"program '" + shown_reference(o.program) + "': " + text.error()};
         auto compiled = mdl2e::compile_source(*text);
         if (!compiled) return kernel::Error{"program '" + shown_reference(o.program) + "': " + compiled.error()};
-        auto task = Mdl2eTask::create(std::make_shared<const mdl2e::Program>(std::move(compiled).value()), o);
+        auto task = Mdl2eTask::create(std::make_shared<const mdl2e::Program>(std::move(compiled).value()), o, devices);
         if (!task) return kernel::Error{"program '" + shown_reference(o.program) + "': " + task.error()};
         return task;
       });

@@ -10,9 +10,9 @@
 namespace symb::control::mdl2e {
 namespace {
 
-constexpr std::string_view kKeywords[] = {"sensor", "interrupt", "behaviour", "behavior", "plan",    "atom",
-                                          "do",     "task",      "until",     "for",      "loop",    "and",
-                                          "or",     "not",       "true",      "false",    "external"};
+constexpr std::string_view kKeywords[] = {"sensor", "interrupt", "behaviour", "behavior", "plan",     "atom",
+                                          "do",     "task",      "until",     "for",      "loop",     "and",
+                                          "or",     "not",       "true",      "false",    "external", "device"};
 
 bool is_keyword(std::string_view s) {
   for (auto k : kKeywords)
@@ -247,7 +247,7 @@ class Parser {
       if (!item(it)) return false;
       items.push_back(std::move(it));
     }
-    if (items.empty()) return failed(peek().loc, "a body needs at least one atom, behaviour, 'do' or 'task'");
+    if (items.empty()) return failed(peek().loc, "a body needs at least one atom, behaviour, 'do', 'task' or 'device'");
     next();
     return true;
   }
@@ -313,7 +313,22 @@ class Parser {
       it.name_loc = peek().loc;
       return name(it.name, "a task name");
     }
-    return failed(k.loc, "expected 'atom', 'behaviour', 'do', 'task' or '}', got " + describe(k));
+    if (is_word("device")) {
+      next();
+      it.kind = ast::Item::Kind::kDevice;
+      it.name_loc = peek().loc;
+      if (!name(it.name, "a device name")) return false;
+      it.command_loc = peek().loc;
+      if (!name(it.command, "a command of device '" + it.name + "'")) return false;
+      if (at(TokenKind::kNumber) || at(TokenKind::kMinus)) {
+        it.args_loc = peek().loc;
+        double v = 0;
+        if (!signed_number(v, 1e6, "argument")) return false;
+        it.args.push_back(v);
+      }
+      return true;
+    }
+    return failed(k.loc, "expected 'atom', 'behaviour', 'do', 'task', 'device' or '}', got " + describe(k));
   }
 
   // A chain `a or b or c ...` is one flat node with an operand per term, however long; only
