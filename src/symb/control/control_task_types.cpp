@@ -4,6 +4,7 @@
 #include "symb/control/cpg/cpg_task_types.hpp"
 #include "symb/control/mdl2e/mdl2e_task_types.hpp"
 #include "symb/control/network/network_task_types.hpp"
+#include "symb/control/organism/organism_task_types.hpp"
 #include "symb/control/schemas/schema_task_types.hpp"
 #include "symb/control/snn/snn_task_types.hpp"
 #include "symb/control/subsumption/subsumption_task_types.hpp"
@@ -23,6 +24,7 @@ kernel::Status register_control_task_types(os::TaskTypeRegistry& registry, Contr
   if (auto st = register_subsumption_task_types(registry, resources); !st) return st;
   if (auto st = register_schema_task_types(registry, resources); !st) return st;
   if (auto st = register_cpg_task_types(registry, resources); !st) return st;
+  if (auto st = register_organism_task_types(registry, resources); !st) return st;
   return register_snn_task_types(registry, resources);
 }
 
