@@ -45,14 +45,13 @@ void check_sound(const ModuleKind& k) {
     if (!finite(c.position) || !on_body(c.position, k.body)) std::abort();
   for (const auto& s : k.ir)
     if (!finite(s.position) || !on_body(s.position, k.body) || !std::isfinite(s.range)) std::abort();
-  if (k.laser && (!finite(k.laser->position) || !on_body(k.laser->position, k.body) || k.laser->rays < 1 ||
-                  k.laser->rays > kMaxLaserRays || !std::isfinite(k.laser->field_of_view) ||
-                  !std::isfinite(k.laser->range)))
+  if (k.laser &&
+      (!finite(k.laser->position) || !on_body(k.laser->position, k.body) || k.laser->rays < 1 ||
+       k.laser->rays > kMaxLaserRays || !std::isfinite(k.laser->field_of_view) || !std::isfinite(k.laser->range)))
     std::abort();
   if (k.camera && (!finite(k.camera->position) || !on_body(k.camera->position, k.body) || k.camera->width < 1 ||
-                   k.camera->width > kMaxCameraWidth || k.camera->height < 1 ||
-                   k.camera->height > kMaxCameraHeight || !std::isfinite(k.camera->field_of_view) ||
-                   !std::isfinite(k.camera->range)))
+                   k.camera->width > kMaxCameraWidth || k.camera->height < 1 || k.camera->height > kMaxCameraHeight ||
+                   !std::isfinite(k.camera->field_of_view) || !std::isfinite(k.camera->range)))
     std::abort();
 }
 

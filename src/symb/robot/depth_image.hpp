@@ -31,13 +31,11 @@ class DepthImage final : public os::Blob {
 
   std::size_t width;
   std::size_t height;
-  std::vector<float> depth;        // m, width x height, row by row from the top
+  std::vector<float> depth;       // m, width x height, row by row from the top
   std::vector<std::int32_t> ids;  // object ids, the same layout
 };
 
 // The frame a message carries, or nullptr when it carries none.
-inline const DepthImage* depth_image_of(const os::Message& m) {
-  return os::blob_as<DepthImage>(m.payload.blob.get());
-}
+inline const DepthImage* depth_image_of(const os::Message& m) { return os::blob_as<DepthImage>(m.payload.blob.get()); }
 
 }  // namespace symb::robot

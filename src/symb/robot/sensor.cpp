@@ -59,8 +59,7 @@ void Sensor::close() {
   deactivate();
 }
 
-PublishResult Sensor::publish(std::span<const float> values, std::shared_ptr<const os::Blob> blob,
-                              kernel::Time time) {
+PublishResult Sensor::publish(std::span<const float> values, std::shared_ptr<const os::Blob> blob, kernel::Time time) {
   SensorSample s;
   s.time = time;
   s.blob = std::move(blob);

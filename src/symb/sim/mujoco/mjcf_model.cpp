@@ -177,8 +177,8 @@ kernel::Result<std::string> mjcf_text(const std::vector<ModuleSpec>& modules, co
                          std::to_string(options.obstacles.size())};
   for (std::size_t k = 0; k < options.obstacles.size(); ++k) {
     const Obstacle& o = options.obstacles[k];
-    const bool sized = o.size[0] > 0 && o.size[1] > 0 && o.size[2] > 0 && o.size[0] <= 100 && o.size[1] <= 100 &&
-                       o.size[2] <= 100;
+    const bool sized =
+        o.size[0] > 0 && o.size[1] > 0 && o.size[2] > 0 && o.size[0] <= 100 && o.size[1] <= 100 && o.size[2] <= 100;
     if (!sized || !std::isfinite(o.x) || !std::isfinite(o.y) || !std::isfinite(o.yaw))
       return kernel::Error{"obstacle " + std::to_string(k) +
                            ": its position and yaw must be finite and its size in (0, 100] m on every axis"};

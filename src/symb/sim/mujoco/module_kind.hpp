@@ -87,10 +87,10 @@ struct IrSpec {
 inline constexpr std::size_t kMaxLaserRays = 32;  // one message's inline numbers (os::Payload)
 struct LaserSpec {
   Face face = Face::kFront;
-  Vec3 position{};              // the rays' origin, on the face
-  std::size_t rays = 15;        // 1..kMaxLaserRays
+  Vec3 position{};                          // the rays' origin, on the face
+  std::size_t rays = 15;                    // 1..kMaxLaserRays
   double field_of_view = std::numbers::pi;  // rad, (0, 2 pi]; ignored for one ray
-  double range = 1.0;           // m
+  double range = 1.0;                       // m
 
   friend bool operator==(const LaserSpec&, const LaserSpec&) = default;
 };
@@ -110,7 +110,7 @@ struct CameraSpec {
   std::size_t width = 32;
   std::size_t height = 24;
   double field_of_view = std::numbers::pi / 3;  // rad, horizontal, (0, 170 degrees]
-  double range = 2.0;             // m
+  double range = 2.0;                           // m
 
   friend bool operator==(const CameraSpec&, const CameraSpec&) = default;
 };

@@ -197,8 +197,7 @@ class KindFileWalk {
     l.position = on_face(m.require("position"), "laser position (m)", l.face, k.body);
     l.rays = static_cast<std::size_t>(
         rd_.integer(m.require("rays"), "laser rays", 1, static_cast<std::int64_t>(kMaxLaserRays)));
-    l.field_of_view =
-        rd_.number(m.require("field_of_view"), "laser field_of_view (rad)", 1e-3, 2 * std::numbers::pi);
+    l.field_of_view = rd_.number(m.require("field_of_view"), "laser field_of_view (rad)", 1e-3, 2 * std::numbers::pi);
     l.range = rd_.number(m.require("range"), "laser range (m)", kMinLength, 10);
     k.laser = l;
   }

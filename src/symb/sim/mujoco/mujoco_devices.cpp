@@ -65,7 +65,8 @@ std::vector<robot::ChannelSpec> MujocoLaser::channel_specs(const LaserSpec& spec
   return c;
 }
 
-MujocoLaser::MujocoLaser(std::string name, const LaserSpec& spec) : robot::Sensor(std::move(name), channel_specs(spec)) {}
+MujocoLaser::MujocoLaser(std::string name, const LaserSpec& spec)
+    : robot::Sensor(std::move(name), channel_specs(spec)) {}
 
 std::vector<robot::ChannelSpec> MujocoCamera::channel_specs(const CameraSpec& spec) {
   return {robot::ChannelSpec{"nearest", "m", 0.0f, static_cast<float>(spec.range)},
@@ -89,8 +90,7 @@ robot::PublishResult MujocoCamera::publish_frame(std::shared_ptr<const robot::De
     }
   }
   const float v[3] = {nearest, static_cast<float>(nearest_id),
-                      frame->depth.empty() ? 0.0f
-                                           : static_cast<float>(seen) / static_cast<float>(frame->depth.size())};
+                      frame->depth.empty() ? 0.0f : static_cast<float>(seen) / static_cast<float>(frame->depth.size())};
   return publish(std::span<const float>(v, 3), std::move(frame), time);
 }
 

@@ -180,8 +180,8 @@ struct MujocoWorld::State {
     double travelled = 0;
     for (int pass = 0; pass <= model->ngeom; ++pass) {
       int geom = -1;
-      const double hit = mj_ray(model.get(), data.get(), origin.data(), direction.data(), nullptr, 1,
-                                pass == 0 ? body : -1, &geom);
+      const double hit =
+          mj_ray(model.get(), data.get(), origin.data(), direction.data(), nullptr, 1, pass == 0 ? body : -1, &geom);
       if (hit < 0 || geom < 0 || travelled + hit > range) return {};
       const int hit_body = model->geom_bodyid[geom];
       if (body_module[static_cast<std::size_t>(hit_body)] != module)
@@ -313,8 +313,7 @@ kernel::Result<MujocoWorld> MujocoWorld::make(std::vector<ModuleSpec> modules, M
   }
   s->obstacles = options.obstacles.size();
   for (std::size_t k = 0; k < s->obstacles; ++k)
-    s->geom_object[static_cast<std::size_t>(id(mjOBJ_GEOM, "obstacle_" + std::to_string(k)))] =
-        obstacle_object_id(k);
+    s->geom_object[static_cast<std::size_t>(id(mjOBJ_GEOM, "obstacle_" + std::to_string(k)))] = obstacle_object_id(k);
   mj_forward(m, s->data.get());
   for (std::size_t i = 0; i < s->modules.size(); ++i) s->speed_now.push_back(s->base_speed(i));
   s->speed_before = s->speed_now;
@@ -472,7 +471,8 @@ std::array<double, 4> MujocoWorld::touch(std::size_t module) const {
     mju_rotVecMatT(local.data(), outward.data(), row(d->xmat, 9, m->geom_bodyid[geom]));
     const double ax = std::abs(local[0]), ay = std::abs(local[1]);
     if (std::abs(local[2]) >= std::max(ax, ay)) continue;
-    const Face face = ax >= ay ? (local[0] > 0 ? Face::kFront : Face::kBack) : (local[1] > 0 ? Face::kLeft : Face::kRight);
+    const Face face =
+        ax >= ay ? (local[0] > 0 ? Face::kFront : Face::kBack) : (local[1] > 0 ? Face::kLeft : Face::kRight);
     mjtNum wrench[6];
     mj_contactForce(m, d, i, wrench);
     force[static_cast<std::size_t>(face)] += std::abs(wrench[0]);
@@ -491,9 +491,11 @@ void MujocoWorld::laser(std::size_t module, std::span<float> distances) const {
   const State::Mount at = s_->mount(module, l.face, l.position);
   for (std::size_t r = 0; r < l.rays; ++r) {
     const double angle =
-        l.rays == 1 ? 0.0 : -l.field_of_view / 2 + l.field_of_view * static_cast<double>(r) / static_cast<double>(l.rays - 1);
+        l.rays == 1 ? 0.0
+                    : -l.field_of_view / 2 + l.field_of_view * static_cast<double>(r) / static_cast<double>(l.rays - 1);
     const double c = std::cos(angle), sn = std::sin(angle);
-    const Vec3 dir = {c * at.out[0] + sn * at.left[0], c * at.out[1] + sn * at.left[1], c * at.out[2] + sn * at.left[2]};
+    const Vec3 dir = {c * at.out[0] + sn * at.left[0], c * at.out[1] + sn * at.left[1],
+                      c * at.out[2] + sn * at.left[2]};
     const State::Hit hit = s_->cast(module, at.body, at.origin, dir, l.range);
     distances[r] = static_cast<float>(hit.distance < 0 ? l.range : hit.distance);
   }
