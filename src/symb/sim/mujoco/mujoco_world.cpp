@@ -193,6 +193,49 @@ struct MujocoWorld::State {
     return {};
   }
 
+  // The geoms a fan of rays from `origin` may meet within `range`: every plane, and every other
+  // geom not of `module` whose bounding sphere reaches within range (and, for a camera, which
+  // narrower than 180 degrees sees only ahead, not wholly behind the plane through `origin`
+  // across `out`). A camera's 768 rays then test a handful of geoms instead of the whole world.
+  void candidates(std::size_t module, const Vec3& origin, const Vec3* out, double range,
+                  std::vector<int>& geoms) const {
+    geoms.clear();
+    for (int g = 0; g < model->ngeom; ++g) {
+      if (body_module[static_cast<std::size_t>(model->geom_bodyid[g])] == module) continue;
+      if (model->geom_type[g] == mjGEOM_PLANE) {
+        geoms.push_back(g);
+        continue;
+      }
+      const mjtNum* p = row(data->geom_xpos, 3, g);
+      const Vec3 rel = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
+      const double bound = model->geom_rbound[g];
+      if (std::hypot(rel[0], rel[1], rel[2]) - bound > range) continue;
+      if (out != nullptr && rel[0] * (*out)[0] + rel[1] * (*out)[1] + rel[2] * (*out)[2] < -bound) continue;
+      geoms.push_back(g);
+    }
+  }
+
+  // The nearest of `geoms` along the ray (unit `direction`) within `range`, by MuJoCo's own
+  // ray-geom intersections, each behind a bounding-sphere test as in mj_ray.
+  Hit cast_among(const std::vector<int>& geoms, const Vec3& origin, const Vec3& direction, double range) const {
+    Hit best;
+    for (const int g : geoms) {
+      const mjtNum* p = row(data->geom_xpos, 3, g);
+      if (model->geom_type[g] != mjGEOM_PLANE) {
+        const Vec3 rel = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
+        const double along = rel[0] * direction[0] + rel[1] * direction[1] + rel[2] * direction[2];
+        const double bound = model->geom_rbound[g];
+        if (along + bound < 0) continue;
+        if (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2] - along * along > bound * bound) continue;
+      }
+      const double hit = mju_rayGeom(p, row(data->geom_xmat, 9, g), row(model->geom_size, 3, g), origin.data(),
+                                     direction.data(), model->geom_type[g]);
+      if (hit >= 0 && hit <= range && (best.distance < 0 || hit < best.distance))
+        best = {hit, geom_object[static_cast<std::size_t>(g)]};
+    }
+    return best;
+  }
+
   // A sensor's mount on a face: the body it sits on (the tail when behind the hinge), its origin
   // and its frame's out (the face's normal), left and up axes, in the world frame.
   struct Mount {
@@ -489,6 +532,8 @@ void MujocoWorld::laser(std::size_t module, std::span<float> distances) const {
     throw std::invalid_argument("laser of module '" + s_->specs[module].name + "' has " + std::to_string(l.rays) +
                                 " rays, not " + std::to_string(distances.size()));
   const State::Mount at = s_->mount(module, l.face, l.position);
+  std::vector<int> geoms;
+  s_->candidates(module, at.origin, nullptr, l.range, geoms);
   for (std::size_t r = 0; r < l.rays; ++r) {
     const double angle =
         l.rays == 1 ? 0.0
@@ -496,7 +541,7 @@ void MujocoWorld::laser(std::size_t module, std::span<float> distances) const {
     const double c = std::cos(angle), sn = std::sin(angle);
     const Vec3 dir = {c * at.out[0] + sn * at.left[0], c * at.out[1] + sn * at.left[1],
                       c * at.out[2] + sn * at.left[2]};
-    const State::Hit hit = s_->cast(module, at.body, at.origin, dir, l.range);
+    const State::Hit hit = s_->cast_among(geoms, at.origin, dir, l.range);
     distances[r] = static_cast<float>(hit.distance < 0 ? l.range : hit.distance);
   }
 }
@@ -513,6 +558,8 @@ void MujocoWorld::camera(std::size_t module, std::span<float> depth, std::span<s
   const State::Mount at = s_->mount(module, cam.face, cam.position);
   const double w = static_cast<double>(cam.width), h = static_cast<double>(cam.height);
   const double focal = (w / 2) / std::tan(cam.field_of_view / 2);
+  std::vector<int> geoms;
+  s_->candidates(module, at.origin, &at.out, cam.range, geoms);
   for (std::size_t v = 0; v < cam.height; ++v) {
     const double up = h / 2 - static_cast<double>(v) - 0.5;
     for (std::size_t u = 0; u < cam.width; ++u) {
@@ -521,7 +568,7 @@ void MujocoWorld::camera(std::size_t module, std::span<float> depth, std::span<s
       for (std::size_t i = 0; i < 3; ++i) dir[i] = focal * at.out[i] + left * at.left[i] + up * at.up[i];
       const double norm = std::hypot(dir[0], dir[1], dir[2]);
       for (double& x : dir) x /= norm;
-      const State::Hit hit = s_->cast(module, at.body, at.origin, dir, cam.range);
+      const State::Hit hit = s_->cast_among(geoms, at.origin, dir, cam.range);
       const std::size_t p = v * cam.width + u;
       depth[p] = static_cast<float>(hit.distance < 0 ? cam.range : hit.distance);
       ids[p] = hit.distance < 0 ? kNothingId : hit.object;
