@@ -17,6 +17,8 @@
 #include <mutex>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -402,6 +404,29 @@ TEST(MujocoSensors, ObstaclesAreInTheModelAndTheIrSeesThem) {
   EXPECT_NE(refused.error().find("obstacle 0"), std::string::npos) << refused.error();
   bad.obstacles = {{std::nan(""), 0, 0, {0.1, 0.1, 0.1}}};
   EXPECT_FALSE(MujocoWorld::make({{"a", standard_kind(), {0, 0, 0}}}, bad).ok());
+}
+
+TEST(MujocoSensors, BadLaserOrCameraDataIsRefusedAndAMissingOneIsAnError) {
+  ModuleKind kind = camera_kind();
+  kind.laser->rays = 0;
+  kind.camera->field_of_view = 3.2;
+  kind.camera->position[0] = 0.04;
+  auto refused = MujocoWorld::make({{"a", kind, {0, 0, 0}}});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().find("a laser has 1 to 32 rays"), std::string::npos) << refused.error();
+  EXPECT_NE(refused.error().find("the camera's field of view"), std::string::npos) << refused.error();
+  EXPECT_NE(refused.error().find("the camera is not on its face"), std::string::npos) << refused.error();
+
+  auto w = sens_world({{"a", standard_kind(), {0, 0, 0}}, {"b", camera_kind(), {1, 0, 0}}});
+  std::vector<float> scan(15), depth(32 * 24);
+  std::vector<std::int32_t> ids(depth.size());
+  EXPECT_THROW(w.laser(0, scan), std::invalid_argument);
+  EXPECT_THROW(w.camera(0, depth, ids), std::invalid_argument);
+  std::vector<float> short_scan(14);
+  EXPECT_THROW(w.laser(1, short_scan), std::invalid_argument);
+  EXPECT_NO_THROW(w.laser(1, scan));
+  EXPECT_NO_THROW(w.camera(1, depth, ids));
+  EXPECT_THROW(w.imu(2), std::out_of_range);
 }
 
 TEST(MujocoSensors, WheelServoReachesTheCommandedSpeed) {

@@ -34,11 +34,13 @@ constexpr std::size_t kRowsPerModule = 64;
 constexpr std::size_t kRowsPerWeld = 6;
 constexpr std::size_t kContactsPerModule = 16;
 // The stack: MuJoCo 2.2.2's peak use (d->maxuse_stack) in a docked chain of standard modules that
-// drives while its hinges wave (1500 steps; tests/sim/mujoco_world_test.cpp prints it) was 7,398
+// drives while its hinges wave (1500 steps; tests/sim/mujoco_sensors_test.cpp prints it) was 7,398
 // numbers for 5 modules (45 dofs, dense solver), 168,138 for 20 (180 dofs) and 1,027,908 for 50
-// (450 dofs): about 5.1 nv^2, the sparse solver's nv x nv matrices, plus vectors per constraint
-// row. The reserve is kStackSafety times 6 nv^2 + 16 njmax, plus a floor for small models:
-// 50 modules reserve 3.8 M numbers (30 MB) instead of the 29 M (234 MB) of the dense worst case.
+// (450 dofs); a crowd of 50 loose modules driving into each other for 5 s, 1,035,398 (6: 10,722).
+// That is about 5.1 nv^2, the sparse solver's nv x nv matrices, plus vectors per constraint row;
+// contacts barely matter. The reserve is kStackSafety times 6 nv^2 + 16 njmax, plus a floor for
+// small models: 50 modules reserve 3.9 M numbers (31 MB) where the dense worst case (2 njmax
+// (njmax + nv)) reserved 29 M (234 MB).
 constexpr std::size_t kStackPerDof2 = 6;
 constexpr std::size_t kStackPerRow = 16;
 constexpr std::size_t kStackSafety = 3;
