@@ -61,12 +61,32 @@ TEST(ModuleKindFile, MissingFileIsNamed) {
   EXPECT_NE(k.error().find("no_such_kind.yaml: cannot open the module kind file"), std::string::npos) << k.error();
 }
 
-// One edit of cube.yaml, the text at which the error must point and a fragment of its message.
+// One edit of a shipped file, the text at which the error must point and a fragment of its message.
 struct KindFileCase {
   std::string from, to;
   std::string at;  // the first occurrence of this text in the edited file; empty: line 1 column 1
   std::string fragment;
 };
+
+// Applies each case's edit to `original` and checks the error's place and message (a case with
+// no fragment must load).
+void kind_file_expect_errors(const std::string& original, const std::vector<KindFileCase>& cases) {
+  for (const KindFileCase& c : cases) {
+    std::string text = original;
+    const std::size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, c.from.size(), c.to);
+    auto k = parse_module_kind(text, "k.yaml");
+    if (c.fragment.empty()) {  // only: never crashes, and a failure is located
+      EXPECT_TRUE(k.ok()) << k.error();
+      continue;
+    }
+    ASSERT_FALSE(k.ok()) << c.to;
+    const std::string where = "k.yaml:" + (c.at.empty() ? std::string("1:1") : kind_file_place(text, c.at)) + ": ";
+    EXPECT_EQ(k.error().rfind(where, 0), 0u) << "edit '" << c.to << "': " << k.error() << " (want " << where << ")";
+    EXPECT_NE(k.error().find(c.fragment), std::string::npos) << k.error();
+  }
+}
 
 TEST(ModuleKindFile, MalformedFilesGetLocatedErrors) {
   const std::string cube = kind_file_text("cube.yaml");
@@ -110,21 +130,7 @@ TEST(ModuleKindFile, MalformedFilesGetLocatedErrors) {
        "  mass: &m 0.40\nwheels: *m\n", "&m",
        "wheels is a mapping"},  // yaml-cpp gives an alias its anchored value's place
   };
-  for (const KindFileCase& c : cases) {
-    std::string text = cube;
-    const std::size_t at = text.find(c.from);
-    ASSERT_NE(at, std::string::npos) << c.from;
-    text.replace(at, c.from.size(), c.to);
-    auto k = parse_module_kind(text, "k.yaml");
-    if (c.fragment.empty()) {  // only: never crashes, and a failure is located
-      EXPECT_TRUE(k.ok()) << k.error();
-      continue;
-    }
-    ASSERT_FALSE(k.ok()) << c.to;
-    const std::string where = "k.yaml:" + (c.at.empty() ? std::string("1:1") : kind_file_place(text, c.at)) + ": ";
-    EXPECT_EQ(k.error().rfind(where, 0), 0u) << "edit '" << c.to << "': " << k.error() << " (want " << where << ")";
-    EXPECT_NE(k.error().find(c.fragment), std::string::npos) << k.error();
-  }
+  kind_file_expect_errors(cube, cases);
 }
 
 // The laser and camera keys, on camera.yaml: each rule's error at its value.
@@ -154,17 +160,7 @@ TEST(ModuleKindFile, LaserAndCameraKeysAreChecked) {
        "  range: 1.0\n",
        "laser: nothing\n", "nothing", "laser is a mapping"},
   };
-  for (const KindFileCase& c : cases) {
-    std::string text = camera;
-    const std::size_t at = text.find(c.from);
-    ASSERT_NE(at, std::string::npos) << c.from;
-    text.replace(at, c.from.size(), c.to);
-    auto k = parse_module_kind(text, "k.yaml");
-    ASSERT_FALSE(k.ok()) << c.to;
-    const std::string where = "k.yaml:" + kind_file_place(text, c.at) + ": ";
-    EXPECT_EQ(k.error().rfind(where, 0), 0u) << "edit '" << c.to << "': " << k.error() << " (want " << where << ")";
-    EXPECT_NE(k.error().find(c.fragment), std::string::npos) << k.error();
-  }
+  kind_file_expect_errors(camera, cases);
   // Without the keys the kind is incomplete.
   std::string no_camera = camera.substr(0, camera.find("camera:"));
   auto k = parse_module_kind(no_camera, "k.yaml");
