@@ -1,7 +1,8 @@
 // Fuzzes module kind files: bytes -> YAML -> ModuleKind. Any input must give a kind or an error
 // "fuzz.yaml:LINE:COLUMN: message" with LINE a line the input has, never a crash or a hang. Every
 // accepted kind must be one the world can trust: check() finds nothing wrong with it, its
-// numbers are finite, its lists within their bounds, its connectors and IR sensors on the body.
+// numbers are finite, its lists within their bounds, its connectors, IR sensors, laser and camera
+// on the body.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -44,6 +45,14 @@ void check_sound(const ModuleKind& k) {
     if (!finite(c.position) || !on_body(c.position, k.body)) std::abort();
   for (const auto& s : k.ir)
     if (!finite(s.position) || !on_body(s.position, k.body) || !std::isfinite(s.range)) std::abort();
+  if (k.laser &&
+      (!finite(k.laser->position) || !on_body(k.laser->position, k.body) || k.laser->rays < 1 ||
+       k.laser->rays > kMaxLaserRays || !std::isfinite(k.laser->field_of_view) || !std::isfinite(k.laser->range)))
+    std::abort();
+  if (k.camera && (!finite(k.camera->position) || !on_body(k.camera->position, k.body) || k.camera->width < 1 ||
+                   k.camera->width > kMaxCameraWidth || k.camera->height < 1 || k.camera->height > kMaxCameraHeight ||
+                   !std::isfinite(k.camera->field_of_view) || !std::isfinite(k.camera->range)))
+    std::abort();
 }
 
 }  // namespace

@@ -1,13 +1,17 @@
 #include "symb/robot/sensor.hpp"
 
 #include <limits>
+#include <memory>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
+#include "symb/robot/depth_image.hpp"
 
 #include "fakes.hpp"
 
@@ -225,6 +229,47 @@ TEST(Sensor, NarrowerTaskRangesClampWhatIsForwarded) {
   ex.run_for(1ms);
   ASSERT_EQ(col->count(), 1u);
   EXPECT_EQ(col->received()[0].values, (std::vector<float>{50, 100}));
+}
+
+// Keeps the numbers and the blob of every message.
+class BlobKeeper final : public os::Task {
+ public:
+  std::vector<std::pair<std::vector<float>, std::shared_ptr<const os::Blob>>> seen;
+
+ protected:
+  void on_message(const os::Message& m) override {
+    seen.push_back({{m.numbers().begin(), m.numbers().end()}, m.payload.blob});
+  }
+};
+
+TEST(Sensor, ABlobTravelsWithItsNumbersSharedByEveryReceiver) {
+  kernel::VirtualTimeExecutor ex;
+  os::Node node(ex, {"bot"});
+  auto sensor = std::make_shared<Sensor>("ir", ir_channels());
+  SensorTask::Options o;
+  o.ranges = *apply_ranges(sensor->channels(), "0:100");
+  auto task = *node.create("ir_task", std::make_unique<SensorTask>(sensor, o));
+  auto a = std::make_unique<BlobKeeper>(), b = std::make_unique<BlobKeeper>();
+  BlobKeeper *ka = a.get(), *kb = b.get();
+  ASSERT_TRUE(node.hook(task, *node.create("a", std::move(a))));
+  ASSERT_TRUE(node.hook(task, *node.create("b", std::move(b))));
+  ex.run_for(1ms);
+  auto frame = std::make_shared<DepthImage>(4, 3);
+  frame->ids[5] = 7;
+  const float v[2] = {50, 500};
+  EXPECT_EQ(sensor->publish(v, frame, kernel::Time{0}), PublishResult::kQueued);
+  (void)sensor->publish(v, kernel::Time{1});  // and one without
+  ex.run_for(1ms);
+  for (const BlobKeeper* k : {ka, kb}) {
+    ASSERT_EQ(k->seen.size(), 2u);
+    EXPECT_EQ(k->seen[0].first, (std::vector<float>{50, 100}));  // narrowed like any sample
+    EXPECT_EQ(k->seen[0].second.get(), frame.get());             // the one frame, not a copy
+    const auto* image = os::blob_as<DepthImage>(k->seen[0].second.get());
+    ASSERT_NE(image, nullptr);
+    EXPECT_EQ(image->id_at(1, 1), 7);
+    EXPECT_EQ(k->seen[1].second, nullptr);
+  }
+  EXPECT_EQ(sensor->latest()->blob, nullptr);  // the newest sample had none
 }
 
 TEST(Sensor, BadChannelTablesAreRefusedAtConstruction) {

@@ -45,6 +45,14 @@ TEST(ModuleKindFile, ShippedFilesAreTheBuiltInKinds) {
   ASSERT_TRUE(long_module.ok()) << long_module.error();
   EXPECT_TRUE(*long_module == long_kind());
   EXPECT_FALSE(*cube == *long_module);
+  auto camera = load_module_kind(kKindFileDir + "/camera.yaml");
+  ASSERT_TRUE(camera.ok()) << camera.error();
+  EXPECT_TRUE(*camera == camera_kind());
+  EXPECT_FALSE(*camera == *cube);
+  ASSERT_TRUE(camera->camera.has_value());
+  ASSERT_TRUE(camera->laser.has_value());
+  EXPECT_FALSE(cube->camera.has_value());
+  EXPECT_FALSE(cube->laser.has_value());
 }
 
 TEST(ModuleKindFile, MissingFileIsNamed) {
@@ -53,12 +61,32 @@ TEST(ModuleKindFile, MissingFileIsNamed) {
   EXPECT_NE(k.error().find("no_such_kind.yaml: cannot open the module kind file"), std::string::npos) << k.error();
 }
 
-// One edit of cube.yaml, the text at which the error must point and a fragment of its message.
+// One edit of a shipped file, the text at which the error must point and a fragment of its message.
 struct KindFileCase {
   std::string from, to;
   std::string at;  // the first occurrence of this text in the edited file; empty: line 1 column 1
   std::string fragment;
 };
+
+// Applies each case's edit to `original` and checks the error's place and message (a case with
+// no fragment must load).
+void kind_file_expect_errors(const std::string& original, const std::vector<KindFileCase>& cases) {
+  for (const KindFileCase& c : cases) {
+    std::string text = original;
+    const std::size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, c.from.size(), c.to);
+    auto k = parse_module_kind(text, "k.yaml");
+    if (c.fragment.empty()) {  // only: never crashes, and a failure is located
+      EXPECT_TRUE(k.ok()) << k.error();
+      continue;
+    }
+    ASSERT_FALSE(k.ok()) << c.to;
+    const std::string where = "k.yaml:" + (c.at.empty() ? std::string("1:1") : kind_file_place(text, c.at)) + ": ";
+    EXPECT_EQ(k.error().rfind(where, 0), 0u) << "edit '" << c.to << "': " << k.error() << " (want " << where << ")";
+    EXPECT_NE(k.error().find(c.fragment), std::string::npos) << k.error();
+  }
+}
 
 TEST(ModuleKindFile, MalformedFilesGetLocatedErrors) {
   const std::string cube = kind_file_text("cube.yaml");
@@ -77,8 +105,8 @@ TEST(ModuleKindFile, MalformedFilesGetLocatedErrors) {
       {"  width: 0.012", "  width: 0.06", "0.06", "wheel width must be under half the body width"},
       {"  max_speed: 0.15", "  max_speed: 0.0000", "0.0000", "wheel max_speed (m/s) must be in"},
       {"  max_speed: 0.15", "  max_sped: 0.15", "max_sped", "(did you mean 'max_speed'?)"},
-      {"wheels:\n  radius: 0.025\n  width: 0.012\n  mass: 0.02\n  max_speed: 0.15\n  gain: 0.004\n",
-       "wheels: nothing\n", "nothing", "wheels is a mapping"},
+      {"wheels:\n  radius: 0.025\n  width: 0.012\n  mass: 0.02\n  max_speed: 0.15\n  gain: 0.05\n", "wheels: nothing\n",
+       "nothing", "wheels is a mapping"},
       {"  axis: [0, 1, 0]", "  axis: [0, 0, 0]", "[0, 0, 0]", "hinge axis must not be zero"},
       {"  range: [-1.2, 1.2]", "  range: [1.2, -1.2]", "[1.2, -1.2]", "low < high"},
       {"  range: [-1.2, 1.2]", "  range: [-1.2, 4]", "4]", "hinge range high (rad) must be in"},
@@ -98,25 +126,46 @@ TEST(ModuleKindFile, MalformedFilesGetLocatedErrors) {
       {"name: cube", "name: [[[[[[[[[[x]]]]]]]]]]", "[[x", "nested more than 8 levels deep"},  // at the 9th
       {"body:\n", "body: &b\n", "", ""},  // an anchor alone changes nothing
       {"  mass: 0.40\n"
-       "wheels:\n  radius: 0.025\n  width: 0.012\n  mass: 0.02\n  max_speed: 0.15\n  gain: 0.004\n",
+       "wheels:\n  radius: 0.025\n  width: 0.012\n  mass: 0.02\n  max_speed: 0.15\n  gain: 0.05\n",
        "  mass: &m 0.40\nwheels: *m\n", "&m",
        "wheels is a mapping"},  // yaml-cpp gives an alias its anchored value's place
   };
-  for (const KindFileCase& c : cases) {
-    std::string text = cube;
-    const std::size_t at = text.find(c.from);
-    ASSERT_NE(at, std::string::npos) << c.from;
-    text.replace(at, c.from.size(), c.to);
-    auto k = parse_module_kind(text, "k.yaml");
-    if (c.fragment.empty()) {  // only: never crashes, and a failure is located
-      EXPECT_TRUE(k.ok()) << k.error();
-      continue;
-    }
-    ASSERT_FALSE(k.ok()) << c.to;
-    const std::string where = "k.yaml:" + (c.at.empty() ? std::string("1:1") : kind_file_place(text, c.at)) + ": ";
-    EXPECT_EQ(k.error().rfind(where, 0), 0u) << "edit '" << c.to << "': " << k.error() << " (want " << where << ")";
-    EXPECT_NE(k.error().find(c.fragment), std::string::npos) << k.error();
-  }
+  kind_file_expect_errors(cube, cases);
+}
+
+// The laser and camera keys, on camera.yaml: each rule's error at its value.
+TEST(ModuleKindFile, LaserAndCameraKeysAreChecked) {
+  const std::string camera = kind_file_text("camera.yaml");
+  ASSERT_FALSE(camera.empty());
+  const std::vector<KindFileCase> cases = {
+      {"  rays: 15", "  rays: 33", "33", "laser rays must be an integer in 1..32"},
+      {"  rays: 15", "  rays: 1.5", "1.5", "laser rays must be an integer"},
+      {"  rays: 15", "  rays: 00", "00", "laser rays must be an integer in 1..32"},
+      {"  field_of_view: 3.141592653589793", "  field_of_view: 6.5", "6.5", "laser field_of_view (rad) must be in"},
+      {"  range: 1.0\n", "  range: 0.0000001\n", "0.0000001", "laser range (m) must be in"},
+      {"  position: [0.05, 0, -0.02]", "  position: [0.05, 0, -0.05]", "[0.05, 0, -0.05]",
+       "laser position (m) lies off the front face: its z must be within +-0.04"},
+      {"  position: [0.05, 0, 0.03]", "  position: [0.04, 0, 0.03]", "[0.04, 0, 0.03]",
+       "camera position (m) is not on the front face: its x must be 0.05"},
+      {"  width: 32", "  width: 161", "161", "camera width (pixels) must be an integer in 1..160"},
+      {"  height: 24", "  height: 121", "121", "camera height (pixels) must be an integer in 1..120"},
+      {"  field_of_view: 1.0471975511965976", "  field_of_view: 3.0", "3.0", "camera field_of_view (rad) must be in"},
+      {"  range: 2.0", "  rnage: 2.0", "rnage", "unknown key 'rnage' in camera (did you mean 'range'?)"},
+      {"  face: front\n  position: [0.05, 0, 0.03]", "  face: top\n  position: [0.05, 0, 0.03]", "top",
+       "face must be front, back, left or right"},
+      {"camera:\n  face: front\n  position: [0.05, 0, 0.03]\n  width: 32\n  height: 24\n"
+       "  field_of_view: 1.0471975511965976\n  range: 2.0\n",
+       "camera: [1]\n", "[1]", "camera is a mapping"},
+      {"laser:\n  face: front\n  position: [0.05, 0, -0.02]\n  rays: 15\n  field_of_view: 3.141592653589793\n"
+       "  range: 1.0\n",
+       "laser: nothing\n", "nothing", "laser is a mapping"},
+  };
+  kind_file_expect_errors(camera, cases);
+  // Without the keys the kind is incomplete.
+  std::string no_camera = camera.substr(0, camera.find("camera:"));
+  auto k = parse_module_kind(no_camera, "k.yaml");
+  ASSERT_FALSE(k.ok());
+  EXPECT_NE(k.error().find("needs 'camera'"), std::string::npos) << k.error();
 }
 
 TEST(ModuleKindFile, BoundsOnSizeAndCounts) {
@@ -137,7 +186,8 @@ TEST(ModuleKindFile, BoundsOnSizeAndCounts) {
   auto empty = parse_module_kind("", "k.yaml");
   ASSERT_FALSE(empty.ok());
   EXPECT_EQ(empty.error(),
-            "k.yaml:1:1: the module kind is empty: it needs name, body, wheels, hinge, connectors and ir");
+            "k.yaml:1:1: the module kind is empty: it needs name, body, wheels, hinge, connectors, ir, laser and "
+            "camera");
 }
 
 // Mutants of the shipped files: bytes replaced, deleted, duplicated or swapped by a seeded
@@ -146,7 +196,7 @@ TEST(ModuleKindFile, BoundsOnSizeAndCounts) {
 TEST(ModuleKindFile, MutantsLoadOrFailInsideTheFile) {
   const std::string alphabet = "0123456789-.,:[]{}#&*! \n\tabcefnrx'\"e+";
   std::size_t loaded = 0, refused = 0;
-  for (const char* name : {"cube.yaml", "long.yaml"}) {
+  for (const char* name : {"cube.yaml", "long.yaml", "camera.yaml"}) {
     const std::string original = kind_file_text(name);
     ASSERT_FALSE(original.empty());
     for (std::uint64_t seed = 1; seed <= 400; ++seed) {
@@ -191,7 +241,7 @@ TEST(ModuleKindFile, MutantsLoadOrFailInsideTheFile) {
 }
 
 TEST(ModuleKindFile, LoadedKindsRunInAWorld) {
-  for (const char* name : {"cube.yaml", "long.yaml"}) {
+  for (const char* name : {"cube.yaml", "long.yaml", "camera.yaml"}) {
     auto kind = load_module_kind(kKindFileDir + "/" + name);
     ASSERT_TRUE(kind.ok()) << kind.error();
     auto world = MujocoWorld::make({{"a", *kind, {0, 0, 0}}, {"b", *kind, {0.5, 0, 0}}});
@@ -210,12 +260,17 @@ TEST(ModuleKindFile, KindsAtTheEndsOfTheRangesRun) {
       "name: tiny\nbody: {size: [0.01, 0.01, 0.01], mass: 0.001}\n"
       "wheels: {radius: 0.009, width: 0.001, mass: 0.001, max_speed: 0.001, gain: 0.000001}\n"
       "hinge: {axis: [0, 1, 0], range: [-3.14159, 3.14159], gain: 0.001, damping: 0}\n"
-      "connectors: [{name: f, face: front, position: [0.005, 0, 0]}]\nir: []\n",
+      "connectors: [{name: f, face: front, position: [0.005, 0, 0]}]\nir: []\n"
+      "laser: {face: front, position: [0.005, 0, 0], rays: 1, field_of_view: 0.001, range: 0.001}\n"
+      "camera: {face: back, position: [-0.005, 0, 0], width: 1, height: 1, field_of_view: 0.001, range: 0.001}\n",
       "name: huge\nbody: {size: [2, 2, 2], mass: 100}\n"
       "wheels: {radius: 1.0, width: 0.9, mass: 100, max_speed: 10, gain: 100}\n"
       "hinge: {axis: [1, 1, 1], range: [-0.1, 0.1], gain: 1000, damping: 100}\n"
       "connectors: [{name: b, face: back, position: [-1, 1, 1]}]\n"
-      "ir: [{face: left, position: [1, 1, -1], range: 5}]\n",
+      "ir: [{face: left, position: [1, 1, -1], range: 5}]\n"
+      "laser: {face: right, position: [1, -1, 1], rays: 32, field_of_view: 6.283185307179586, range: 10}\n"
+      "camera: {face: left, position: [-1, 1, -1], width: 160, height: 120, field_of_view: 2.96705972839036, "
+      "range: 10}\n",
   };
   for (const std::string& text : kinds) {
     auto kind = parse_module_kind(text, "k.yaml");

@@ -237,12 +237,13 @@ TEST(MujocoDevices, WheelsDriveAModuleForwardAMeasuredDistance) {
   const double forward = end.position[0] - start.position[0];
   const double sideways = end.position[1] - start.position[1];
   // The steady speed over the last second (33 ticks): the wheels' velocity servo (a P law on the
-  // rim speed) droops under the casters' friction. Measured: 61.4 mm/s of the 75 commanded.
+  // rim speed) droops a little under the casters' friction. Measured: 73.3 mm/s of the 75
+  // commanded (98%; mujoco_sensors_test.cpp holds the servo to 97%).
   const double steady = (end.position[0] - records[records.size() - 34].modules[0].pose.position[0]) / (33 * 0.030);
-  EXPECT_TRUE(symb::testing::near_measured(steady, 0.0614, 0.002));
+  EXPECT_TRUE(symb::testing::near_measured(steady, 0.0733, 0.002));
   EXPECT_LT(steady, 0.075);
-  // 65 ticks (1.95 s). Measured: 114.6 mm forward, 0.000 mm sideways, heading unchanged.
-  EXPECT_TRUE(symb::testing::near_measured(forward, 0.1146, 0.002));
+  // 65 ticks (1.95 s). Measured: 142.4 mm forward, 0.000 mm sideways, heading unchanged.
+  EXPECT_TRUE(symb::testing::near_measured(forward, 0.1424, 0.002));
   EXPECT_LT(std::abs(sideways), 0.001);
   EXPECT_LT(std::abs(end.yaw()), 0.01);
   EXPECT_EQ(rig.runner->wheels(0)->command().sequence, 66U);

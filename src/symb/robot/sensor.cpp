@@ -59,9 +59,10 @@ void Sensor::close() {
   deactivate();
 }
 
-PublishResult Sensor::publish(std::span<const float> values, kernel::Time time) {
+PublishResult Sensor::publish(std::span<const float> values, std::shared_ptr<const os::Blob> blob, kernel::Time time) {
   SensorSample s;
   s.time = time;
+  s.blob = std::move(blob);
   std::lock_guard lock(mu_);
   ++stats_.published;
   if (!open_.load(std::memory_order_acquire)) {
@@ -221,7 +222,21 @@ void SensorTask::drain() {
   const SensorStats after = sensor_->take(batch_);
   std::array<float, os::Payload::kInlineValues> narrowed{};
   for (const SensorSample& s : batch_) {
-    if (options_.ranges.empty()) {
+    if (s.blob) {
+      // Rare (a camera's frame): the message is built here to carry the blob too.
+      os::Payload payload(std::span<const float>(s.numbers()));
+      if (!options_.ranges.empty()) {
+        const Conditioned c = condition_sample(options_.ranges, s.numbers(), narrowed);
+        if (!c.ok()) {
+          rejected_.bump();
+          continue;
+        }
+        if (c.clamped > 0) clamped_.bump(c.clamped);
+        payload.assign(std::span<const float>(narrowed.data(), s.count));
+      }
+      payload.blob = s.blob;
+      send(kDataPort, payload);
+    } else if (options_.ranges.empty()) {
       send(kDataPort, s.numbers());
     } else {
       const Conditioned c = condition_sample(options_.ranges, s.numbers(), narrowed);

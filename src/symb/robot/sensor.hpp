@@ -23,6 +23,8 @@
 //    message); the driver's own sample time is kept with latest().
 //  - Drivers either hold a Sensor and call publish(), or derive from it to start and stop the
 //    hardware with the device (activate() on open, deactivate() on close).
+//  - A sample may carry a shared blob beside its numbers (a camera's frame, depth_image.hpp): the
+//    task sends both in one message, and every receiver shares the one blob.
 #pragma once
 
 #include <algorithm>
@@ -56,15 +58,17 @@ struct SensorSample {
   // Only values[0, count) is ever read; copies move just those (a sample is built and copied
   // three times per reading, with 7 of its 32 numbers in use for the IR).
   std::array<float, os::Payload::kInlineValues> values;
+  std::shared_ptr<const os::Blob> blob;  // null for most sensors
 
   SensorSample() = default;
-  SensorSample(const SensorSample& o) : time(o.time), count(o.count) {
+  SensorSample(const SensorSample& o) : time(o.time), count(o.count), blob(o.blob) {
     std::copy_n(o.values.begin(), count, values.begin());
   }
   SensorSample& operator=(const SensorSample& o) {
     time = o.time;
     count = o.count;
     std::copy_n(o.values.begin(), count, values.begin());
+    blob = o.blob;
     return *this;
   }
   ~SensorSample() = default;
@@ -107,7 +111,9 @@ class Sensor : public io::Device {
 
   // For the driver, from any thread, at any time (the "interrupt"): one value per channel,
   // sampled at `time`. Never blocks for long (a short lock), never throws.
-  PublishResult publish(std::span<const float> values, kernel::Time time);
+  PublishResult publish(std::span<const float> values, kernel::Time time) { return publish(values, nullptr, time); }
+  // ... with a blob that travels with the numbers (a rejected sample drops it too).
+  PublishResult publish(std::span<const float> values, std::shared_ptr<const os::Blob> blob, kernel::Time time);
 
   SensorStats stats() const;
   // The newest accepted sample, heard or not.

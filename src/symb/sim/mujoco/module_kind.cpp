@@ -1,6 +1,7 @@
 #include "symb/sim/mujoco/module_kind.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <set>
 #include <sstream>
 
@@ -68,6 +69,15 @@ ModuleKind long_kind() {
   return kind;
 }
 
+ModuleKind camera_kind() {
+  ModuleKind kind = standard_kind();
+  kind.name = "camera";
+  const double front = kind.body.size[0] / 2;
+  kind.camera = CameraSpec{Face::kFront, {front, 0, 0.03}, 32, 24, std::numbers::pi / 3, 2.0};
+  kind.laser = LaserSpec{Face::kFront, {front, 0, -0.02}, 15, std::numbers::pi, 1.0};
+  return kind;
+}
+
 double rest_height(const ModuleKind& kind) {
   return kind.body.size[2] / 2 + (kind.has_wheels ? kWheeledClearance : 0.0);
 }
@@ -98,6 +108,30 @@ std::string check(const ModuleKind& kind) {
   for (const auto& ir : kind.ir) {
     if (!ir_faces.insert(ir.face).second) why << "two IR sensors on face " << face_name(ir.face) << "; ";
     if (!(ir.range > 0)) why << "IR range must be positive; ";
+  }
+  // A point on its face (the files check the same to a micrometre; this only catches code).
+  auto on_face = [&](Face f, const Vec3& p) {
+    const Vec3 n = face_normal(f);
+    for (std::size_t i = 0; i < 3; ++i)
+      if (n[i] != 0 ? std::abs(p[i] - n[i] * s[i] / 2) > 1e-6 : std::abs(p[i]) > s[i] / 2 + 1e-6) return false;
+    return true;
+  };
+  if (kind.laser) {
+    const LaserSpec& l = *kind.laser;
+    if (!on_face(l.face, l.position)) why << "the laser is not on its face; ";
+    if (!(l.rays >= 1 && l.rays <= kMaxLaserRays)) why << "a laser has 1 to " << kMaxLaserRays << " rays; ";
+    if (!(l.field_of_view > 0 && l.field_of_view <= 2 * std::numbers::pi))
+      why << "the laser's field of view must be in (0, 2 pi]; ";
+    if (!(l.range > 0)) why << "the laser's range must be positive; ";
+  }
+  if (kind.camera) {
+    const CameraSpec& c = *kind.camera;
+    if (!on_face(c.face, c.position)) why << "the camera is not on its face; ";
+    if (!(c.width >= 1 && c.width <= kMaxCameraWidth && c.height >= 1 && c.height <= kMaxCameraHeight))
+      why << "a camera image is 1.." << kMaxCameraWidth << " x 1.." << kMaxCameraHeight << " pixels; ";
+    if (!(c.field_of_view > 0 && c.field_of_view <= kMaxCameraFieldOfView))
+      why << "the camera's field of view must be in (0, 170 degrees]; ";
+    if (!(c.range > 0)) why << "the camera's range must be positive; ";
   }
   std::string text = why.str();
   if (text.size() >= 2) text.resize(text.size() - 2);

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -35,8 +36,8 @@ class KindFileWalk {
   ModuleKind top(const YAML::Node& root) {
     if (!root.IsDefined() || root.IsNull())
       src_.fail(SourceLocation{src_.file(), 1, 1},
-                "the module kind is empty: it needs name, body, wheels, hinge, connectors and ir");
-    Map m(src_, root, "the module kind", {"name", "body", "wheels", "hinge", "connectors", "ir"});
+                "the module kind is empty: it needs name, body, wheels, hinge, connectors, ir, laser and camera");
+    Map m(src_, root, "the module kind", {"name", "body", "wheels", "hinge", "connectors", "ir", "laser", "camera"});
     ModuleKind k;
     k.name = name(m.require("name"), "name");
     body(m.require("body"), k.body);
@@ -44,6 +45,8 @@ class KindFileWalk {
     hinge(m.require("hinge"), k.hinge);
     connectors(m.require("connectors"), k);
     ir(m.require("ir"), k);
+    laser(m.require("laser"), k);
+    camera(m.require("camera"), k);
     // The rules above are this file's; check() is the kind's own, which a world trusts.
     if (const std::string why = check(k); !why.empty()) src_.fail(root, "the module kind is not usable: " + why);
     return k;
@@ -179,6 +182,41 @@ class KindFileWalk {
       k.ir.push_back(s);
       faces.push_back(fn);
     }
+  }
+
+  // The word `none`: the kind has no such sensor.
+  static bool none(const YAML::Node& n) { return n.IsScalar() && n.Scalar() == "none"; }
+
+  void laser(const YAML::Node& n, ModuleKind& k) {
+    if (none(n)) return;
+    if (!n.IsMap())
+      src_.fail(n, "laser is a mapping (face, position, rays, field_of_view, range) or none" + Map::got(n));
+    Map m(src_, n, "laser", {"face", "position", "rays", "field_of_view", "range"});
+    LaserSpec l;
+    l.face = face(m.require("face"));
+    l.position = on_face(m.require("position"), "laser position (m)", l.face, k.body);
+    l.rays = static_cast<std::size_t>(
+        rd_.integer(m.require("rays"), "laser rays", 1, static_cast<std::int64_t>(kMaxLaserRays)));
+    l.field_of_view = rd_.number(m.require("field_of_view"), "laser field_of_view (rad)", 1e-3, 2 * std::numbers::pi);
+    l.range = rd_.number(m.require("range"), "laser range (m)", kMinLength, 10);
+    k.laser = l;
+  }
+
+  void camera(const YAML::Node& n, ModuleKind& k) {
+    if (none(n)) return;
+    if (!n.IsMap())
+      src_.fail(n, "camera is a mapping (face, position, width, height, field_of_view, range) or none" + Map::got(n));
+    Map m(src_, n, "camera", {"face", "position", "width", "height", "field_of_view", "range"});
+    CameraSpec c;
+    c.face = face(m.require("face"));
+    c.position = on_face(m.require("position"), "camera position (m)", c.face, k.body);
+    c.width = static_cast<std::size_t>(
+        rd_.integer(m.require("width"), "camera width (pixels)", 1, static_cast<std::int64_t>(kMaxCameraWidth)));
+    c.height = static_cast<std::size_t>(
+        rd_.integer(m.require("height"), "camera height (pixels)", 1, static_cast<std::int64_t>(kMaxCameraHeight)));
+    c.field_of_view = rd_.number(m.require("field_of_view"), "camera field_of_view (rad)", 1e-3, kMaxCameraFieldOfView);
+    c.range = rd_.number(m.require("range"), "camera range (m)", kMinLength, 10);
+    k.camera = c;
   }
 
   const Source& src_;

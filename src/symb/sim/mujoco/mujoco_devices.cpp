@@ -26,6 +26,74 @@ std::vector<robot::ChannelSpec> MujocoHingeSensor::channel_specs() {
 
 MujocoHingeSensor::MujocoHingeSensor(std::string name) : robot::Sensor(std::move(name), channel_specs()) {}
 
+std::vector<robot::ChannelSpec> MujocoImuSensor::channel_specs() {
+  // Wide enough for a module knocked about by its neighbours; a reading beyond is clamped.
+  constexpr float kMaxAcceleration = 1000, kMaxRate = 1000;
+  std::vector<robot::ChannelSpec> c;
+  for (const char* axis : {"ax", "ay", "az"}) c.push_back({axis, "m/s^2", -kMaxAcceleration, kMaxAcceleration});
+  for (const char* axis : {"gx", "gy", "gz"}) c.push_back({axis, "rad/s", -kMaxRate, kMaxRate});
+  return c;
+}
+
+MujocoImuSensor::MujocoImuSensor(std::string name) : robot::Sensor(std::move(name), channel_specs()) {}
+
+robot::PublishResult MujocoImuSensor::publish_reading(const ImuReading& r, kernel::Time time) {
+  const float v[6] = {static_cast<float>(r.acceleration[0]),     static_cast<float>(r.acceleration[1]),
+                      static_cast<float>(r.acceleration[2]),     static_cast<float>(r.angular_velocity[0]),
+                      static_cast<float>(r.angular_velocity[1]), static_cast<float>(r.angular_velocity[2])};
+  return publish(std::span<const float>(v, 6), time);
+}
+
+std::vector<robot::ChannelSpec> MujocoTouchSensor::channel_specs() {
+  std::vector<robot::ChannelSpec> c;
+  for (const Face face : kFaces) c.push_back(robot::ChannelSpec{face_name(face), "N", 0.0f, 1.0e6f});
+  return c;
+}
+
+MujocoTouchSensor::MujocoTouchSensor(std::string name) : robot::Sensor(std::move(name), channel_specs()) {}
+
+robot::PublishResult MujocoTouchSensor::publish_forces(const std::array<double, kIrFaces>& force, kernel::Time time) {
+  std::array<float, kIrFaces> v{};
+  for (std::size_t i = 0; i < kIrFaces; ++i) v[i] = static_cast<float>(force[i]);
+  return publish(std::span<const float>(v.data(), v.size()), time);
+}
+
+std::vector<robot::ChannelSpec> MujocoLaser::channel_specs(const LaserSpec& spec) {
+  std::vector<robot::ChannelSpec> c;
+  for (std::size_t r = 0; r < spec.rays; ++r)
+    c.push_back(robot::ChannelSpec{"ray" + std::to_string(r), "m", 0.0f, static_cast<float>(spec.range)});
+  return c;
+}
+
+MujocoLaser::MujocoLaser(std::string name, const LaserSpec& spec)
+    : robot::Sensor(std::move(name), channel_specs(spec)) {}
+
+std::vector<robot::ChannelSpec> MujocoCamera::channel_specs(const CameraSpec& spec) {
+  return {robot::ChannelSpec{"nearest", "m", 0.0f, static_cast<float>(spec.range)},
+          robot::ChannelSpec{"nearest_id", "object id", -16777216.0f, 16777216.0f},
+          robot::ChannelSpec{"seen", "share of pixels", 0.0f, 1.0f}};
+}
+
+MujocoCamera::MujocoCamera(std::string name, const CameraSpec& spec)
+    : robot::Sensor(std::move(name), channel_specs(spec)), range_(spec.range) {}
+
+robot::PublishResult MujocoCamera::publish_frame(std::shared_ptr<const robot::DepthImage> frame, kernel::Time time) {
+  float nearest = static_cast<float>(range_);
+  std::int32_t nearest_id = kNothingId;
+  std::size_t seen = 0;
+  for (std::size_t p = 0; p < frame->depth.size(); ++p) {
+    if (frame->ids[p] == kNothingId) continue;
+    ++seen;
+    if (frame->depth[p] < nearest) {
+      nearest = frame->depth[p];
+      nearest_id = frame->ids[p];
+    }
+  }
+  const float v[3] = {nearest, static_cast<float>(nearest_id),
+                      frame->depth.empty() ? 0.0f : static_cast<float>(seen) / static_cast<float>(frame->depth.size())};
+  return publish(std::span<const float>(v, 3), std::move(frame), time);
+}
+
 std::vector<robot::ChannelSpec> MujocoHinge::channel_specs(std::array<double, 2> range) {
   return {robot::ChannelSpec{"target", "rad", static_cast<float>(range[0]), static_cast<float>(range[1])}};
 }

@@ -14,6 +14,21 @@
 //   SimWheels          "wheels", the 2D driver itself (sim_drivers.hpp): left, right in Thymio
 //                      motor units [-500, 500], 500 mapped to the kind's top rim speed, so a
 //                      controller written for the full range uses the full range here too.
+//   MujocoImuSensor    "imu", 6 channels ax, ay, az (m/s^2, specific force: +9.81 on z at rest),
+//                      gx, gy, gz (rad/s), of the module's front half in the module frame; the
+//                      acceleration is the mean over the last control period (mujoco_world.hpp).
+//   MujocoTouchSensor  "touch", 4 channels front, back, left, right: the normal force (N) of the
+//                      contacts on that face, 0 when nothing touches it.
+//   MujocoLaser        "laser" (kinds with a laser), one channel per ray, "ray0" the rightmost:
+//                      the distance (m) to what the ray meets, the laser's range for nothing.
+//   MujocoCamera       "camera" (kinds with a camera), 3 channels nearest (m, the smallest depth
+//                      of a pixel that sees a module or an obstacle, the range when none does),
+//                      nearest_id (its object id, 0 for none), seen (the share of pixels that
+//                      see a module or an obstacle); every sample
+//                      carries the frame itself as a robot::DepthImage blob (depth_image.hpp),
+//                      which the sensor task forwards in the same message.
+// The runner publishes imu, touch, laser and camera only while a task listens to them (their
+// rays and contact sums cost nothing otherwise), ir and hinge_state every tick.
 //   MujocoConnector    "connector_<name>", one per connector, 3 channels: state (0 free, 1
 //                      aligned, 2 docked), open (0 or 1), peer (the docked partner's module index,
 //                      -1 when not docked). Its ioctls act on the world at once and answer with its
@@ -43,6 +58,7 @@
 #include "symb/kernel/time.hpp"
 #include "symb/robot/actuator.hpp"
 #include "symb/robot/channel_spec.hpp"
+#include "symb/robot/depth_image.hpp"
 #include "symb/robot/sensor.hpp"
 #include "symb/sim/mujoco/module_kind.hpp"
 #include "symb/sim/mujoco/mujoco_world.hpp"
@@ -73,6 +89,40 @@ class MujocoHingeSensor final : public robot::Sensor {
     const float v[2] = {static_cast<float>(angle), static_cast<float>(speed)};
     return publish(std::span<const float>(v, 2), time);
   }
+};
+
+class MujocoImuSensor final : public robot::Sensor {
+ public:
+  explicit MujocoImuSensor(std::string name = "imu");
+  static std::vector<robot::ChannelSpec> channel_specs();
+  robot::PublishResult publish_reading(const ImuReading& r, kernel::Time time);
+};
+
+class MujocoTouchSensor final : public robot::Sensor {
+ public:
+  explicit MujocoTouchSensor(std::string name = "touch");
+  static std::vector<robot::ChannelSpec> channel_specs();
+  robot::PublishResult publish_forces(const std::array<double, kIrFaces>& force, kernel::Time time);
+};
+
+class MujocoLaser final : public robot::Sensor {
+ public:
+  MujocoLaser(std::string name, const LaserSpec& spec);
+  static std::vector<robot::ChannelSpec> channel_specs(const LaserSpec& spec);
+  robot::PublishResult publish_scan(std::span<const float> distances, kernel::Time time) {
+    return publish(distances, time);
+  }
+};
+
+class MujocoCamera final : public robot::Sensor {
+ public:
+  MujocoCamera(std::string name, const CameraSpec& spec);
+  static std::vector<robot::ChannelSpec> channel_specs(const CameraSpec& spec);
+  // Publishes the frame's summary with the frame attached.
+  robot::PublishResult publish_frame(std::shared_ptr<const robot::DepthImage> frame, kernel::Time time);
+
+ private:
+  double range_;
 };
 
 // The newest hinge command.

@@ -36,12 +36,21 @@ MujocoRunner::MujocoRunner(kernel::Executor& executor, MujocoWorld& world, Optio
     connector_readings_.emplace_back(connectors.size());
     connector_listened_.emplace_back(connectors.size(), false);
     connectors_.push_back(std::move(connectors));
+    imu_.push_back(std::make_shared<MujocoImuSensor>("imu"));
+    touch_.push_back(std::make_shared<MujocoTouchSensor>("touch"));
+    laser_.push_back(kind.laser ? std::make_shared<MujocoLaser>("laser", *kind.laser) : nullptr);
+    camera_.push_back(kind.camera ? std::make_shared<MujocoCamera>("camera", *kind.camera) : nullptr);
+    laser_readings_.emplace_back(kind.laser ? kind.laser->rays : 0);
     for (const Face face : kFaces) {
       const auto sensor =
           std::find_if(kind.ir.begin(), kind.ir.end(), [&](const IrSpec& ir) { return ir.face == face; });
       ir_range_.push_back(sensor == kind.ir.end() ? 0.0 : sensor->range);
     }
   }
+  listened_.resize(n);
+  imu_readings_.resize(n);
+  touch_readings_.resize(n);
+  camera_frames_.resize(n);
 }
 
 MujocoRunner::~MujocoRunner() {
@@ -66,6 +75,13 @@ std::shared_ptr<MujocoHingeSensor> MujocoRunner::hinge_sensor(std::size_t module
 std::shared_ptr<MujocoHinge> MujocoRunner::hinge(std::size_t module) const { return mj_runner_at(hinge_, module); }
 std::shared_ptr<SimWheels> MujocoRunner::wheels(std::size_t module) const { return mj_runner_at(wheels_, module); }
 
+std::shared_ptr<MujocoImuSensor> MujocoRunner::imu(std::size_t module) const { return mj_runner_at(imu_, module); }
+std::shared_ptr<MujocoTouchSensor> MujocoRunner::touch(std::size_t module) const {
+  return mj_runner_at(touch_, module);
+}
+std::shared_ptr<MujocoLaser> MujocoRunner::laser(std::size_t module) const { return mj_runner_at(laser_, module); }
+std::shared_ptr<MujocoCamera> MujocoRunner::camera(std::size_t module) const { return mj_runner_at(camera_, module); }
+
 std::shared_ptr<MujocoConnector> MujocoRunner::connector(std::size_t module, std::size_t connector) const {
   (void)mj_runner_at(ir_, module);
   const auto& list = connectors_[module];
@@ -86,12 +102,19 @@ std::shared_ptr<MujocoConnector> MujocoRunner::connector(std::size_t module, std
 std::vector<std::shared_ptr<io::Device>> MujocoRunner::devices(std::size_t module) const {
   std::vector<std::shared_ptr<io::Device>> all{ir_sensor(module), hinge_sensor(module), hinge(module)};
   if (wheels_[module]) all.push_back(wheels_[module]);
+  all.push_back(imu_[module]);
+  all.push_back(touch_[module]);
+  if (laser_[module]) all.push_back(laser_[module]);
+  if (camera_[module]) all.push_back(camera_[module]);
   for (const auto& c : connectors_[module]) all.push_back(c);
   return all;
 }
 
 robot::RobotDevices MujocoRunner::device_lookups(std::size_t module) const {
-  std::vector<std::shared_ptr<robot::Sensor>> sensors{ir_sensor(module), hinge_sensor(module)};
+  std::vector<std::shared_ptr<robot::Sensor>> sensors{ir_sensor(module), hinge_sensor(module), imu(module),
+                                                      touch(module)};
+  if (laser_[module]) sensors.push_back(laser_[module]);
+  if (camera_[module]) sensors.push_back(camera_[module]);
   for (const auto& c : connectors_[module]) sensors.push_back(c);
   std::vector<std::shared_ptr<robot::Actuator>> actuators{hinge(module)};
   if (wheels_[module]) actuators.push_back(wheels_[module]);
@@ -123,6 +146,9 @@ kernel::Status MujocoRunner::step_once(kernel::Time now) {
   for (std::size_t m = 0; m < connectors_.size(); ++m)
     for (std::size_t c = 0; c < connectors_[m].size(); ++c)
       connector_listened_[m][c] = connectors_[m][c]->has_listener();
+  for (std::size_t m = 0; m < listened_.size(); ++m)
+    listened_[m] = {imu_[m]->has_listener(), touch_[m]->has_listener(), laser_[m] && laser_[m]->has_listener(),
+                    camera_[m] && camera_[m]->has_listener()};
   kernel::Status stepped;
   std::vector<DockEvent> events;
   access_->with_world([&](MujocoWorld& world) {
@@ -152,6 +178,16 @@ kernel::Status MujocoRunner::step_once(kernel::Time now) {
         r.ir[f] = ir_proximity(world.ir(m, kFaces[f]), ir_range_[m * kIrFaces + f]);
       for (std::size_t c = 0; c < connectors_[m].size(); ++c)
         if (connector_listened_[m][c]) connector_readings_[m][c] = connectors_[m][c]->reading(world);
+      const Listened& l = listened_[m];
+      if (l.imu) imu_readings_[m] = world.imu(m);
+      if (l.touch) touch_readings_[m] = world.touch(m);
+      if (l.laser) world.laser(m, laser_readings_[m]);
+      if (l.camera) {
+        const CameraSpec& spec = *world.module(m).kind.camera;
+        auto frame = std::make_shared<robot::DepthImage>(spec.width, spec.height);
+        world.camera(m, frame->depth, frame->ids);
+        camera_frames_[m] = std::move(frame);
+      }
     }
   });
   access_->log_dock_events(events);
@@ -168,6 +204,11 @@ kernel::Status MujocoRunner::step_once(kernel::Time now) {
     hinge_state_[m]->publish_state(r.hinge_angle, r.hinge_speed, now);
     for (std::size_t c = 0; c < connectors_[m].size(); ++c)
       if (connector_listened_[m][c]) connectors_[m][c]->publish_reading(connector_readings_[m][c], now);
+    const Listened& l = listened_[m];
+    if (l.imu) imu_[m]->publish_reading(imu_readings_[m], now);
+    if (l.touch) touch_[m]->publish_forces(touch_readings_[m], now);
+    if (l.laser) laser_[m]->publish_scan(laser_readings_[m], now);
+    if (l.camera) camera_[m]->publish_frame(std::move(camera_frames_[m]), now);
   }
   if (!has_observers_.load(std::memory_order_acquire)) return {};
   std::lock_guard lock(observers_mu_);

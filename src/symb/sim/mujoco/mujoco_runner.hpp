@@ -6,7 +6,8 @@
 //      end, counted in integer nanoseconds from the start, so a period that is no multiple of
 //      2 ms (33.33 Hz) never drifts: its ticks take 16 or 17 steps, never 16.67,
 //   3. publishes every module's IR and hinge state to its MujocoIrSensor and MujocoHingeSensor,
-//      stamped with the node time, and each connector's reading when a task listens to it,
+//      stamped with the node time, and each connector's, IMU's, touch's, laser's and camera's
+//      reading when a task listens to it (nobody listening: no rays cast, no frame made),
 //   4. writes the docking changes since the last tick to the modules' node logs (a latch from a
 //      shell or a scenario through with_world is logged like one from a connector's ioctl),
 //   5. hands a MujocoStepRecord (poses, hinge, IR) to the observers.
@@ -93,6 +94,11 @@ class MujocoRunner final : public PeriodicRunner {
   std::shared_ptr<MujocoHinge> hinge(std::size_t module) const;
   // Null for a kind without wheels.
   std::shared_ptr<SimWheels> wheels(std::size_t module) const;
+  std::shared_ptr<MujocoImuSensor> imu(std::size_t module) const;
+  std::shared_ptr<MujocoTouchSensor> touch(std::size_t module) const;
+  // Null for a kind without a laser (a camera).
+  std::shared_ptr<MujocoLaser> laser(std::size_t module) const;
+  std::shared_ptr<MujocoCamera> camera(std::size_t module) const;
   std::shared_ptr<MujocoConnector> connector(std::size_t module, std::size_t connector) const;
   // By the connector's name in the kind ("front"); null when there is none.
   std::shared_ptr<MujocoConnector> connector(std::size_t module, std::string_view name) const;
@@ -100,8 +106,9 @@ class MujocoRunner final : public PeriodicRunner {
   std::vector<std::shared_ptr<io::Device>> devices(std::size_t module) const;
   // The module's devices by name for the robot task types (robot_task_types.hpp), so a shell, a
   // scenario or a genome creates `sensor device=hinge_state` or `actuator_sink device=hinge` on
-  // the module's node as on a Thymio's: sensors ir, hinge_state, connector_<name>; actuators
-  // hinge, wheels. The lookups hold the devices, not the runner.
+  // the module's node as on a Thymio's: sensors ir, hinge_state, imu, touch, laser and camera
+  // (when the kind has them), connector_<name>; actuators hinge, wheels. The lookups hold the
+  // devices, not the runner.
   robot::RobotDevices device_lookups(std::size_t module) const;
 
   // See the header's Nodes paragraph. Throws std::out_of_range for a bad module.
@@ -135,6 +142,20 @@ class MujocoRunner final : public PeriodicRunner {
   std::vector<std::vector<std::array<float, 3>>> connector_readings_;  // reused every tick
   std::vector<std::vector<bool>> connector_listened_;                  // reused every tick
   std::vector<double> ir_range_;  // per module and face (module * 4 + face), m; 0 without a sensor
+  std::vector<std::shared_ptr<MujocoImuSensor>> imu_;
+  std::vector<std::shared_ptr<MujocoTouchSensor>> touch_;
+  std::vector<std::shared_ptr<MujocoLaser>> laser_;    // null without a laser
+  std::vector<std::shared_ptr<MujocoCamera>> camera_;  // null without a camera
+  // Per module, reused every tick: which of imu, touch, laser, camera a task listens to, and the
+  // readings taken under the world's lock for publishing outside it.
+  struct Listened {
+    bool imu = false, touch = false, laser = false, camera = false;
+  };
+  std::vector<Listened> listened_;
+  std::vector<ImuReading> imu_readings_;
+  std::vector<std::array<double, kIrFaces>> touch_readings_;
+  std::vector<std::vector<float>> laser_readings_;
+  std::vector<std::shared_ptr<robot::DepthImage>> camera_frames_;
 
   MujocoStepRecord record_;  // reused every tick; only the runner's context touches it
   std::mutex observers_mu_;

@@ -114,7 +114,13 @@ struct MujocoWorld::State {
     int free_qpos = -1, free_dof = -1;
     int hinge_qpos = -1, hinge_dof = -1, hinge_actuator = -1;
     int wheel_actuator[2] = {-1, -1};
+    int base_geom = -1, tail_geom = -1;  // the two box halves, where touch is felt
     std::vector<Connector> connectors;
+  };
+  // What a ray met: the distance along it (m) and the object's id; nothing is {-1, kNothingId}.
+  struct Hit {
+    double distance = -1;
+    int object = kNothingId;
   };
   struct Weld {
     int equality = -1;
@@ -127,6 +133,12 @@ struct MujocoWorld::State {
   std::unique_ptr<mjData, DataDeleter> data;
   std::vector<Module> modules;
   std::vector<std::size_t> body_module;  // per MuJoCo body: its module, or kNoIndex
+  std::vector<int> geom_object;          // per MuJoCo geom: its object id (see the header)
+  std::size_t obstacles = 0;
+  // The IMU: each module's base speed (world frame, m/s) at the end of the last step() call and
+  // at its start, and how long that call stepped (s).
+  std::vector<Vec3> speed_now, speed_before;
+  double imu_span = 0;
   std::vector<Weld> welds;
   std::vector<DockEvent> log;
   std::uint64_t steps = 0;
@@ -154,6 +166,89 @@ struct MujocoWorld::State {
   // Bodies' poses for the current qpos: mj_step leaves them one step behind its new qpos. Only
   // derived quantities change, so the next step's result is the same with or without it.
   void refresh() { mj_kinematics(model.get(), data.get()); }
+
+  // The base's linear speed: a free joint's first three speeds are its origin's, world frame.
+  Vec3 base_speed(std::size_t module) const {
+    const mjtNum* v = data->qvel + modules[module].free_dof;
+    return {v[0], v[1], v[2]};
+  }
+
+  // The first thing along the ray from `origin` (unit `direction`) within `range` that is not
+  // `module`'s own. MuJoCo's ray skips one body; the first pass skips `body` (the one the sensor
+  // sits on), and each of the module's other geoms met is stepped past, at most once per geom.
+  Hit cast(std::size_t module, int body, Vec3 origin, const Vec3& direction, double range) const {
+    double travelled = 0;
+    for (int pass = 0; pass <= model->ngeom; ++pass) {
+      int geom = -1;
+      const double hit =
+          mj_ray(model.get(), data.get(), origin.data(), direction.data(), nullptr, 1, pass == 0 ? body : -1, &geom);
+      if (hit < 0 || geom < 0 || travelled + hit > range) return {};
+      const int hit_body = model->geom_bodyid[geom];
+      if (body_module[static_cast<std::size_t>(hit_body)] != module)
+        return {travelled + hit, geom_object[static_cast<std::size_t>(geom)]};
+      const double skip = hit + kRayStepPast;
+      for (int i = 0; i < 3; ++i) origin[static_cast<std::size_t>(i)] += skip * direction[static_cast<std::size_t>(i)];
+      travelled += skip;
+    }
+    return {};
+  }
+
+  // The geoms a fan of rays from `origin` may meet within `range`: every plane, and every other
+  // geom not of `module` whose bounding sphere reaches within range (and, for a camera, which
+  // narrower than 180 degrees sees only ahead, not wholly behind the plane through `origin`
+  // across `out`). A camera's 768 rays then test a handful of geoms instead of the whole world.
+  void candidates(std::size_t module, const Vec3& origin, const Vec3* out, double range,
+                  std::vector<int>& geoms) const {
+    geoms.clear();
+    for (int g = 0; g < model->ngeom; ++g) {
+      if (body_module[static_cast<std::size_t>(model->geom_bodyid[g])] == module) continue;
+      if (model->geom_type[g] == mjGEOM_PLANE) {
+        geoms.push_back(g);
+        continue;
+      }
+      const mjtNum* p = row(data->geom_xpos, 3, g);
+      const Vec3 rel = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
+      const double bound = model->geom_rbound[g];
+      if (std::hypot(rel[0], rel[1], rel[2]) - bound > range) continue;
+      if (out != nullptr && rel[0] * (*out)[0] + rel[1] * (*out)[1] + rel[2] * (*out)[2] < -bound) continue;
+      geoms.push_back(g);
+    }
+  }
+
+  // The nearest of `geoms` along the ray (unit `direction`) within `range`, by MuJoCo's own
+  // ray-geom intersections, each behind a bounding-sphere test as in mj_ray.
+  Hit cast_among(const std::vector<int>& geoms, const Vec3& origin, const Vec3& direction, double range) const {
+    Hit best;
+    for (const int g : geoms) {
+      const mjtNum* p = row(data->geom_xpos, 3, g);
+      if (model->geom_type[g] != mjGEOM_PLANE) {
+        const Vec3 rel = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
+        const double along = rel[0] * direction[0] + rel[1] * direction[1] + rel[2] * direction[2];
+        const double bound = model->geom_rbound[g];
+        if (along + bound < 0) continue;
+        if (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2] - along * along > bound * bound) continue;
+      }
+      const double hit = mju_rayGeom(p, row(data->geom_xmat, 9, g), row(model->geom_size, 3, g), origin.data(),
+                                     direction.data(), model->geom_type[g]);
+      if (hit >= 0 && hit <= range && (best.distance < 0 || hit < best.distance))
+        best = {hit, geom_object[static_cast<std::size_t>(g)]};
+    }
+    return best;
+  }
+
+  // A sensor's mount on a face: the body it sits on (the tail when behind the hinge), its origin
+  // and its frame's out (the face's normal), left and up axes, in the world frame.
+  struct Mount {
+    int body;
+    Vec3 origin, out, left, up;
+  };
+  Mount mount(std::size_t module, Face face, const Vec3& position) const {
+    const Module& mod = at(module);
+    const int body = position[0] < 0 ? mod.tail : mod.base;
+    const mjtNum* mat = row(data->xmat, 9, body);
+    const Vec3 n = face_normal(face);
+    return {body, point(body, position), rotate(mat, n), rotate(mat, {-n[1], n[0], 0}), rotate(mat, {0, 0, 1})};
+  }
 
   Vec3 point(int body, const Vec3& local) const {
     Vec3 p = rotate(row(data->xmat, 9, body), local);
@@ -235,6 +330,8 @@ kernel::Result<MujocoWorld> MujocoWorld::make(std::vector<ModuleSpec> modules, M
     mod.hinge_qpos = m->jnt_qposadr[hinge];
     mod.hinge_dof = m->jnt_dofadr[hinge];
     mod.hinge_actuator = id(mjOBJ_ACTUATOR, n + ".hinge");
+    mod.base_geom = id(mjOBJ_GEOM, n + ".base");
+    mod.tail_geom = id(mjOBJ_GEOM, n + ".tail");
     s->body_module[static_cast<std::size_t>(mod.base)] = i;
     s->body_module[static_cast<std::size_t>(mod.tail)] = i;
     if (spec.kind.has_wheels) {
@@ -252,7 +349,17 @@ kernel::Result<MujocoWorld> MujocoWorld::make(std::vector<ModuleSpec> modules, M
   }
   for (std::size_t k = 0; k < options.spare_welds; ++k)
     s->welds.push_back({id(mjOBJ_EQUALITY, "spare_weld_" + std::to_string(k)), false});
+  s->geom_object.assign(static_cast<std::size_t>(m->ngeom), kNothingId);
+  for (int g = 0; g < m->ngeom; ++g) {
+    const std::size_t owner = s->body_module[static_cast<std::size_t>(m->geom_bodyid[g])];
+    if (owner != kNoIndex) s->geom_object[static_cast<std::size_t>(g)] = module_object_id(owner);
+  }
+  s->obstacles = options.obstacles.size();
+  for (std::size_t k = 0; k < s->obstacles; ++k)
+    s->geom_object[static_cast<std::size_t>(id(mjOBJ_GEOM, "obstacle_" + std::to_string(k)))] = obstacle_object_id(k);
   mj_forward(m, s->data.get());
+  for (std::size_t i = 0; i < s->modules.size(); ++i) s->speed_now.push_back(s->base_speed(i));
+  s->speed_before = s->speed_now;
   return MujocoWorld(std::move(s));
 }
 
@@ -281,6 +388,8 @@ kernel::Status MujocoWorld::step(std::uint64_t substeps) {
   if (!s_->failure.empty()) return kernel::Error{"the world has failed and does not step: " + s_->failure};
   const mjModel* m = s_->model.get();
   mjData* d = s_->data.get();
+  s_->speed_before.swap(s_->speed_now);
+  s_->imu_span = static_cast<double>(substeps) * kTimestep;
   for (std::uint64_t i = 0; i < substeps; ++i) {
     std::array<int, kFatalWarnings.size()> before{};
     for (std::size_t w = 0; w < kFatalWarnings.size(); ++w) before[w] = d->warning[kFatalWarnings[w].first].number;
@@ -297,6 +406,7 @@ kernel::Status MujocoWorld::step(std::uint64_t substeps) {
     }
   }
   s_->refresh();
+  for (std::size_t i = 0; i < s_->modules.size(); ++i) s_->speed_now[i] = s_->base_speed(i);
   return {};
 }
 
@@ -347,33 +457,126 @@ kernel::Status MujocoWorld::place(std::size_t module, const StartPose& where) {
   q[5] = 0;
   q[6] = std::sin(where.yaw / 2);
   std::fill_n(s_->data->qvel + mod.free_dof, 6, 0.0);
+  s_->speed_now[module] = s_->speed_before[module] = Vec3{};
   s_->refresh();
   return {};
 }
 
 std::optional<double> MujocoWorld::ir(std::size_t module, Face face) const {
-  const auto& mod = s_->at(module);
+  s_->at(module);
   const ModuleKind& kind = s_->specs[module].kind;
   const auto sensor = std::find_if(kind.ir.begin(), kind.ir.end(), [&](const IrSpec& ir) { return ir.face == face; });
   if (sensor == kind.ir.end()) return std::nullopt;
-  const int body = sensor->position[0] < 0 ? mod.tail : mod.base;
-  Vec3 origin = s_->point(body, sensor->position);
-  const Vec3 direction = rotate(row(s_->data->xmat, 9, body), face_normal(face));
-  // Each pass skips one of the module's own geoms; it has at most as many as the model has.
-  double travelled = 0;
-  for (int pass = 0; pass <= s_->model->ngeom; ++pass) {
-    int geom = -1;
-    const double hit = mj_ray(s_->model.get(), s_->data.get(), origin.data(), direction.data(), nullptr, 1,
-                              pass == 0 ? body : -1, &geom);
-    if (hit < 0 || geom < 0 || travelled + hit > sensor->range) return std::nullopt;
-    const int hit_body = s_->model->geom_bodyid[geom];
-    if (s_->body_module[static_cast<std::size_t>(hit_body)] != module) return travelled + hit;
-    const double skip = hit + kRayStepPast;
-    for (int i = 0; i < 3; ++i) origin[static_cast<std::size_t>(i)] += skip * direction[static_cast<std::size_t>(i)];
-    travelled += skip;
-  }
-  return std::nullopt;
+  const State::Mount at = s_->mount(module, face, sensor->position);
+  const State::Hit hit = s_->cast(module, at.body, at.origin, at.out, sensor->range);
+  if (hit.distance < 0) return std::nullopt;
+  return hit.distance;
 }
+
+ImuReading MujocoWorld::imu(std::size_t module) const {
+  const auto& mod = s_->at(module);
+  const mjtNum* mat = row(s_->data->xmat, 9, mod.base);
+  Vec3 specific{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double acceleration =
+        s_->imu_span > 0 ? (s_->speed_now[module][i] - s_->speed_before[module][i]) / s_->imu_span : 0.0;
+    specific[i] = acceleration - s_->model->opt.gravity[i];
+  }
+  ImuReading r;
+  mju_rotVecMatT(r.acceleration.data(), specific.data(), mat);
+  // A free joint's last three speeds are the body's angular velocity in its own frame.
+  const mjtNum* w = s_->data->qvel + mod.free_dof + 3;
+  r.angular_velocity = {w[0], w[1], w[2]};
+  return r;
+}
+
+std::array<double, 4> MujocoWorld::touch(std::size_t module) const {
+  const auto& mod = s_->at(module);
+  const mjModel* m = s_->model.get();
+  const mjData* d = s_->data.get();
+  std::array<double, 4> force{};
+  for (int i = 0; i < d->ncon; ++i) {
+    const mjContact& c = d->contact[i];
+    // The contact normal points from geom1 to geom2: out of geom1, into geom2.
+    double sign = 0;
+    int geom = -1;
+    if (c.geom1 == mod.base_geom || c.geom1 == mod.tail_geom) {
+      sign = 1;
+      geom = c.geom1;
+    } else if (c.geom2 == mod.base_geom || c.geom2 == mod.tail_geom) {
+      sign = -1;
+      geom = c.geom2;
+    } else {
+      continue;
+    }
+    const Vec3 outward = {sign * c.frame[0], sign * c.frame[1], sign * c.frame[2]};
+    Vec3 local;
+    mju_rotVecMatT(local.data(), outward.data(), row(d->xmat, 9, m->geom_bodyid[geom]));
+    const double ax = std::abs(local[0]), ay = std::abs(local[1]);
+    if (std::abs(local[2]) >= std::max(ax, ay)) continue;
+    const Face face =
+        ax >= ay ? (local[0] > 0 ? Face::kFront : Face::kBack) : (local[1] > 0 ? Face::kLeft : Face::kRight);
+    mjtNum wrench[6];
+    mj_contactForce(m, d, i, wrench);
+    force[static_cast<std::size_t>(face)] += std::abs(wrench[0]);
+  }
+  return force;
+}
+
+void MujocoWorld::laser(std::size_t module, std::span<float> distances) const {
+  s_->at(module);
+  const ModuleKind& kind = s_->specs[module].kind;
+  if (!kind.laser) throw std::invalid_argument("module '" + s_->specs[module].name + "' has no laser");
+  const LaserSpec& l = *kind.laser;
+  if (distances.size() != l.rays)
+    throw std::invalid_argument("laser of module '" + s_->specs[module].name + "' has " + std::to_string(l.rays) +
+                                " rays, not " + std::to_string(distances.size()));
+  const State::Mount at = s_->mount(module, l.face, l.position);
+  std::vector<int> geoms;
+  s_->candidates(module, at.origin, nullptr, l.range, geoms);
+  for (std::size_t r = 0; r < l.rays; ++r) {
+    const double angle =
+        l.rays == 1 ? 0.0
+                    : -l.field_of_view / 2 + l.field_of_view * static_cast<double>(r) / static_cast<double>(l.rays - 1);
+    const double c = std::cos(angle), sn = std::sin(angle);
+    const Vec3 dir = {c * at.out[0] + sn * at.left[0], c * at.out[1] + sn * at.left[1],
+                      c * at.out[2] + sn * at.left[2]};
+    const State::Hit hit = s_->cast_among(geoms, at.origin, dir, l.range);
+    distances[r] = static_cast<float>(hit.distance < 0 ? l.range : hit.distance);
+  }
+}
+
+void MujocoWorld::camera(std::size_t module, std::span<float> depth, std::span<std::int32_t> ids) const {
+  s_->at(module);
+  const ModuleKind& kind = s_->specs[module].kind;
+  if (!kind.camera) throw std::invalid_argument("module '" + s_->specs[module].name + "' has no camera");
+  const CameraSpec& cam = *kind.camera;
+  const std::size_t pixels = cam.width * cam.height;
+  if (depth.size() != pixels || ids.size() != pixels)
+    throw std::invalid_argument("camera of module '" + s_->specs[module].name + "' has " + std::to_string(pixels) +
+                                " pixels");
+  const State::Mount at = s_->mount(module, cam.face, cam.position);
+  const double w = static_cast<double>(cam.width), h = static_cast<double>(cam.height);
+  const double focal = (w / 2) / std::tan(cam.field_of_view / 2);
+  std::vector<int> geoms;
+  s_->candidates(module, at.origin, &at.out, cam.range, geoms);
+  for (std::size_t v = 0; v < cam.height; ++v) {
+    const double up = h / 2 - static_cast<double>(v) - 0.5;
+    for (std::size_t u = 0; u < cam.width; ++u) {
+      const double left = w / 2 - static_cast<double>(u) - 0.5;
+      Vec3 dir;
+      for (std::size_t i = 0; i < 3; ++i) dir[i] = focal * at.out[i] + left * at.left[i] + up * at.up[i];
+      const double norm = std::hypot(dir[0], dir[1], dir[2]);
+      for (double& x : dir) x /= norm;
+      const State::Hit hit = s_->cast_among(geoms, at.origin, dir, cam.range);
+      const std::size_t p = v * cam.width + u;
+      depth[p] = static_cast<float>(hit.distance < 0 ? cam.range : hit.distance);
+      ids[p] = hit.distance < 0 ? kNothingId : hit.object;
+    }
+  }
+}
+
+std::size_t MujocoWorld::obstacle_count() const { return s_->obstacles; }
 
 Vec3 MujocoWorld::connector_position(std::size_t module, std::size_t connector) const {
   return s_->position(module, connector);
@@ -502,5 +705,8 @@ std::size_t MujocoWorld::spare_welds_free() const {
   return static_cast<std::size_t>(
       std::count_if(s_->welds.begin(), s_->welds.end(), [](const State::Weld& w) { return !w.in_use; }));
 }
+
+std::size_t MujocoWorld::stack_reserved() const { return static_cast<std::size_t>(s_->model->nstack); }
+std::size_t MujocoWorld::stack_peak() const { return static_cast<std::size_t>(s_->data->maxuse_stack); }
 
 }  // namespace symb::sim::mujoco

@@ -1,7 +1,20 @@
 // MujocoWorld: the 3D world of robot modules on MuJoCo 2.2.2. It owns the compiled model and its
 // running state, steps them by whole 2 ms steps, takes each module's wheel speeds and hinge
-// target, gives its hinge angle and speed, its IR range per face and its pose, and docks modules
-// by their connectors at runtime.
+// target, gives its hinge angle and speed, its IR range per face, its IMU, the force on each
+// face, its laser scan and camera image, and its pose, and docks modules by their connectors at
+// runtime.
+//
+// Sensors, all computed from the state at the end of the last step():
+//   imu      the front half's (the base's) specific force, m/s^2 (what an accelerometer reads:
+//            the acceleration minus gravity, so +9.81 up at rest), averaged over the last step()
+//            call from the change of its speed; and its angular velocity, rad/s, at that instant;
+//            both in the module frame.
+//   touch    per face, the normal force (N) of the contacts on the body's two box halves whose
+//            normal in the module frame is mostly along that face's normal; contacts mostly
+//            vertical (the floor under a module without wheels) count on no face.
+//   laser, camera: ray casts (module_kind.hpp says which rays), skipping the module's own bodies.
+// Object ids, what the camera reports per pixel: module m is m + 1, obstacle k is -(k + 1), the
+// floor and nothing are 0.
 //
 // Docking. Each connector has an open flag (set by its owner; open by default) and a state:
 //   free     not docked, and no other module's undocked connector faces it within the tolerances;
@@ -41,6 +54,7 @@
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -69,6 +83,15 @@ struct Pose3 {
   Vec3 position{};                                  // of the module frame's origin, world frame
   std::array<double, 4> quaternion = {1, 0, 0, 0};  // w, x, y, z: module frame to world
   double yaw() const;                               // heading about z, rad
+};
+
+inline constexpr int kNothingId = 0;  // the floor, or nothing within range
+constexpr int module_object_id(std::size_t module) { return static_cast<int>(module) + 1; }
+constexpr int obstacle_object_id(std::size_t obstacle) { return -static_cast<int>(obstacle) - 1; }
+
+struct ImuReading {
+  Vec3 acceleration{};      // specific force, m/s^2, module frame
+  Vec3 angular_velocity{};  // rad/s, module frame
 };
 
 enum class DockChange { kLatched, kUnlatched, kRefused };
@@ -126,6 +149,17 @@ class MujocoWorld {
   // The distance (m) from the face's IR sensor to the first thing its ray meets that is not the
   // module itself, or nothing when that is beyond the sensor's range or the face has no sensor.
   std::optional<double> ir(std::size_t module, Face face) const;
+  ImuReading imu(std::size_t module) const;
+  // The normal force on each face, N, in kFaces order.
+  std::array<double, 4> touch(std::size_t module) const;
+  // The kind's laser scan, one distance (m) per ray, its range where a ray meets nothing.
+  // std::invalid_argument when the kind has no laser or `distances` is not one per ray.
+  void laser(std::size_t module, std::span<float> distances) const;
+  // The kind's camera image, row by row from the top: per pixel the distance (m, its range for
+  // nothing) and the object id. std::invalid_argument when the kind has no camera or a span is not
+  // width x height.
+  void camera(std::size_t module, std::span<float> depth, std::span<std::int32_t> ids) const;
+  std::size_t obstacle_count() const;
 
   Vec3 connector_position(std::size_t module, std::size_t connector) const;  // world frame
   Vec3 connector_normal(std::size_t module, std::size_t connector) const;    // outward, unit
@@ -139,6 +173,11 @@ class MujocoWorld {
   kernel::Status unlatch(std::size_t module, std::size_t connector);
   const std::vector<DockEvent>& docking_log() const;
   std::size_t spare_welds_free() const;
+
+  // MuJoCo 2.2.2's scratch stack, in numbers (mjtNum, 8 bytes each): what the model reserves
+  // (nstack, sized by mjcf_model.cpp) and the most any step has used so far (maxuse_stack).
+  std::size_t stack_reserved() const;
+  std::size_t stack_peak() const;
 
  private:
   struct State;
