@@ -94,15 +94,6 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   const bool write_files = !result.out_dir.empty();
   std::ofstream csv;
   std::ofstream probes_csv;
-  if (write_files) {
-    std::error_code ec;
-    fs::create_directories(result.out_dir, ec);
-    if (ec) return Error{"cannot create " + result.out_dir.string() + ": " + ec.message()};
-    csv.open(result.out_dir / "steps.csv", std::ios::binary);
-    if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
-    probes_csv.open(result.out_dir / "probes.csv", std::ios::binary);
-    if (!probes_csv) return Error{"cannot write " + (result.out_dir / "probes.csv").string()};
-  }
 
   std::unique_ptr<kernel::Executor> executor;
   kernel::VirtualTimeExecutor* virtual_time = nullptr;
@@ -120,6 +111,15 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (!created) return Error{created.error()};
   std::unique_ptr<sim::ScenarioSession> session = std::move(created).value();
   result.seed = session->seed();
+  if (write_files) {
+    std::error_code ec;
+    fs::create_directories(result.out_dir, ec);
+    if (ec) return Error{"cannot create " + result.out_dir.string() + ": " + ec.message()};
+    csv.open(result.out_dir / "steps.csv", std::ios::binary);
+    if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
+    probes_csv.open(result.out_dir / "probes.csv", std::ios::binary);
+    if (!probes_csv) return Error{"cannot write " + (result.out_dir / "probes.csv").string()};
+  }
 
   RunRecorder recorder(session->world(), write_files ? &csv : nullptr, options.csv_every,
                        seconds(scenario.control_period));
