@@ -371,6 +371,8 @@ TEST(OrganismRun, RunsASessionInSlicesStopsOnRequestAndWritesTheFolder) {
   EXPECT_EQ(run->seed, 7U);
   ASSERT_EQ(run->robots.size(), 3U);
   EXPECT_EQ(run->robots[2].name, "c");
+  EXPECT_EQ(run->organism.rfind("0 latched, 0 unlatched, 0 refused; final topology a b c; its centre moved ", 0), 0U)
+      << run->organism;
   EXPECT_TRUE(symb::testing::near_measured(run->robots[2].distance, 12.05, 1.0));  // cm: c drove (measured)
   for (const char* name : {"world.xml", "summary.txt", "probes.csv", "syslog.txt", "topology.csv"})
     EXPECT_TRUE(fs::exists(run->out_dir / name)) << name;

@@ -29,6 +29,7 @@ struct OrganismRecorder::State {
   std::vector<std::string> names;
   std::vector<std::vector<std::string>> connectors;  // per module, the kind's connector names
   std::vector<Vec3> box_size;
+  std::vector<Vec3> hinge_axis;
   std::string mjcf;
 
   mutable std::mutex mu;  // everything below
@@ -206,6 +207,7 @@ OrganismRecorder::OrganismRecorder(sim::mujoco::MujocoRunner& runner, OrganismRe
       const auto& spec = world.module(m);
       s.names.push_back(spec.name);
       s.box_size.push_back(spec.kind.body.size);
+      s.hinge_axis.push_back(spec.kind.hinge.axis);
       std::vector<std::string> connectors;
       for (const auto& c : spec.kind.connectors) connectors.push_back(c.name);
       s.connectors.push_back(std::move(connectors));
@@ -351,13 +353,18 @@ kernel::Result<std::vector<fs::path>> OrganismRecorder::finish(const fs::path& d
   for (std::size_t m = 0; m < n; ++m) {
     paths[m].name = s.names[m];
     paths[m].box_size = s.box_size[m];
+    paths[m].hinge_axis = s.hinge_axis[m];
     if (m < first.modules.size()) paths[m].points.push_back(first.modules[m].pose.position);
-    paths[m].end = m < first.modules.size() ? first.modules[m].pose : sim::mujoco::Pose3{};
+    if (m < first.modules.size()) {
+      paths[m].end = first.modules[m].pose;
+      paths[m].end_hinge_angle = first.modules[m].hinge_angle;
+    }
   }
   for (const OrganismSample& r : rows)
     for (std::size_t m = 0; m < r.modules.size() && m < n; ++m) {
       paths[m].points.push_back(r.modules[m].pose.position);
       paths[m].end = r.modules[m].pose;
+      paths[m].end_hinge_angle = r.modules[m].hinge_angle;
     }
   const std::vector<DockedPair>& docked = topology.back().pairs;
   std::ostringstream top, side, joints_svg, topo_svg, docking_svg;
@@ -370,8 +377,8 @@ kernel::Result<std::vector<fs::path>> OrganismRecorder::finish(const fs::path& d
   summary_text << summary_header;
   if (!summary_header.empty() && summary_header.back() != '\n') summary_text << "\n";
   summary_text << "modules: " << n << "\n"
-               << "control ticks: " << summary.ticks << " (" << rows.size() << " kept: every " << stride
-               << "-th tick, and the last)\n"
+               << "control ticks: " << summary.ticks << " (" << rows.size() << " kept: one in " << stride
+               << " by the end, and the last)\n"
                << "organism centre: moved " << fixed(summary.centre_distance, 3) << " m (path in x-y), "
                << fixed(summary.centre_displacement, 3) << " m from start to end\n"
                << "docking: " << summary.latches << " latched, " << summary.unlatches << " unlatched, "

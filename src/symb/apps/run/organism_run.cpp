@@ -33,6 +33,9 @@ void fill_organism_result(const OrganismRecorder& recorder, RunResult& result) {
   result.simulated_seconds = s.seconds;
   result.real_time_factor = result.wall_seconds > 0 ? result.simulated_seconds / result.wall_seconds : 0;
   result.trajectory_hash = s.hash;
+  result.organism = std::to_string(s.latches) + " latched, " + std::to_string(s.unlatches) + " unlatched, " +
+                    std::to_string(s.refusals) + " refused; final topology " + s.final_components +
+                    "; its centre moved " + fixed(s.centre_distance, 2) + " m";
   result.robots.clear();
   const auto samples = recorder.samples();
   const auto& names = recorder.module_names();
@@ -79,18 +82,14 @@ kernel::Status write_organism_files(OrganismRecorder& recorder, const ProbeRecor
   auto charts = write_probe_charts(result.out_dir / "probes", probes, kMaxProbeCharts);
   if (!charts) return kernel::Error{charts.error()};
   result.files.insert(result.files.end(), charts->begin(), charts->end());
-  for (const ProbeSeries& s : module_series(probes, "hormones/", kMaxModuleChartValues)) {
-    if (s.width < 2) continue;  // one module alone: its own chart in probes/ says it all
-    const fs::path dir = result.out_dir / "modules";
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec) return kernel::Error{"cannot create " + dir.string() + ": " + ec.message()};
-    std::ostringstream plot;
-    write_probe_svg(plot, s);
-    const fs::path file = dir / probe_file_name(s);
-    if (auto st = write_file(file, plot.str()); !st) return st;
-    result.files.push_back(file);
-  }
+  // One module alone: its own chart in probes/ says it all.
+  const std::vector<ProbeSeries> side_by_side = module_series(probes, "hormones/", kMaxModuleChartValues);
+  std::vector<const ProbeSeries*> shown;
+  for (const ProbeSeries& s : side_by_side)
+    if (s.width >= 2) shown.push_back(&s);
+  auto module_charts = write_charts(result.out_dir / "modules", shown);
+  if (!module_charts) return kernel::Error{module_charts.error()};
+  result.files.insert(result.files.end(), module_charts->begin(), module_charts->end());
   return {};
 }
 

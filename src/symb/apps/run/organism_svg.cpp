@@ -40,13 +40,22 @@ Point2 project(PathView view, const Vec3& p) {
   return view == PathView::kTop ? Point2{p[0], p[1]} : Point2{p[0], p[2]};
 }
 
-// The outline of the box of `size` at `pose`, projected: the convex hull of its 8 corners
-// (Andrew's monotone chain), counter-clockwise.
-std::vector<Point2> box_outline(PathView view, const Vec3& size, const Pose3& pose) {
+// The outline of one half of a module's box at its end pose, projected: the convex hull of the
+// half's 8 corners (Andrew's monotone chain), counter-clockwise. The front half (x >= 0 in the
+// module frame) is the module frame's body; the back half turns about the hinge axis through the
+// centre by the hinge angle, as the model's joint does.
+std::vector<Point2> half_outline(PathView view, const ModulePath& m, bool back) {
+  const Vec3& size = m.box_size;
+  const Pose3& pose = m.end;
+  const double half = m.end_hinge_angle / 2;
+  const double norm = std::hypot(m.hinge_axis[0], m.hinge_axis[1], m.hinge_axis[2]);
+  const double s = norm > 0 ? std::sin(half) / norm : 0;
+  const std::array<double, 4> hinge = {std::cos(half), s * m.hinge_axis[0], s * m.hinge_axis[1], s * m.hinge_axis[2]};
   std::vector<Point2> pts;
   for (int i = 0; i < 8; ++i) {
-    const Vec3 corner = {(i & 1 ? 0.5 : -0.5) * size[0], (i & 2 ? 0.5 : -0.5) * size[1],
-                         (i & 4 ? 0.5 : -0.5) * size[2]};
+    const double x = (i & 1 ? 0.5 : 0.0) * size[0] * (back ? -1 : 1);
+    Vec3 corner = {x, (i & 2 ? 0.5 : -0.5) * size[1], (i & 4 ? 0.5 : -0.5) * size[2]};
+    if (back) corner = rotate(hinge, corner);
     const Vec3 r = rotate(pose.quaternion, corner);
     pts.push_back(project(view, {pose.position[0] + r[0], pose.position[1] + r[1], pose.position[2] + r[2]}));
   }
@@ -110,6 +119,13 @@ Lanes open_lanes(std::ostream& out, const std::vector<std::string>& modules, dou
   return l;
 }
 
+// The key below the lanes, and the end of the picture.
+void close_lanes(std::ostream& out, const Lanes& l, std::string_view key) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" fill=\"#444\">", Lanes::kLeft, l.bottom() + 52);
+  out << buf << svg_escape(key) << "</text>\n</svg>\n";
+}
+
 }  // namespace
 
 void write_path_view_svg(std::ostream& out, PathView view, const std::vector<ModulePath>& modules,
@@ -121,8 +137,10 @@ void write_path_view_svg(std::ostream& out, PathView view, const std::vector<Mod
   };
   for (const ModulePath& m : modules) {
     for (const Vec3& p : m.points) grow(project(view, p));
-    outlines.push_back(box_outline(view, m.box_size, m.end));
-    for (const Point2& p : outlines.back()) grow(p);
+    for (bool back : {false, true}) {
+      outlines.push_back(half_outline(view, m, back));
+      for (const Point2& p : outlines.back()) grow(p);
+    }
   }
   if (view == PathView::kSide) grow({u0, 0.0});  // the floor in sight
   if (!(u0 <= u1)) u0 = v0 = 0, u1 = v1 = 0;
@@ -177,8 +195,8 @@ void write_path_view_svg(std::ostream& out, PathView view, const std::vector<Mod
     out << buf;
   }
   // End poses under the paths, then the paths, then the docked pairs over both.
-  for (std::size_t i = 0; i < modules.size(); ++i) {
-    const std::string c = svg_colour(i);
+  for (std::size_t i = 0; i < outlines.size(); ++i) {
+    const std::string c = svg_colour(i / 2);  // two halves per module
     out << "<polygon fill=\"" << c << "\" fill-opacity=\"0.25\" stroke=\"" << c << "\" points=\"";
     for (const Point2& p : outlines[i]) {
       std::snprintf(buf, sizeof buf, "%.1f,%.1f ", px(p.u), py(p.v));
@@ -250,11 +268,7 @@ void write_topology_svg(std::ostream& out, const std::vector<std::string>& modul
       out << buf;
     }
   }
-  std::snprintf(buf, sizeof buf,
-                "<text x=\"%.1f\" y=\"%.1f\" fill=\"#444\">grey: alone; a colour per docked group (the colour of "
-                "its first module); dashed: a change</text>\n",
-                Lanes::kLeft, l.bottom() + 52);
-  out << buf << "</svg>\n";
+  close_lanes(out, l, "grey: alone; a colour per docked group (the colour of its first module); dashed: a change");
 }
 
 void write_docking_svg(std::ostream& out, const std::vector<std::string>& modules,
@@ -281,7 +295,8 @@ void write_docking_svg(std::ostream& out, const std::vector<std::string>& module
                     x, l.y(e.other_module), colour);
       out << buf;
     }
-    for (std::size_t m : {e.module, paired ? e.other_module : e.module}) {
+    for (std::size_t m : {e.module, e.other_module}) {
+      if (m >= modules.size() || (!paired && m != e.module)) continue;
       if (e.change == DockChange::kLatched)
         std::snprintf(buf, sizeof buf, "<circle class=\"latched\" cx=\"%.1f\" cy=\"%.1f\" r=\"5\" fill=\"%s\"/>\n", x,
                       l.y(m), colour);
@@ -292,11 +307,7 @@ void write_docking_svg(std::ostream& out, const std::vector<std::string>& module
       out << buf;
     }
   }
-  std::snprintf(buf, sizeof buf,
-                "<text x=\"%.1f\" y=\"%.1f\" fill=\"#444\">green dots: latched; orange squares: unlatched; red "
-                "crosses: refused (docking.csv says why)</text>\n",
-                Lanes::kLeft, l.bottom() + 52);
-  out << buf << "</svg>\n";
+  close_lanes(out, l, "green dots: latched; orange squares: unlatched; red crosses: refused (docking.csv says why)");
 }
 
 }  // namespace symb::apps::run

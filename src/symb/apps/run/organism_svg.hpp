@@ -1,8 +1,9 @@
 // Organism pictures: what a 3D run of docking modules looked like, for a person to look at
 // afterwards (organism_recorder.hpp gathers the data):
 //   a path view   every module's path seen from above (x-y) or from the side (x-z), each module
-//                 in its own colour (svg_colour(i)), a ring where it started, its box outline at
-//                 its end pose, and a thick dark line between the centres of each docked pair;
+//                 in its own colour (svg_colour(i)), a ring where it started, the outlines of its
+//                 two halves at its end pose (the back half turned by the hinge), and a thick
+//                 dark line between the centres of each docked pair;
 //   topology lanes one lane per module along the time axis, coloured by the component (the
 //                 docked group) it belonged to: a colour per group, named by its first module,
 //                 light grey while alone;
@@ -25,9 +26,11 @@ namespace symb::apps::run {
 
 struct ModulePath {
   std::string name;
-  std::vector<sim::mujoco::Vec3> points;  // m, world frame, time order
-  sim::mujoco::Vec3 box_size{};           // the module's box, drawn at the end pose
-  sim::mujoco::Pose3 end;
+  std::vector<sim::mujoco::Vec3> points;     // m, world frame, time order
+  sim::mujoco::Vec3 box_size{};              // the module's box, drawn at the end pose
+  sim::mujoco::Vec3 hinge_axis = {0, 1, 0};  // module frame, through the box's centre
+  sim::mujoco::Pose3 end;                    // of the front half (the module frame)
+  double end_hinge_angle = 0;                // rad: the back half turned about the hinge axis
 };
 
 // Two modules docked to each other (indices into the paths).

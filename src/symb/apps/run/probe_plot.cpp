@@ -19,6 +19,24 @@ constexpr double kWidth = 900, kHeight = 360;
 constexpr double kLeft = 70, kRight = 150, kTop = 36, kBottom = 44;  // room for axes and legend
 constexpr std::size_t kMaxLegend = 16;
 
+// The kinds of series (task and channel) whose channel starts with `channel_prefix`, in order of
+// first appearance, each with its robots' series.
+std::vector<std::vector<const ProbeSeries*>> series_by_kind(const ProbeRecorder& probes,
+                                                            std::string_view channel_prefix) {
+  std::vector<std::vector<const ProbeSeries*>> kinds;
+  for (const ProbeSeries* s : probes.series()) {
+    if (!s->channel.starts_with(channel_prefix)) continue;
+    auto same = std::find_if(kinds.begin(), kinds.end(), [s](const auto& k) {
+      return k.front()->task == s->task && k.front()->channel == s->channel;
+    });
+    if (same == kinds.end())
+      kinds.push_back({s});
+    else
+      same->push_back(s);
+  }
+  return kinds;
+}
+
 }  // namespace
 
 std::string probe_file_name(const ProbeSeries& series) {
@@ -128,22 +146,18 @@ kernel::Result<std::vector<std::filesystem::path>> write_probe_charts(const std:
   // A picture per probe series, for the first robots (a swarm would make hundreds). The
   // max_charts pictures are shared fairly among the kinds of series (task and channel), so an
   // evolution task's few probes are not crowded out by its controllers' many.
-  std::vector<std::vector<const ProbeSeries*>> kinds;
-  for (const ProbeSeries* s : probes.series()) {
-    auto same = std::find_if(kinds.begin(), kinds.end(), [s](const auto& k) {
-      return k.front()->task == s->task && k.front()->channel == s->channel;
-    });
-    if (same == kinds.end())
-      kinds.push_back({s});
-    else
-      same->push_back(s);
-  }
+  const auto kinds = series_by_kind(probes, "");
   const std::size_t per_kind = kinds.empty() ? 0 : std::max<std::size_t>(1, max_charts / kinds.size());
   std::vector<const ProbeSeries*> chosen;
   for (const auto& k : kinds)
     for (std::size_t i = 0; i < k.size() && i < per_kind && chosen.size() < max_charts; ++i) chosen.push_back(k[i]);
+  return write_charts(dir, chosen);
+}
+
+kernel::Result<std::vector<std::filesystem::path>> write_charts(const std::filesystem::path& dir,
+                                                                const std::vector<const ProbeSeries*>& series) {
   std::vector<std::filesystem::path> files;
-  for (const ProbeSeries* s : chosen) {
+  for (const ProbeSeries* s : series) {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) return kernel::Error{"cannot create " + dir.string() + ": " + ec.message()};
@@ -158,18 +172,7 @@ kernel::Result<std::vector<std::filesystem::path>> write_probe_charts(const std:
 
 std::vector<ProbeSeries> module_series(const ProbeRecorder& probes, std::string_view channel_prefix,
                                        std::size_t max_values) {
-  // Kinds (task, channel) in order of first appearance, each with its robots' series.
-  std::vector<std::vector<const ProbeSeries*>> kinds;
-  for (const ProbeSeries* s : probes.series()) {
-    if (!s->channel.starts_with(channel_prefix)) continue;
-    auto same = std::find_if(kinds.begin(), kinds.end(), [s](const auto& k) {
-      return k.front()->task == s->task && k.front()->channel == s->channel;
-    });
-    if (same == kinds.end())
-      kinds.push_back({s});
-    else
-      same->push_back(s);
-  }
+  const auto kinds = series_by_kind(probes, channel_prefix);
   std::vector<ProbeSeries> out;
   for (const auto& kind : kinds) {
     std::size_t width = 0;

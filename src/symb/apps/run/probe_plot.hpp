@@ -26,6 +26,10 @@ kernel::Result<std::vector<std::filesystem::path>> write_probe_charts(const std:
                                                                       const ProbeRecorder& probes,
                                                                       std::size_t max_charts);
 
+// Writes a chart per series into `dir` (made when needed), named by probe_file_name; the files.
+kernel::Result<std::vector<std::filesystem::path>> write_charts(const std::filesystem::path& dir,
+                                                                const std::vector<const ProbeSeries*>& series);
+
 // Series that set the robots side by side: for each kind (task, channel) whose channel starts
 // with `channel_prefix` and each value index k below `max_values`, one series whose line r is
 // robot r's value k (robot "modules", channel "<channel>.v<k>", the robots' names as labels).

@@ -216,11 +216,14 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
                                  "x real time)")
             << "\n";
     const std::size_t shown = std::min<std::size_t>(r.robots.size(), 10);
+    if (!r.organism.empty()) ctx.out << "  organism: " << r.organism << "\n";
     for (std::size_t i = 0; i < shown; ++i) {
       const RobotSummary& s = r.robots[i];
-      ctx.out << "  " << s.name << ": " << fixed(s.distance / 100.0, 2) << " m travelled, " << s.contact_events
-              << " contacts (" << s.contact_steps << " steps touching), moving " << fixed(s.moving_seconds, 1)
-              << " s\n";
+      ctx.out << "  " << s.name << ": " << fixed(s.distance / 100.0, 2) << " m travelled";
+      if (r.organism.empty())
+        ctx.out << ", " << s.contact_events << " contacts (" << s.contact_steps << " steps touching), moving "
+                << fixed(s.moving_seconds, 1) << " s";
+      ctx.out << "\n";
     }
     if (shown < r.robots.size()) ctx.out << "  ... " << r.robots.size() - shown << " more in summary.txt\n";
   }

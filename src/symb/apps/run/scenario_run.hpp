@@ -82,6 +82,9 @@ struct RunResult {
   std::uint64_t trajectory_hash = 0;
   std::filesystem::path out_dir;
   std::vector<std::filesystem::path> files;
+  // A 3D run's organism in one line ("1 latched, 0 unlatched, 0 refused; final topology a+b c");
+  // empty for a 2D run. Its robots are then modules: distance and end pose, no contacts.
+  std::string organism;
 };
 
 kernel::Result<RunResult> run_scenario(const RunOptions& options);
