@@ -20,12 +20,14 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "symb/apps/run/organism_recorder.hpp"
 #include "symb/apps/text_file.hpp"
+#include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/sim/mujoco/mjcf_file.hpp"
@@ -303,6 +305,31 @@ TEST(OrganismRecorder, FinishMidRunWritesWhatWasRecordedAndTheRecorderMayGoFirst
   recorder.reset();       // the runner's observer keeps the state alive
   rig.ex.run_for(300ms);  // and ticks on without it
   EXPECT_EQ(rig.world.steps(), 300U);
+  fs::remove_all(out);
+}
+
+TEST(OrganismRecorder, FinishWhileTheRunnerTicksOnItsOwnThread) {
+  // symb run --realtime and Ctrl-C: the runner ticks on the thread executor while finish() writes
+  // from this thread; a latch from here lands in the files too.
+  kernel::ThreadExecutor ex;
+  MujocoWorld world = OrgRig::make();
+  auto runner = std::make_unique<MujocoRunner>(ex, world, sim::PeriodicRunner::Options{.period = kOrgPeriod});
+  OrganismRecorder recorder(*runner);
+  ASSERT_TRUE(runner->start());
+  bool latched = false;
+  runner->with_world([&](MujocoWorld& w) { latched = w.latch(1, *w.find_connector(1, "front")).ok(); });
+  ASSERT_TRUE(latched);
+  for (int i = 0; i < 200 && recorder.summary().ticks < 5; ++i) std::this_thread::sleep_for(10ms);
+  const fs::path out = org_temp_dir("threads");
+  auto files = recorder.finish(out);
+  ASSERT_TRUE(files.ok()) << files.error();
+  const auto joints = org_read_csv(out / "joints.csv");
+  EXPECT_GE(joints.size(), 1 + 3 * 5U);
+  EXPECT_EQ((joints.size() - 1) % 3, 0U);  // whole ticks only
+  const auto topo = org_read_csv(out / "topology.csv");
+  ASSERT_GE(topo.size(), 3U);
+  EXPECT_EQ(topo[2][4], "a+b c");
+  runner.reset();  // stops it; the executor goes after
   fs::remove_all(out);
 }
 
