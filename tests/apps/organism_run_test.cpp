@@ -278,6 +278,18 @@ TEST(OrganismRecorder, AFaultyPathIsReportedNotThrown) {
   fs::remove(blocker);
 }
 
+TEST(OrganismRecorder, ASavedModelThatDoesNotCompileIsAnErrorNamingTheFile) {
+  const fs::path bad = org_temp_dir("bad") += ".xml";
+  ASSERT_TRUE(write_file(bad, "<mujoco><worldbody><body><geom type=\"box\"/></body></worldbody>").ok());
+  auto counts = sim::mujoco::load_mjcf_file(bad);
+  ASSERT_FALSE(counts.ok());
+  EXPECT_EQ(counts.error().rfind(bad.string() + ": MuJoCo could not compile it: ", 0), 0U) << counts.error();
+  fs::remove(bad);
+  auto missing = sim::mujoco::load_mjcf_file(bad);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.error(), bad.string() + ": no such file");
+}
+
 TEST(OrganismRecorder, KeepsAtMostMaxSamplesEvenlySpacedAndTheLastTick) {
   OrgRig rig;
   OrganismRecorder recorder(*rig.runner, {.every = 2, .max_samples = 8, .caption = ""});
