@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
+#include <sstream>
 #include <string>
 
 #include "symb/apps/svg.hpp"
+#include "symb/apps/text_file.hpp"
 
 namespace symb::apps::run {
 
@@ -15,6 +18,24 @@ namespace {
 constexpr double kWidth = 900, kHeight = 360;
 constexpr double kLeft = 70, kRight = 150, kTop = 36, kBottom = 44;  // room for axes and legend
 constexpr std::size_t kMaxLegend = 16;
+
+// The kinds of series (task and channel) whose channel starts with `channel_prefix`, in order of
+// first appearance, each with its robots' series.
+std::vector<std::vector<const ProbeSeries*>> series_by_kind(const ProbeRecorder& probes,
+                                                            std::string_view channel_prefix) {
+  std::vector<std::vector<const ProbeSeries*>> kinds;
+  for (const ProbeSeries* s : probes.series()) {
+    if (!s->channel.starts_with(channel_prefix)) continue;
+    auto same = std::find_if(kinds.begin(), kinds.end(), [s](const auto& k) {
+      return k.front()->task == s->task && k.front()->channel == s->channel;
+    });
+    if (same == kinds.end())
+      kinds.push_back({s});
+    else
+      same->push_back(s);
+  }
+  return kinds;
+}
 
 }  // namespace
 
@@ -28,8 +49,10 @@ std::string probe_file_name(const ProbeSeries& series) {
 void write_probe_svg(std::ostream& out, const ProbeSeries& s) {
   double t0 = 0, t1 = 1, lo = std::numeric_limits<double>::infinity(), hi = -lo;
   if (!s.times.empty()) {
-    t0 = s.times.front();
-    t1 = std::max(s.times.back(), t0 + 1e-3);
+    // Samples put together from several series (write_module_charts) are in time order per line.
+    const auto [first, last] = std::minmax_element(s.times.begin(), s.times.end());
+    t0 = *first;
+    t1 = std::max(*last, t0 + 1e-3);
   }
   for (const auto& v : s.values)
     for (float x : v)
@@ -105,7 +128,9 @@ void write_probe_svg(std::ostream& out, const ProbeSeries& s) {
                   "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" stroke-width=\"3\"/>"
                   "<text x=\"%.1f\" y=\"%.1f\" fill=\"#222\">",
                   kLeft + pw + 12, y, kLeft + pw + 32, y, svg_colour(k).c_str(), kLeft + pw + 38, y + 4);
-    out << buf << svg_escape(s.channel) << "[" << k << "]</text>\n";
+    out << buf
+        << (k < s.labels.size() ? svg_escape(s.labels[k]) : svg_escape(s.channel) + "[" + std::to_string(k) + "]")
+        << "</text>\n";
   }
   if (s.width > kMaxLegend) {
     std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" fill=\"#222\">", kLeft + pw + 12,
@@ -113,6 +138,67 @@ void write_probe_svg(std::ostream& out, const ProbeSeries& s) {
     out << buf << "+" << s.width - kMaxLegend << " more</text>\n";
   }
   out << "</svg>\n";
+}
+
+kernel::Result<std::vector<std::filesystem::path>> write_probe_charts(const std::filesystem::path& dir,
+                                                                      const ProbeRecorder& probes,
+                                                                      std::size_t max_charts) {
+  // A picture per probe series, for the first robots (a swarm would make hundreds). The
+  // max_charts pictures are shared fairly among the kinds of series (task and channel), so an
+  // evolution task's few probes are not crowded out by its controllers' many.
+  const auto kinds = series_by_kind(probes, "");
+  const std::size_t per_kind = kinds.empty() ? 0 : std::max<std::size_t>(1, max_charts / kinds.size());
+  std::vector<const ProbeSeries*> chosen;
+  for (const auto& k : kinds)
+    for (std::size_t i = 0; i < k.size() && i < per_kind && chosen.size() < max_charts; ++i) chosen.push_back(k[i]);
+  return write_charts(dir, chosen);
+}
+
+kernel::Result<std::vector<std::filesystem::path>> write_charts(const std::filesystem::path& dir,
+                                                                const std::vector<const ProbeSeries*>& series) {
+  std::vector<std::filesystem::path> files;
+  for (const ProbeSeries* s : series) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) return kernel::Error{"cannot create " + dir.string() + ": " + ec.message()};
+    std::ostringstream plot;
+    write_probe_svg(plot, *s);
+    const std::filesystem::path file = dir / probe_file_name(*s);
+    if (auto st = write_file(file, plot.str()); !st) return kernel::Error{st.error()};
+    files.push_back(file);
+  }
+  return files;
+}
+
+std::vector<ProbeSeries> module_series(const ProbeRecorder& probes, std::string_view channel_prefix,
+                                       std::size_t max_values) {
+  const auto kinds = series_by_kind(probes, channel_prefix);
+  std::vector<ProbeSeries> out;
+  for (const auto& kind : kinds) {
+    std::size_t width = 0;
+    for (const ProbeSeries* s : kind) width = std::max(width, s->width);
+    for (std::size_t k = 0; k < width && k < max_values; ++k) {
+      ProbeSeries c;
+      c.robot = "modules";
+      c.task = kind.front()->task;
+      c.channel = kind.front()->channel + ".v" + std::to_string(k);
+      c.width = kind.size();
+      // One robot's samples after another's: each line is one unbroken run of rows.
+      for (std::size_t r = 0; r < kind.size(); ++r) {
+        const ProbeSeries& s = *kind[r];
+        c.labels.push_back(s.robot);
+        c.samples += s.samples;
+        for (std::size_t i = 0; i < s.times.size(); ++i) {
+          std::vector<float> row(kind.size(), std::numeric_limits<float>::quiet_NaN());
+          if (k < s.values[i].size()) row[r] = s.values[i][k];
+          c.times.push_back(s.times[i]);
+          c.values.push_back(std::move(row));
+        }
+      }
+      out.push_back(std::move(c));
+    }
+  }
+  return out;
 }
 
 }  // namespace symb::apps::run

@@ -25,6 +25,8 @@ struct ProbeSeries {
   std::vector<double> times;  // seconds, thinned
   std::vector<std::vector<float>> values;
   std::uint64_t samples = 0;  // all samples, before thinning
+  // The legend's name per value index (a module per line); past its end, "<channel>[k]".
+  std::vector<std::string> labels;
 };
 
 class ProbeRecorder {

@@ -35,7 +35,7 @@ constexpr OptionSpec kOptions[] = {
     {"--token", "T", "the TCP shell's token (default: a random one, printed)"},
     {"--genome", "FILE", "replay a champion: the controller task gets this genome's weights (symb evolve)"},
     {"--controller", "NAME", "the task --genome replaces the weights of (default controller)"},
-    {"--csv-every", "N", "record every N-th step in steps.csv (default 1)"},
+    {"--csv-every", "N", "record every N-th step in steps.csv (3D: poses.csv, joints.csv; default 1)"},
     {"--print-hash", "", "print 'trajectory-hash: <16 hex digits>' on stdout"},
     {"--quiet", "", "no progress line and no summary"},
     {"--help", "", "this help"},
@@ -53,6 +53,9 @@ void print_help(std::ostream& out) {
       << "Writes trajectory.svg, steps.csv, summary.txt and syslog.txt into the output folder, with\n"
       << "probes.csv and probes/*.svg (controllers' internal state) and, for spiking controllers,\n"
       << "spikes/ (an AEDAT 2.0 file, a raster and the grown network per network task).\n"
+      << "A 3D scenario (a MuJoCo world of docking modules) writes paths_top.svg, paths_side.svg,\n"
+      << "poses.csv, joints.csv/.svg, docking.csv/.svg, topology.csv/.svg, world.xml (open it with\n"
+      << "MuJoCo's simulate), summary.txt, syslog.txt and the probes (docs/run.md).\n"
       << "A shell needs --realtime or --speed (a virtual-time run is over before anyone could type);\n"
       << "with --shell and neither, --speed 1 is implied.\n"
       << "Ctrl-C stops the run early: the files are written for what was run (summary.txt says\n"
@@ -213,11 +216,14 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
                                  "x real time)")
             << "\n";
     const std::size_t shown = std::min<std::size_t>(r.robots.size(), 10);
+    if (!r.organism.empty()) ctx.out << "  organism: " << r.organism << "\n";
     for (std::size_t i = 0; i < shown; ++i) {
       const RobotSummary& s = r.robots[i];
-      ctx.out << "  " << s.name << ": " << fixed(s.distance / 100.0, 2) << " m travelled, " << s.contact_events
-              << " contacts (" << s.contact_steps << " steps touching), moving " << fixed(s.moving_seconds, 1)
-              << " s\n";
+      ctx.out << "  " << s.name << ": " << fixed(s.distance / 100.0, 2) << " m travelled";
+      if (r.organism.empty())
+        ctx.out << ", " << s.contact_events << " contacts (" << s.contact_steps << " steps touching), moving "
+                << fixed(s.moving_seconds, 1) << " s";
+      ctx.out << "\n";
     }
     if (shown < r.robots.size()) ctx.out << "  ... " << r.robots.size() - shown << " more in summary.txt\n";
   }

@@ -8,12 +8,12 @@
 #include <fstream>
 #include <memory>
 #include <sstream>
-#include <thread>
 
 #include "symb/apps/cli_args.hpp"
 #include "symb/apps/run/maze_svg.hpp"
 #include "symb/apps/run/probe_plot.hpp"
 #include "symb/apps/run/probe_recorder.hpp"
+#include "symb/apps/run/run_loop.hpp"
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/apps/run/spike_recorder.hpp"
 #include "symb/apps/text_file.hpp"
@@ -94,15 +94,6 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   const bool write_files = !result.out_dir.empty();
   std::ofstream csv;
   std::ofstream probes_csv;
-  if (write_files) {
-    std::error_code ec;
-    fs::create_directories(result.out_dir, ec);
-    if (ec) return Error{"cannot create " + result.out_dir.string() + ": " + ec.message()};
-    csv.open(result.out_dir / "steps.csv", std::ios::binary);
-    if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
-    probes_csv.open(result.out_dir / "probes.csv", std::ios::binary);
-    if (!probes_csv) return Error{"cannot write " + (result.out_dir / "probes.csv").string()};
-  }
 
   std::unique_ptr<kernel::Executor> executor;
   kernel::VirtualTimeExecutor* virtual_time = nullptr;
@@ -120,6 +111,15 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (!created) return Error{created.error()};
   std::unique_ptr<sim::ScenarioSession> session = std::move(created).value();
   result.seed = session->seed();
+  if (write_files) {
+    std::error_code ec;
+    fs::create_directories(result.out_dir, ec);
+    if (ec) return Error{"cannot create " + result.out_dir.string() + ": " + ec.message()};
+    csv.open(result.out_dir / "steps.csv", std::ios::binary);
+    if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
+    probes_csv.open(result.out_dir / "probes.csv", std::ios::binary);
+    if (!probes_csv) return Error{"cannot write " + (result.out_dir / "probes.csv").string()};
+  }
 
   RunRecorder recorder(session->world(), write_files ? &csv : nullptr, options.csv_every,
                        seconds(scenario.control_period));
@@ -179,47 +179,15 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   const auto wall_seconds = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   };
-  const double total = seconds(scenario.duration);
-  const auto report = [&](double simulated) {
-    if (options.on_progress) options.on_progress(RunProgress{simulated, total, wall_seconds()});
-  };
-
-  bool stopped = false;
-  const auto stop = [&] {
-    if (!stopped && options.stop_requested && options.stop_requested()) stopped = true;
-    return stopped;
-  };
-  result.planned_seconds = total;
+  result.planned_seconds = seconds(scenario.duration);
   session->start();
-  if (virtual_time) {
-    // Slices: a progress report per slice; with a speed, the wall clock paces each slice and
-    // shell commands (injected work) are served while waiting.
-    const kernel::Duration slice = options.speed > 0 ? std::chrono::milliseconds(20) : std::chrono::milliseconds(1000);
-    const kernel::Time start = virtual_time->clock().now();
-    const kernel::Time end = start + scenario.duration;
-    auto last_report = std::chrono::steady_clock::now();
-    for (kernel::Time t = start; t < end && !stop();) {
-      t = std::min(end, t + slice);
-      virtual_time->run_until(t);
-      if (!session->cycle_error().empty()) break;
-      if (options.speed > 0) {
-        const auto due = wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                          std::chrono::duration<double>(seconds(t - start) / options.speed));
-        for (auto now = std::chrono::steady_clock::now(); now < due && !stop(); now = std::chrono::steady_clock::now())
-          virtual_time->wait_injected(std::min<kernel::Duration>(due - now, std::chrono::milliseconds(20)));
-      }
-      if (std::chrono::steady_clock::now() - last_report > std::chrono::milliseconds(100) || t == end) {
-        report(seconds(t - start));
-        last_report = std::chrono::steady_clock::now();
-      }
-    }
-  } else {
-    for (double elapsed = wall_seconds(); elapsed < total && !stop(); elapsed = wall_seconds()) {
-      std::this_thread::sleep_for(std::chrono::duration<double>(std::min(0.1, total - elapsed)));
-      report(std::min(total, wall_seconds()));
-      if (!session->cycle_error().empty()) break;
-    }
-  }
+  const bool stopped = run_slices({.virtual_time = virtual_time,
+                                   .duration = scenario.duration,
+                                   .speed = options.speed,
+                                   .wall_start = wall_start,
+                                   .on_progress = options.on_progress,
+                                   .stop_requested = options.stop_requested,
+                                   .failed = [&session] { return !session->cycle_error().empty(); }});
   running = false;
   session->stop();
   result.wall_seconds = wall_seconds();
@@ -255,35 +223,9 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     auto spike_files = spikes.write(result.out_dir);
     if (!spike_files) return Error{spike_files.error()};
     result.files.insert(result.files.end(), spike_files->begin(), spike_files->end());
-    // A picture per probe series, for the first robots (a swarm would make hundreds). The
-    // kMaxProbePlots pictures are shared fairly among the kinds of series (task and channel), so
-    // an evolution task's few probes are not crowded out by its controllers' many.
-    std::vector<std::vector<const ProbeSeries*>> kinds;
-    for (const ProbeSeries* s : probes.series()) {
-      auto same = std::find_if(kinds.begin(), kinds.end(), [s](const auto& k) {
-        return k.front()->task == s->task && k.front()->channel == s->channel;
-      });
-      if (same == kinds.end())
-        kinds.push_back({s});
-      else
-        same->push_back(s);
-    }
-    const std::size_t per_kind = kinds.empty() ? 0 : std::max<std::size_t>(1, kMaxProbePlots / kinds.size());
-    std::vector<const ProbeSeries*> chosen;
-    for (const auto& k : kinds)
-      for (std::size_t i = 0; i < k.size() && i < per_kind && chosen.size() < kMaxProbePlots; ++i)
-        chosen.push_back(k[i]);
-    for (const ProbeSeries* s : chosen) {
-      const fs::path dir = result.out_dir / "probes";
-      std::error_code ec;
-      fs::create_directories(dir, ec);
-      if (ec) return Error{"cannot create " + dir.string() + ": " + ec.message()};
-      std::ostringstream plot;
-      write_probe_svg(plot, *s);
-      const fs::path file = dir / probe_file_name(*s);
-      if (auto st = write_file(file, plot.str()); !st) return Error{st.error()};
-      result.files.push_back(file);
-    }
+    auto charts = write_probe_charts(result.out_dir / "probes", probes, kMaxProbePlots);
+    if (!charts) return Error{charts.error()};
+    result.files.insert(result.files.end(), charts->begin(), charts->end());
   }
   if (auto e = session->cycle_error(); !e.empty())
     return Error{e + (write_files ? "; the run so far is in " + result.out_dir.string() : std::string())};

@@ -10,6 +10,7 @@
 //   probes/*.svg    a line chart per probed series (robot, task, channel), for the first 48
 //   spikes/         spiking networks: an AEDAT 2.0 file, a raster and the grown network's picture
 //                   per network task (spike_recorder.hpp)
+// A 3D scenario writes its own set (organism_run.hpp, organism_recorder.hpp; docs/run.md).
 #pragma once
 
 #include <cstdint>
@@ -81,6 +82,9 @@ struct RunResult {
   std::uint64_t trajectory_hash = 0;
   std::filesystem::path out_dir;
   std::vector<std::filesystem::path> files;
+  // A 3D run's organism in one line ("1 latched, 0 unlatched, 0 refused; final topology a+b c");
+  // empty for a 2D run. Its robots are then modules: distance and end pose, no contacts.
+  std::string organism;
 };
 
 kernel::Result<RunResult> run_scenario(const RunOptions& options);

@@ -1,0 +1,61 @@
+#include "symb/apps/run/run_loop.hpp"
+
+#include <algorithm>
+#include <thread>
+
+namespace symb::apps::run {
+
+namespace {
+
+double loop_seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
+
+}  // namespace
+
+bool run_slices(const RunLoop& loop) {
+  const auto wall_seconds = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - loop.wall_start).count();
+  };
+  const double total = loop_seconds(loop.duration);
+  const auto report = [&](double simulated) {
+    if (loop.on_progress) loop.on_progress(RunProgress{simulated, total, wall_seconds()});
+  };
+  const auto failed = [&] { return loop.failed && loop.failed(); };
+  bool stopped = false;
+  const auto stop = [&] {
+    if (!stopped && loop.stop_requested && loop.stop_requested()) stopped = true;
+    return stopped;
+  };
+  kernel::VirtualTimeExecutor* virtual_time = loop.virtual_time;
+  if (virtual_time) {
+    // Slices: a progress report per slice; with a speed, the wall clock paces each slice and
+    // shell commands (injected work) are served while waiting.
+    const kernel::Duration slice = loop.speed > 0 ? std::chrono::milliseconds(20) : std::chrono::milliseconds(1000);
+    const kernel::Time start = virtual_time->clock().now();
+    const kernel::Time end = start + loop.duration;
+    auto last_report = std::chrono::steady_clock::now();
+    for (kernel::Time t = start; t < end && !stop();) {
+      t = std::min(end, t + slice);
+      virtual_time->run_until(t);
+      if (failed()) break;
+      if (loop.speed > 0) {
+        const auto due = loop.wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                               std::chrono::duration<double>(loop_seconds(t - start) / loop.speed));
+        for (auto now = std::chrono::steady_clock::now(); now < due && !stop(); now = std::chrono::steady_clock::now())
+          virtual_time->wait_injected(std::min<kernel::Duration>(due - now, std::chrono::milliseconds(20)));
+      }
+      if (std::chrono::steady_clock::now() - last_report > std::chrono::milliseconds(100) || t == end) {
+        report(loop_seconds(t - start));
+        last_report = std::chrono::steady_clock::now();
+      }
+    }
+  } else {
+    for (double elapsed = wall_seconds(); elapsed < total && !stop(); elapsed = wall_seconds()) {
+      std::this_thread::sleep_for(std::chrono::duration<double>(std::min(0.1, total - elapsed)));
+      report(std::min(total, wall_seconds()));
+      if (failed()) break;
+    }
+  }
+  return stopped;
+}
+
+}  // namespace symb::apps::run
