@@ -14,14 +14,17 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "symb/kernel/executor.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/node.hpp"
 #include "symb/os/task_type_registry.hpp"
 #include "symb/robot/actuator.hpp"
+#include "symb/robot/robot_task_types.hpp"
 #include "symb/robot/sensor.hpp"
 #include "symb/sim/scenario.hpp"
 
@@ -50,6 +53,10 @@ struct RobotDevices {
   // robot then gets a device task kRadioTaskName, made before the scenario's own tasks.
   LocalRadio* radio = nullptr;
   std::size_t radio_index = 0;
+  // A 3D module's devices by name (MujocoRunner::device_lookups), set instead of the four above:
+  // the robot task types bind to them, and the device tasks are the module's (ir, hinge_state,
+  // hinge, wheels when it has them, connector_<name> when named; see scenario.hpp).
+  std::optional<robot::RobotDevices> module;
 };
 
 struct RobotSystemOptions {
@@ -62,11 +69,16 @@ struct RobotSystemOptions {
   // after the last command; `sensor` tasks over devices.pose and devices.ground when the robot's
   // hooks name them). It must create tasks named kIrTaskName and kWheelsTaskName.
   std::function<kernel::Status(os::Node&)> make_device_tasks;
+  // Device tasks made even when no hook of the robot names them (a remote hook's end on this
+  // robot, an event's task): the optional ones (pose, ground, connector_<name>) are made only
+  // when used, each being a task woken every period.
+  std::vector<std::string> named_device_tasks;
 };
 
-// The port layouts of device task `task` (kIrTaskName and kGroundTaskName send a sensor vector,
-// kPoseTaskName a pose, and the three read no messages; kWheelsTaskName takes a wheel command;
-// other names declare nothing). The
+// The port layouts of device task `task` (kIrTaskName, kGroundTaskName, kHingeStateTaskName and
+// every connector_<name> send a sensor vector, kPoseTaskName a pose, and these read no messages;
+// kWheelsTaskName takes a wheel command, kHingeTaskName a hinge target [rad]; other names declare
+// nothing). The
 // device tasks are made with these (TaskOptions::ports), however they are made (the default
 // `sensor` and `actuator_sink` tasks, whose types say only `any`, or a board's tasks made in
 // code), so that Node::hook refuses `ir -> wheels` from the shell, a scenario or a genome alike.
