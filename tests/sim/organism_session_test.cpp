@@ -5,6 +5,8 @@
 // stopping the run); the module's device tasks are its devices', bound by name and typed by
 // port; remote hooks are refused with their place until the organism bus exists. The figures
 // beside the bounds were measured once with this file (release build).
+#include "symb/sim/mujoco/organism_session.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -17,7 +19,6 @@
 
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
-#include "symb/sim/mujoco/organism_session.hpp"
 #include "symb/sim/scenario.hpp"
 
 #include "support/measured.hpp"
@@ -64,7 +65,8 @@ OrgRun org_run_chain(kernel::Duration how_long, std::uint64_t seed) {
     for (std::size_t m = 0; m < w.module_count(); ++m) {
       run.poses.push_back(w.pose(m));
       run.docks.emplace_back();
-      for (std::size_t c = 0; c < w.module(m).kind.connectors.size(); ++c) run.docks.back().push_back(w.docked_to(m, c));
+      for (std::size_t c = 0; c < w.module(m).kind.connectors.size(); ++c)
+        run.docks.back().push_back(w.docked_to(m, c));
     }
   });
   return run;
@@ -250,8 +252,7 @@ robots:
   kernel::VirtualTimeExecutor ex;
   auto made = OrganismSession::create(sc, ex);
   ASSERT_FALSE(made.ok());
-  EXPECT_NE(made.error().find("inline.yaml:13:9: hook a/controller -> b/wheels"), std::string::npos)
-      << made.error();
+  EXPECT_NE(made.error().find("inline.yaml:13:9: hook a/controller -> b/wheels"), std::string::npos) << made.error();
 }
 
 TEST(OrganismSession, EachSessionTakesOnlyItsOwnKindOfWorld) {

@@ -33,8 +33,7 @@ os::PortDeclaration device_task_ports(std::string_view task) {
   if (task == kGroundTaskName) return {reads_nothing, {{robot::kDataPort, "ground", layout::kSensorVector}}};
   if (task == kPoseTaskName) return {reads_nothing, {{robot::kDataPort, "pose", layout::kPose}}};
   if (task == kWheelsTaskName) return {{{robot::kDataPort, "wheels", layout::kWheelCommand}}, {}};
-  if (task == kHingeStateTaskName)
-    return {reads_nothing, {{robot::kDataPort, "hinge_state", layout::kSensorVector}}};
+  if (task == kHingeStateTaskName) return {reads_nothing, {{robot::kDataPort, "hinge_state", layout::kSensorVector}}};
   if (task == kHingeTaskName) return {{{robot::kDataPort, "hinge", kHingeTarget}}, {}};
   if (task.substr(0, kConnectorTaskPrefix.size()) == kConnectorTaskPrefix)
     return {reads_nothing, {{robot::kDataPort, "connector", layout::kSensorVector}}};

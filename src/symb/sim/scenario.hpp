@@ -44,8 +44,8 @@
 #include "symb/os/hook.hpp"
 #include "symb/os/param.hpp"
 #include "symb/os/task_type_registry.hpp"
-#include "symb/sim/mujoco/module_kind.hpp"
 #include "symb/sim/mujoco/mjcf_model.hpp"
+#include "symb/sim/mujoco/module_kind.hpp"
 #include "symb/sim/world_spec.hpp"
 
 namespace symb::sim {
@@ -185,8 +185,8 @@ struct Scenario {
   kernel::Duration duration = std::chrono::minutes(10);
   kernel::Duration control_period = std::chrono::milliseconds(30);
   WorldKind world_kind = WorldKind::kEnki;
-  WorldSpec world;            // the 2D world (its arena is empty in a 3D one)
-  OrganismWorldSpec organism;  // the 3D world's docks and bus
+  WorldSpec world;                // the 2D world (its arena is empty in a 3D one)
+  OrganismWorldSpec organism;     // the 3D world's docks and bus
   std::vector<RobotSpec> robots;  // `count: N` entries are expanded, names made unique
   std::vector<EventSpec> events;  // in file order (those at one time run in that order)
 };

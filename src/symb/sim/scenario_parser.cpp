@@ -138,7 +138,7 @@ struct Parser {
   std::size_t total_params = 0;
   ModuleKindReader read_kind;
   std::map<std::string, mujoco::ModuleKind, std::less<>> kinds;  // by the name as written
-  YAML::Node docked_node;  // world.docked, read once the robots are known
+  YAML::Node docked_node;                                        // world.docked, read once the robots are known
   // Per robot (expanded): the start the file gives, if any, and where.
   std::vector<std::optional<Pose>> given_start;
   std::vector<SourceLocation> given_where;
@@ -210,7 +210,8 @@ struct Parser {
     BusSpec b;
     b.where = src.at(n);
     if (auto v = m.get("bandwidth"); v.IsDefined())
-      b.bandwidth = static_cast<std::uint64_t>(rd.integer(v, "bus bandwidth (bit/s)", kMinBusBandwidth, kMaxBusBandwidth));
+      b.bandwidth =
+          static_cast<std::uint64_t>(rd.integer(v, "bus bandwidth (bit/s)", kMinBusBandwidth, kMaxBusBandwidth));
     if (auto v = m.get("latency"); v.IsDefined())
       b.latency = rd.duration(v, "bus latency", kernel::Duration{0}, std::chrono::seconds(1));
     return b;
@@ -404,11 +405,13 @@ struct Parser {
     r.name = rd.name(name_node, "robot name");
     if (in_3d()) {
       if (r.name.find('-') != std::string::npos)
-        src.fail(name_node, "module name '" + r.name + "' has a '-': in a 3D world a name is letters, digits and '_' "
-                                                      "(the world names its bodies after it)");
+        src.fail(name_node, "module name '" + r.name +
+                                "' has a '-': in a 3D world a name is letters, digits and '_' "
+                                "(the world names its bodies after it)");
       if (auto k = m.get("kind"); k.IsDefined())
-        src.fail(k, "'kind' names a 2D robot; in a 3D world a robot names its module kind file: "
-                    "module: modules/cube.yaml");
+        src.fail(k,
+                 "'kind' names a 2D robot; in a 3D world a robot names its module kind file: "
+                 "module: modules/cube.yaml");
       const YAML::Node mod = m.require("module");
       r.module = rd.text(mod, "module");
       r.module_where = src.at(mod);
@@ -449,8 +452,9 @@ struct Parser {
       if (s.Scalar() != "random")
         src.fail(s, "start must be {x: X, y: Y, heading: DEGREES}, a list of those, or 'random'" + Map::got(s));
       if (in_3d())
-        src.fail(s, "a 3D world has no arena to place modules at random: give {x: X, y: Y, heading: DEGREES}, "
-                    "or dock the module to one that has a start (world.docked)");
+        src.fail(s,
+                 "a 3D world has no arena to place modules at random: give {x: X, y: Y, heading: DEGREES}, "
+                 "or dock the module to one that has a start (world.docked)");
       e.random = true;
       return;
     }
@@ -589,8 +593,8 @@ struct Parser {
   // The device tasks robot `r` has in this world.
   std::vector<std::string> device_tasks(const RobotSpec& r) const {
     if (!in_3d()) {
-      std::vector<std::string> names{std::string(kIrTaskName), std::string(kWheelsTaskName),
-                                     std::string(kPoseTaskName), std::string(kGroundTaskName)};
+      std::vector<std::string> names{std::string(kIrTaskName), std::string(kWheelsTaskName), std::string(kPoseTaskName),
+                                     std::string(kGroundTaskName)};
       if (sc.world.radio) names.emplace_back(kRadioTaskName);
       return names;
     }
@@ -683,11 +687,13 @@ struct Parser {
     const bool remote = to.IsScalar() && to.Scalar().find('/') != std::string::npos;
     if (remote) {
       if (!in_3d())
-        src.fail(to, "a hook to another robot's task (ROBOT/TASK) rides the organism bus: only in a 3D world "
-                     "(world: {kind: mujoco, bus: {...}})");
+        src.fail(to,
+                 "a hook to another robot's task (ROBOT/TASK) rides the organism bus: only in a 3D world "
+                 "(world: {kind: mujoco, bus: {...}})");
       if (!sc.organism.bus)
-        src.fail(to, "a hook to another robot's task (ROBOT/TASK) rides the organism bus, and this world has none: "
-                     "add world.bus: {bandwidth: BITS_PER_SECOND, latency: DURATION}");
+        src.fail(to,
+                 "a hook to another robot's task (ROBOT/TASK) rides the organism bus, and this world has none: "
+                 "add world.bus: {bandwidth: BITS_PER_SECOND, latency: DURATION}");
     } else {
       h.to = rd.task_name(to, "hook 'to'");
     }
@@ -852,14 +858,15 @@ struct Parser {
           if (given_start[v])
             src.fail(given_where[v], "robot '" + sc.robots[v].name + "' is placed by docking (world.docked, line " +
                                          std::to_string(d.where.line) + ") in the organism of '" +
-                                         sc.robots[root].name + "', which has a start: an organism takes one "
+                                         sc.robots[root].name +
+                                         "', which has a start: an organism takes one "
                                          "start, its first module's; remove this one");
           const auto& cu = connector(sc.robots[u], u_is_a ? d.connector_a : d.connector_b);
           const auto& cv = connector(sc.robots[v], u_is_a ? d.connector_b : d.connector_a);
           const mujoco::Vec3 nu = turned(placed[u]->yaw, mujoco::face_normal(cu.face));
           const mujoco::Vec3 nv = mujoco::face_normal(cv.face);
-          const double yaw = std::remainder(
-              std::atan2(nu[1], nu[0]) + std::numbers::pi - std::atan2(nv[1], nv[0]), 2 * std::numbers::pi);
+          const double yaw = std::remainder(std::atan2(nu[1], nu[0]) + std::numbers::pi - std::atan2(nv[1], nv[0]),
+                                            2 * std::numbers::pi);
           const mujoco::Vec3 at = connector_at(sc.robots[u], *placed[u], cu);
           const mujoco::Vec3 offset = turned(yaw, cv.position);
           placed[v] = Placed{at[0] - offset[0], at[1] - offset[1], yaw};
@@ -889,11 +896,12 @@ struct Parser {
       const double angle = std::acos(std::clamp(-(na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2]), -1.0, 1.0));
       const std::string pair = ra.name + "." + d.connector_a + " and " + rb.name + "." + d.connector_b;
       if (distance > mujoco::kLatchPositionTolerance)
-        src.fail(d.where, pair + " cannot meet: placed " + (placed_by_dock[d.a] == k || placed_by_dock[d.b] == k
-                                                                 ? std::string("face to face")
-                                                                 : std::string("by their other docks")) +
-                              ", their centres are " + mm(distance) + " apart (" + mm(std::abs(pa[2] - pb[2])) +
-                              " in height); latching needs at most " + mm(mujoco::kLatchPositionTolerance));
+        src.fail(d.where,
+                 pair + " cannot meet: placed " +
+                     (placed_by_dock[d.a] == k || placed_by_dock[d.b] == k ? std::string("face to face")
+                                                                           : std::string("by their other docks")) +
+                     ", their centres are " + mm(distance) + " apart (" + mm(std::abs(pa[2] - pb[2])) +
+                     " in height); latching needs at most " + mm(mujoco::kLatchPositionTolerance));
       if (angle > mujoco::kLatchAngleTolerance)
         src.fail(d.where, pair + " cannot meet: placed by their other docks, they face " +
                               Reader::fmt(std::round(angle * 1800 / std::numbers::pi) / 10) +
@@ -947,7 +955,8 @@ struct Parser {
     std::vector<std::pair<std::pair<std::size_t, std::string>, SourceLocation>> used;
     for (const auto& item : rd.list(docked_node, "docked", kMaxDocked)) {
       if (!item.IsSequence() || item.size() != 2)
-        src.fail(item, "a docked pair is [ROBOT.CONNECTOR, ROBOT.CONNECTOR], e.g. [m0.back, m1.front]" + Map::got(item));
+        src.fail(item,
+                 "a docked pair is [ROBOT.CONNECTOR, ROBOT.CONNECTOR], e.g. [m0.back, m1.front]" + Map::got(item));
       DockSpec d;
       d.where = src.at(item);
       std::size_t* robot[2] = {&d.a, &d.b};
@@ -966,7 +975,8 @@ struct Parser {
                          [&](const mujoco::ConnectorSpec& c) { return c.name == cname; })) {
           std::vector<std::string_view> names;
           for (const auto& c : kind.connectors) names.push_back(c.name);
-          std::string msg = "robot '" + rname + "' (module kind '" + kind.name + "') has no connector '" + shown(cname) + "'";
+          std::string msg =
+              "robot '" + rname + "' (module kind '" + kind.name + "') has no connector '" + shown(cname) + "'";
           if (auto hint = os::closest_name(cname, names); !hint.empty()) msg += " (did you mean '" + hint + "'?)";
           src.fail(end, msg);
         }
@@ -981,7 +991,6 @@ struct Parser {
       sc.organism.docked.push_back(std::move(d));
     }
   }
-
 };
 
 }  // namespace

@@ -32,12 +32,13 @@ std::vector<std::string> organism_named_tasks(const Scenario& sc, std::size_t ro
 // Latches world.docked's pairs in file order; an error at the pair the world refuses.
 kernel::Status latch_docked(const Scenario& scenario, MujocoWorld& world) {
   for (const DockSpec& d : scenario.organism.docked) {
-    const std::string pair = scenario.robots[d.a].name + "." + d.connector_a + " and " +
-                             scenario.robots[d.b].name + "." + d.connector_b;
+    const std::string pair =
+        scenario.robots[d.a].name + "." + d.connector_a + " and " + scenario.robots[d.b].name + "." + d.connector_b;
     const auto ca = world.find_connector(d.a, d.connector_a);
     const auto cb = world.find_connector(d.b, d.connector_b);
     if (!ca || !cb) return kernel::Error{d.where.str() + ": " + pair + ": no such connector in the world"};
-    if (auto st = world.latch(d.a, *ca); !st) return kernel::Error{d.where.str() + ": " + pair + " cannot latch: " + st.error()};
+    if (auto st = world.latch(d.a, *ca); !st)
+      return kernel::Error{d.where.str() + ": " + pair + " cannot latch: " + st.error()};
     const auto to = world.docked_to(d.a, *ca);
     if (!to || *to != std::pair<std::size_t, std::size_t>{d.b, *cb}) {
       (void)world.unlatch(d.a, *ca);
