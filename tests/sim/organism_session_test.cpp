@@ -13,10 +13,12 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario.hpp"
@@ -185,6 +187,28 @@ TEST(OrganismSession, EventsLatchTwoFreeModulesAtRuntimeAndARefusalIsLoggedWitho
   // The run went on after the refusals: the runner ticked to the end.
   EXPECT_EQ(s.runner().ticks(), 1000u / 30u);
   EXPECT_EQ(s.error(), "");
+}
+
+// Under the thread executor the events run on their own thread while the runner steps the world
+// on another: the latch goes through the world's lock, and the session stops cleanly.
+TEST(OrganismSession, EventsLatchUnderTheThreadExecutorToo) {
+  std::string text = kOrgTwoFree;
+  text.replace(text.find("  - {at: 300ms, robot: b, shell: \"no_such_thing\"}\n"), 51, "");
+  Scenario sc = org_parse(text);
+  ASSERT_EQ(sc.events.size(), 2u);
+  kernel::ThreadExecutor ex;
+  auto made = OrganismSession::create(sc, ex);
+  ASSERT_TRUE(made.ok()) << made.error();
+  OrganismSession& s = **made;
+  s.start();
+  const auto give_up = std::chrono::steady_clock::now() + 10s;
+  while (s.events()->done() < 2 && std::chrono::steady_clock::now() < give_up) std::this_thread::sleep_for(10ms);
+  EXPECT_EQ(s.events()->done(), 2u);
+  EXPECT_EQ(s.events()->failed(), 1u);
+  bool docked = false;
+  s.runner().with_world([&](MujocoWorld& w) { docked = w.connector_state(0, 0) == ConnectorState::kDocked; });
+  EXPECT_TRUE(docked);
+  s.stop();
 }
 
 TEST(OrganismSession, DeviceTasksAreTheModulesDevicesByNameAndTypedByPort) {
