@@ -1,9 +1,11 @@
 // RobotSystem: one robot's control system built from its scenario entry: a Node (the robot's own
-// operating system instance), the task-type registry it creates tasks from, the two device
-// tasks every robot has (`ir`, `wheels`) and the scenario's tasks and hooks. The same builder
-// serves the in-process run (device tasks over simulated drivers) and the board of a
-// hardware-in-the-loop pair (device tasks over the serial link), which is what makes the two
-// run the same task graph.
+// operating system instance), the task-type registry it creates tasks from, the device tasks
+// (a Thymio's `ir`, `wheels`; a 3D module's `ir`, `hinge_state`, `hinge`, `wheels`; the optional
+// ones when named) and the scenario's tasks and hooks. The same builder serves the in-process 2D
+// run (device tasks over simulated drivers), a 3D module of an organism (over its MuJoCo
+// devices, RobotDevices::module) and the board of a hardware-in-the-loop pair (device tasks over
+// the serial link), which is what makes them run the same task graph. Hooks to other robots'
+// tasks (RobotSpec::remote_hooks) are not made here: they ride the organism bus.
 //
 // Build order, and why: registry first (the node keeps a pointer to it), then the device tasks
 // (hooks may name them), then the scenario's tasks in file order, then its hooks. Any failure
