@@ -142,8 +142,7 @@ struct Parser {
   // Per robot (expanded): the start the file gives, if any, and where.
   std::vector<std::optional<Pose>> given_start;
   std::vector<SourceLocation> given_where;
-  // Per robot: each remote hook's `to` value's place (remote_hooks order).
-  std::vector<std::vector<SourceLocation>> remote_to_where;
+  std::map<std::string, std::size_t, std::less<>> robot_indices;  // expanded names, once all are known
 
   Parser(const Source& s, ModuleKindReader reader) : src(s), rd(s), read_kind(std::move(reader)) {}
 
@@ -616,8 +615,12 @@ struct Parser {
 
   [[noreturn]] void no_task(const RobotSpec& r, const std::string& name, const SourceLocation& where) const {
     const auto devices = device_tasks(r);
-    std::vector<std::string_view> names(devices.begin(), devices.end());
+    // The radio last, after the robot's own tasks: the order the hint breaks ties in.
+    std::vector<std::string_view> names;
+    for (const auto& d : devices)
+      if (d != kRadioTaskName) names.push_back(d);
     for (const auto& t : r.tasks) names.push_back(t.name);
+    if (!in_3d() && sc.world.radio) names.push_back(kRadioTaskName);
     std::string msg = "robot '" + r.name + "' has no task '" + name + "'";
     if (name == kRadioTaskName && !in_3d())
       msg += ": robots have a radio only in a world that declares one (world: radio: {range: CM})";
@@ -746,9 +749,10 @@ struct Parser {
     r.remote_hooks.push_back(std::move(rh));
   }
 
-  std::optional<std::size_t> robot_index(std::string_view name) const {
-    for (std::size_t i = 0; i < sc.robots.size(); ++i)
-      if (sc.robots[i].name == name) return i;
+  std::optional<std::size_t> robot_index(std::string_view name) {
+    if (robot_indices.size() != sc.robots.size())
+      for (std::size_t i = robot_indices.size(); i < sc.robots.size(); ++i) robot_indices.emplace(sc.robots[i].name, i);
+    if (auto it = robot_indices.find(name); it != robot_indices.end()) return it->second;
     return std::nullopt;
   }
 
@@ -952,7 +956,7 @@ struct Parser {
 
   // world.docked: [[a.back, b.front], ...]
   void docked() {
-    std::vector<std::pair<std::pair<std::size_t, std::string>, SourceLocation>> used;
+    std::map<std::pair<std::size_t, std::string>, SourceLocation> used;
     for (const auto& item : rd.list(docked_node, "docked", kMaxDocked)) {
       if (!item.IsSequence() || item.size() != 2)
         src.fail(item,
@@ -980,10 +984,8 @@ struct Parser {
           if (auto hint = os::closest_name(cname, names); !hint.empty()) msg += " (did you mean '" + hint + "'?)";
           src.fail(end, msg);
         }
-        for (const auto& [key, at] : used)
-          if (key.first == *index && key.second == cname)
-            src.fail(end, "'" + text + "' is docked twice (first at line " + std::to_string(at.line) + ")");
-        used.push_back({{*index, cname}, src.at(end)});
+        if (auto [it, fresh] = used.emplace(std::pair{*index, cname}, src.at(end)); !fresh)
+          src.fail(end, "'" + text + "' is docked twice (first at line " + std::to_string(it->second.line) + ")");
         *robot[k] = *index;
         *connector[k] = cname;
       }
