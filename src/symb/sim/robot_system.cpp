@@ -184,6 +184,18 @@ kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor
   return sys;
 }
 
+RobotSystem* find_robot(const std::vector<std::unique_ptr<RobotSystem>>& robots, std::string_view name) {
+  for (const auto& r : robots)
+    if (r->name() == name) return r.get();
+  return nullptr;
+}
+
+std::string first_cycle_error(const std::vector<std::unique_ptr<RobotSystem>>& robots) {
+  for (const auto& r : robots)
+    if (auto e = r->node().cycle_error(); !e.empty()) return e;
+  return {};
+}
+
 RobotSystem::~RobotSystem() {
   if (node_) node_->clear();
 }

@@ -92,6 +92,12 @@ os::PortDeclaration device_task_ports(std::string_view task);
 kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, RobotDevices devices,
                                             ProgramReader read_program);
 
+class RobotSystem;
+// The robot named `name` among `robots`, or null; the first cycle of answers one of their nodes
+// cut (os/message.hpp, kMaxHops), or empty. What every session asks of its robots.
+RobotSystem* find_robot(const std::vector<std::unique_ptr<RobotSystem>>& robots, std::string_view name);
+std::string first_cycle_error(const std::vector<std::unique_ptr<RobotSystem>>& robots);
+
 class RobotSystem {
  public:
   static kernel::Result<std::unique_ptr<RobotSystem>> build(kernel::Executor& executor, const RobotSpec& spec,

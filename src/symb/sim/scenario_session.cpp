@@ -78,16 +78,8 @@ void ScenarioSession::stop() {
   if (runner_) runner_->stop();
 }
 
-std::string ScenarioSession::cycle_error() const {
-  for (const auto& r : robots_)
-    if (auto e = r->node().cycle_error(); !e.empty()) return e;
-  return {};
-}
+std::string ScenarioSession::cycle_error() const { return first_cycle_error(robots_); }
 
-RobotSystem* ScenarioSession::find_robot(std::string_view name) {
-  for (auto& r : robots_)
-    if (r->name() == name) return r.get();
-  return nullptr;
-}
+RobotSystem* ScenarioSession::find_robot(std::string_view name) { return sim::find_robot(robots_, name); }
 
 }  // namespace symb::sim

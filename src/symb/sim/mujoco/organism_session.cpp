@@ -150,17 +150,9 @@ void OrganismSession::stop() {
   if (runner_) runner_->stop();
 }
 
-RobotSystem* OrganismSession::find_robot(std::string_view name) {
-  for (auto& r : robots_)
-    if (r->name() == name) return r.get();
-  return nullptr;
-}
+RobotSystem* OrganismSession::find_robot(std::string_view name) { return sim::find_robot(robots_, name); }
 
-std::string OrganismSession::cycle_error() const {
-  for (const auto& r : robots_)
-    if (auto e = r->node().cycle_error(); !e.empty()) return e;
-  return {};
-}
+std::string OrganismSession::cycle_error() const { return first_cycle_error(robots_); }
 
 std::string OrganismSession::error() const { return runner_ ? runner_->error() : std::string(); }
 
