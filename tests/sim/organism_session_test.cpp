@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -111,6 +112,8 @@ TEST(OrganismSession, TheShippedChainStartsDockedStaysDockedAndMovesForwardAsOne
     // 250 of 500 motor units is 7.5 cm/s at the rim; 10 s of it, less the start, drove the head
     // 0.547 m forward (measured) and kept it on its line.
     const Pose3 head = w.pose(0);
+    std::printf("organism_chain: the head drove %.3f m along x, %.4f m off its line, in %.0f s\n", head.position[0],
+                head.position[1], w.time());
     EXPECT_TRUE(symb::testing::near_measured(head.position[0], 0.547, 0.03));
     EXPECT_LT(std::abs(head.position[1]), 0.02);
   });
