@@ -229,6 +229,9 @@ robots:
   - name: b
     module: modules/long.yaml
     start: {x: 40, y: 0}
+events:
+  - {at: 0s, robot: b, shell: "suspend connector_left"}
+  - {at: 0s, robot: b, shell: "ioctl connector_right state"}
 )");
   kernel::VirtualTimeExecutor ex;
   auto made = OrganismSession::create(sc, ex);
@@ -241,6 +244,9 @@ robots:
   // The long kind has no wheels, so no wheels task.
   EXPECT_TRUE(s.robot(1).node().find("hinge").has_value());
   EXPECT_FALSE(s.robot(1).node().find("wheels").has_value());
+  // An event that names a connector's task gets it made; an ioctl names the device, not a task.
+  EXPECT_TRUE(s.robot(1).node().find("connector_left").has_value());
+  EXPECT_FALSE(s.robot(1).node().find("connector_right").has_value());
   // A wheel command cannot be hooked into the hinge: the ports' layouts differ.
   Scenario bad = org_parse(R"(name: bad_port
 world: {kind: mujoco}
