@@ -1,12 +1,16 @@
-// Fuzzes scenario files: bytes -> YAML -> Scenario. Any input must give a scenario or an error
-// "fuzz.yaml:LINE:COLUMN: message" with LINE a line the input has, never a crash or a hang. Every
-// accepted scenario must obey the rules the parser promises (robots inside the arena, clear of
-// each other, unique names, hooks between existing tasks) and survive check_scenario.
+// Fuzzes scenario files: bytes -> YAML -> Scenario, 2D and 3D. Any input must give a scenario or
+// an error "fuzz.yaml:LINE:COLUMN: message" with LINE a line the input has, never a crash or a
+// hang. Every accepted scenario must obey the rules the parser promises (robots inside the arena,
+// clear of each other, unique names, hooks between existing tasks; in 3D, docks between two
+// modules, finite starts, remote hooks and events that name robots that exist) and survive
+// check_scenario. Module kind files come from memory (the shipped cube and long kinds, under the
+// names modules/cube.yaml and modules/long.yaml): the fuzzer never reads the disk.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <map>
 #include <string>
 #include <string_view>
 
@@ -36,6 +40,68 @@ bool located(const std::string& e, std::string_view text) {
   return line >= 1 && line <= std::max(lines, 1L) && column >= 1;
 }
 
+// scenarios/modules/cube.yaml and long.yaml without their comments.
+constexpr std::string_view kCubeKind = R"(name: cube
+body:
+  size: [0.10, 0.10, 0.08]
+  mass: 0.40
+wheels:
+  radius: 0.025
+  width: 0.012
+  mass: 0.02
+  max_speed: 0.15
+  gain: 0.004
+hinge:
+  axis: [0, 1, 0]
+  range: [-1.2, 1.2]
+  gain: 4.0
+  damping: 0.06
+connectors:
+  - {name: front, face: front, position: [0.05, 0, 0]}
+  - {name: back, face: back, position: [-0.05, 0, 0]}
+  - {name: left, face: left, position: [0.025, 0.05, 0]}
+  - {name: right, face: right, position: [0.025, -0.05, 0]}
+ir:
+  - {face: front, position: [0.05, 0, 0.02], range: 0.15}
+  - {face: back, position: [-0.05, 0, 0.02], range: 0.15}
+  - {face: left, position: [0.025, 0.05, 0.02], range: 0.15}
+  - {face: right, position: [0.025, -0.05, 0.02], range: 0.15}
+)";
+constexpr std::string_view kLongKind = R"(name: long
+body:
+  size: [0.16, 0.10, 0.08]
+  mass: 0.6
+wheels: none
+hinge:
+  axis: [0, 1, 0]
+  range: [-1.2, 1.2]
+  gain: 8.0
+  damping: 0.12
+connectors:
+  - {name: front, face: front, position: [0.08, 0, 0]}
+  - {name: back, face: back, position: [-0.08, 0, 0]}
+  - {name: left, face: left, position: [0.04, 0.05, 0]}
+  - {name: right, face: right, position: [0.04, -0.05, 0]}
+ir:
+  - {face: front, position: [0.08, 0, 0.02], range: 0.15}
+  - {face: back, position: [-0.08, 0, 0.02], range: 0.15}
+  - {face: left, position: [0.04, 0.05, 0.02], range: 0.15}
+  - {face: right, position: [0.04, -0.05, 0.02], range: 0.15}
+)";
+
+const ScenarioParseOptions& from_memory() {
+  static const ScenarioParseOptions options = [] {
+    ScenarioParseOptions o;
+    o.read_module_kind = [](std::string_view name) -> kernel::Result<std::string> {
+      if (name == "modules/cube.yaml") return std::string(kCubeKind);
+      if (name == "modules/long.yaml") return std::string(kLongKind);
+      return kernel::Error{"no such kind file (the fuzzer serves modules/cube.yaml and modules/long.yaml)"};
+    };
+    return o;
+  }();
+  return options;
+}
+
 const os::TaskTypeRegistry& registry() {
   static const os::TaskTypeRegistry reg = [] {
     os::TaskTypeRegistry r;
@@ -50,7 +116,28 @@ const os::TaskTypeRegistry& registry() {
   return reg;
 }
 
+void check_sound_3d(const Scenario& sc) {
+  if (sc.robots.empty() || sc.robots.size() > kMaxRobots) std::abort();
+  const std::size_t n = sc.robots.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const RobotSpec& r = sc.robots[i];
+    for (std::size_t j = 0; j < i; ++j)
+      if (r.name == sc.robots[j].name) std::abort();
+    if (!std::isfinite(r.module_start.x) || !std::isfinite(r.module_start.y) || !std::isfinite(r.module_start.yaw))
+      std::abort();
+    if (r.module_kind.connectors.empty() || r.module.empty()) std::abort();
+    for (const auto& h : r.remote_hooks)
+      if (h.to_index >= n || h.to_index == i || sc.robots[h.to_index].name != h.to_robot || !sc.organism.bus)
+        std::abort();
+  }
+  for (const auto& d : sc.organism.docked)
+    if (d.a >= n || d.b >= n || d.a == d.b) std::abort();
+  for (const auto& e : sc.events)
+    if (e.robot >= n || e.at > sc.duration || e.at.count() < 0) std::abort();
+}
+
 void check_sound(const Scenario& sc) {
+  if (sc.world_kind == WorldKind::kMujoco) return check_sound_3d(sc);
   const WorldSpec& w = sc.world;
   if (!(w.width > 0 && w.height > 0) || sc.robots.empty() || sc.robots.size() > kMaxRobots) std::abort();
   for (std::size_t i = 0; i < sc.robots.size(); ++i) {
@@ -62,22 +149,23 @@ void check_sound(const Scenario& sc) {
     for (const auto& h : r.hooks) {
       if (h.from == h.to) std::abort();
       for (const std::string* end : {&h.from, &h.to}) {
-        const bool known =
-            *end == kIrTaskName || *end == kWheelsTaskName ||
-            std::any_of(r.tasks.begin(), r.tasks.end(), [&](const TaskSpec& t) { return t.name == *end; });
+        const bool known = is_device_task_name(*end) || std::any_of(r.tasks.begin(), r.tasks.end(),
+                                                                    [&](const TaskSpec& t) { return t.name == *end; });
         if (!known) std::abort();
       }
     }
     for (const auto& t : r.tasks)
       if (t.params.size() != t.param_where.size()) std::abort();
   }
+  for (const auto& e : sc.events)
+    if (e.robot >= sc.robots.size() || e.at > sc.duration || e.at.count() < 0) std::abort();
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  auto sc = parse_scenario(text, "fuzz.yaml");
+  auto sc = parse_scenario(text, "fuzz.yaml", from_memory());
   if (!sc) {
     if (!located(sc.error(), text)) std::abort();
     return 0;

@@ -134,6 +134,13 @@ std::string mutate(const std::string& text, kernel::RandomStream& rng) {
 
 // What an accepted mutant must still satisfy.
 void expect_sound(const Scenario& sc) {
+  if (sc.world_kind == WorldKind::kMujoco) {  // no arena: the modules' own rules
+    ASSERT_FALSE(sc.robots.empty());
+    for (std::size_t i = 0; i < sc.robots.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j) EXPECT_NE(sc.robots[i].name, sc.robots[j].name);
+    for (const auto& d : sc.organism.docked) EXPECT_NE(d.a, d.b);
+    return;
+  }
   const WorldSpec& w = sc.world;
   EXPECT_TRUE(std::isfinite(w.width) && w.width > 0 && std::isfinite(w.height) && w.height > 0);
   ASSERT_FALSE(sc.robots.empty());
@@ -188,15 +195,24 @@ TEST(ScenarioMalformed, MutantsOfTheShippedFilesAreRejectedWithALocationOrStaySo
   ASSERT_GE(files.size(), 4u);
   int total = 0, rejected = 0;
   kernel::RandomStream rng(20240607, 1);
+  // A 3D scenario's module kind files, beside it.
+  ScenarioParseOptions beside;
+  beside.read_module_kind = [](std::string_view path) -> kernel::Result<std::string> {
+    std::ifstream in(std::string(SYMB_SCENARIO_DIR) + "/" + std::string(path));
+    if (!in) return kernel::Error{"no such file"};
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
   for (const auto& [name, text] : files) {
-    ASSERT_TRUE(parse_scenario(text, name).ok()) << name;
+    ASSERT_TRUE(parse_scenario(text, name, beside).ok()) << name;
     for (int k = 0; k < kMutantsPerFile; ++k) {
       std::string m = mutate(text, rng);
       // Some mutants get a second or third mutation, so that errors pile up.
       for (int extra = static_cast<int>(rng.below(3)); extra > 0; --extra) m = mutate(m, rng);
       if (m == text) continue;
       ++total;
-      auto sc = parse_scenario(m, name);
+      auto sc = parse_scenario(m, name, beside);
       if (sc.ok()) {
         SCOPED_TRACE(m);
         expect_sound(*sc);

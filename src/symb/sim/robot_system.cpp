@@ -17,6 +17,9 @@ namespace symb::sim {
 namespace {
 
 constexpr std::uintmax_t kMaxProgramBytes = 1 << 20;
+// The hinge's position servo target: one number, radians. Its own layout so that a wheel command
+// (two numbers in motor units) cannot be hooked into a hinge.
+constexpr os::PortLayout kHingeTarget{"hinge-target", "[target angle, rad]"};
 
 kernel::Error at(const SourceLocation& where, const std::string& what) { return {where.str() + ": " + what}; }
 
@@ -30,6 +33,10 @@ os::PortDeclaration device_task_ports(std::string_view task) {
   if (task == kGroundTaskName) return {reads_nothing, {{robot::kDataPort, "ground", layout::kSensorVector}}};
   if (task == kPoseTaskName) return {reads_nothing, {{robot::kDataPort, "pose", layout::kPose}}};
   if (task == kWheelsTaskName) return {{{robot::kDataPort, "wheels", layout::kWheelCommand}}, {}};
+  if (task == kHingeStateTaskName) return {reads_nothing, {{robot::kDataPort, "hinge_state", layout::kSensorVector}}};
+  if (task == kHingeTaskName) return {{{robot::kDataPort, "hinge", kHingeTarget}}, {}};
+  if (task.substr(0, kConnectorTaskPrefix.size()) == kConnectorTaskPrefix)
+    return {reads_nothing, {{robot::kDataPort, "connector", layout::kSensorVector}}};
   return {};
 }
 
@@ -61,6 +68,13 @@ ProgramReader file_program_reader(std::string base_dir) {
 
 kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, RobotDevices devices,
                                             ProgramReader read_program) {
+  control::ControlResources resources;
+  resources.read_program = std::move(read_program);
+  if (devices.module) {
+    if (auto s = robot::register_robot_task_types(registry, *devices.module); !s) return s;
+    if (auto st = control::register_control_task_types(registry, resources); !st) return st;
+    return evo::register_evo_task_types(registry, resources);
+  }
   robot::RobotDevices lookups;
   lookups.sensor = [devices](std::string_view name) -> std::shared_ptr<robot::Sensor> {
     if (name == kIrTaskName) return devices.ir;
@@ -72,8 +86,6 @@ kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, Robo
     return name == kWheelsTaskName ? wheels : nullptr;
   };
   if (auto s = robot::register_robot_task_types(registry, std::move(lookups)); !s) return s;
-  control::ControlResources resources;
-  resources.read_program = std::move(read_program);
   if (auto st = control::register_control_task_types(registry, resources); !st) return st;
   return evo::register_evo_task_types(registry, resources);
 }
@@ -89,44 +101,65 @@ kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor
       executor, os::NodeConfig{spec.name, options.seed, options.log_capacity, sys->types_.get()});
   os::Node& node = *sys->node_;
 
+  // A device task over the device of the same name, with its declared ports.
+  auto make_device = [&](std::string_view type, std::string_view device, std::vector<os::ParamAssignment> extra,
+                         std::optional<kernel::Duration> period) -> kernel::Status {
+    std::vector<os::ParamAssignment> params{{"device", std::string(device), 1}};
+    for (auto& p : extra) params.push_back(std::move(p));
+    os::TaskOptions o = sys->types_->find(type)->defaults;
+    if (period) o.period = *period;
+    o.ports = device_task_ports(device);
+    if (auto r = node.create(type, std::string(device), params, o); !r)
+      return kernel::Error{"robot '" + spec.name + "': " + std::string(device) + ": " + r.error()};
+    return {};
+  };
+  // The optional device tasks only when used: each is a task woken every period. (A shell can
+  // still make one later: `create sensor pose device=pose`.)
+  auto used = [&](std::string_view device) {
+    return std::any_of(spec.hooks.begin(), spec.hooks.end(),
+                       [&](const HookSpec& h) { return h.from == device || h.to == device; }) ||
+           std::any_of(spec.remote_hooks.begin(), spec.remote_hooks.end(),
+                       [&](const RemoteHookSpec& h) { return h.from == device; }) ||
+           std::find(options.named_device_tasks.begin(), options.named_device_tasks.end(), device) !=
+               options.named_device_tasks.end();
+  };
+  // The watchdog: a controller that stops talking (suspended from the shell, deleted, faulted)
+  // must not leave the robot driving on its last command.
+  const auto timeout = options.control_period * 3 / 2;
+  const std::vector<os::ParamAssignment> watchdog{
+      {"timeout", std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(timeout).count()) + "us", 1}};
+  bool wants_wheels = true;
   if (options.make_device_tasks) {
     if (auto s = options.make_device_tasks(node); !s)
       return kernel::Error{"robot '" + spec.name + "': device tasks: " + s.error()};
-  } else {
-    const std::vector<os::ParamAssignment> ir_params{{"device", std::string(kIrTaskName), 1}};
-    os::TaskOptions ir_options = sys->types_->find("sensor")->defaults;
-    ir_options.ports = device_task_ports(kIrTaskName);
-    if (auto r = node.create("sensor", std::string(kIrTaskName), ir_params, ir_options); !r)
-      return kernel::Error{"robot '" + spec.name + "': ir: " + r.error()};
-    // The watchdog: a controller that stops talking (suspended from the shell, deleted, faulted)
-    // must not leave the robot driving on its last command.
-    const auto timeout = options.control_period * 3 / 2;
-    const std::vector<os::ParamAssignment> wheel_params{
-        {"device", std::string(kWheelsTaskName), 1},
-        {"timeout", std::to_string(std::chrono::duration_cast<std::chrono::microseconds>(timeout).count()) + "us", 1}};
-    os::TaskOptions wheel_options = sys->types_->find("actuator_sink")->defaults;
-    wheel_options.period = options.control_period;
-    wheel_options.ports = device_task_ports(kWheelsTaskName);
-    if (auto r = node.create("actuator_sink", std::string(kWheelsTaskName), wheel_params, wheel_options); !r)
-      return kernel::Error{"robot '" + spec.name + "': wheels: " + r.error()};
-    // Pose and ground only when used: each is a task woken every period. (A shell can still make
-    // one later: `create sensor pose device=pose`.)
-    for (const std::string_view device : {kPoseTaskName, kGroundTaskName}) {
-      const bool used = std::any_of(spec.hooks.begin(), spec.hooks.end(),
-                                    [&](const HookSpec& h) { return h.from == device || h.to == device; });
-      if (!used) continue;
-      const std::vector<os::ParamAssignment> params{{"device", std::string(device), 1}};
-      os::TaskOptions device_options = sys->types_->find("sensor")->defaults;
-      device_options.ports = device_task_ports(device);
-      if (auto r = node.create("sensor", std::string(device), params, device_options); !r)
-        return kernel::Error{"robot '" + spec.name + "': " + std::string(device) + ": " + r.error()};
+  } else if (devices.module) {
+    // A 3D module. The hinge has no watchdog: its servo holds the last target (a bent organism
+    // that straightened on its own when a controller paused could push its neighbours).
+    if (auto s = make_device("sensor", kIrTaskName, {}, std::nullopt); !s) return kernel::Error{s.error()};
+    if (auto s = make_device("sensor", kHingeStateTaskName, {}, std::nullopt); !s) return kernel::Error{s.error()};
+    if (auto s = make_device("actuator_sink", kHingeTaskName, {}, std::nullopt); !s) return kernel::Error{s.error()};
+    wants_wheels = spec.module_kind.has_wheels;
+    if (wants_wheels)
+      if (auto s = make_device("actuator_sink", kWheelsTaskName, watchdog, options.control_period); !s)
+        return kernel::Error{s.error()};
+    for (const auto& c : spec.module_kind.connectors) {
+      const std::string device = std::string(kConnectorTaskPrefix) + c.name;
+      if (used(device))
+        if (auto s = make_device("sensor", device, {}, std::nullopt); !s) return kernel::Error{s.error()};
     }
+  } else {
+    if (auto s = make_device("sensor", kIrTaskName, {}, std::nullopt); !s) return kernel::Error{s.error()};
+    if (auto s = make_device("actuator_sink", kWheelsTaskName, watchdog, options.control_period); !s)
+      return kernel::Error{s.error()};
+    for (const std::string_view device : {kPoseTaskName, kGroundTaskName})
+      if (used(device))
+        if (auto s = make_device("sensor", device, {}, std::nullopt); !s) return kernel::Error{s.error()};
   }
   if (devices.radio != nullptr)
     if (auto r = devices.radio->add_to(node, devices.radio_index, std::string(kRadioTaskName)); !r)
       return kernel::Error{"robot '" + spec.name + "': radio: " + r.error()};
-  for (const char* device_task : {kIrTaskName.data(), kWheelsTaskName.data()})
-    if (!node.find(device_task))
+  for (const std::string_view device_task : {kIrTaskName, kWheelsTaskName})
+    if ((device_task != kWheelsTaskName || wants_wheels) && !node.find(std::string(device_task)))
       return kernel::Error{"robot '" + spec.name + "': the device tasks made no task named '" +
                            std::string(device_task) + "'"};
 
@@ -149,6 +182,18 @@ kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor
     if (auto r = node.hook(*from, *to, h.options); !r) return at(h.where, "hook: " + r.error());
   }
   return sys;
+}
+
+RobotSystem* find_robot(const std::vector<std::unique_ptr<RobotSystem>>& robots, std::string_view name) {
+  for (const auto& r : robots)
+    if (r->name() == name) return r.get();
+  return nullptr;
+}
+
+std::string first_cycle_error(const std::vector<std::unique_ptr<RobotSystem>>& robots) {
+  for (const auto& r : robots)
+    if (auto e = r->node().cycle_error(); !e.empty()) return e;
+  return {};
 }
 
 RobotSystem::~RobotSystem() {

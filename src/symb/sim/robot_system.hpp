@@ -1,9 +1,11 @@
 // RobotSystem: one robot's control system built from its scenario entry: a Node (the robot's own
-// operating system instance), the task-type registry it creates tasks from, the two device
-// tasks every robot has (`ir`, `wheels`) and the scenario's tasks and hooks. The same builder
-// serves the in-process run (device tasks over simulated drivers) and the board of a
-// hardware-in-the-loop pair (device tasks over the serial link), which is what makes the two
-// run the same task graph.
+// operating system instance), the task-type registry it creates tasks from, the device tasks
+// (a Thymio's `ir`, `wheels`; a 3D module's `ir`, `hinge_state`, `hinge`, `wheels`; the optional
+// ones when named) and the scenario's tasks and hooks. The same builder serves the in-process 2D
+// run (device tasks over simulated drivers), a 3D module of an organism (over its MuJoCo
+// devices, RobotDevices::module) and the board of a hardware-in-the-loop pair (device tasks over
+// the serial link), which is what makes them run the same task graph. Hooks to other robots'
+// tasks (RobotSpec::remote_hooks) are not made here: they ride the organism bus.
 //
 // Build order, and why: registry first (the node keeps a pointer to it), then the device tasks
 // (hooks may name them), then the scenario's tasks in file order, then its hooks. Any failure
@@ -14,14 +16,17 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "symb/kernel/executor.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/node.hpp"
 #include "symb/os/task_type_registry.hpp"
 #include "symb/robot/actuator.hpp"
+#include "symb/robot/robot_task_types.hpp"
 #include "symb/robot/sensor.hpp"
 #include "symb/sim/scenario.hpp"
 
@@ -50,6 +55,10 @@ struct RobotDevices {
   // robot then gets a device task kRadioTaskName, made before the scenario's own tasks.
   LocalRadio* radio = nullptr;
   std::size_t radio_index = 0;
+  // A 3D module's devices by name (MujocoRunner::device_lookups), set instead of the four above:
+  // the robot task types bind to them, and the device tasks are the module's (ir, hinge_state,
+  // hinge, wheels when it has them, connector_<name> when named; see scenario.hpp).
+  std::optional<robot::RobotDevices> module;
 };
 
 struct RobotSystemOptions {
@@ -62,11 +71,16 @@ struct RobotSystemOptions {
   // after the last command; `sensor` tasks over devices.pose and devices.ground when the robot's
   // hooks name them). It must create tasks named kIrTaskName and kWheelsTaskName.
   std::function<kernel::Status(os::Node&)> make_device_tasks;
+  // Device tasks made even when no hook of the robot names them (a remote hook's end on this
+  // robot, an event's task): the optional ones (pose, ground, connector_<name>) are made only
+  // when used, each being a task woken every period.
+  std::vector<std::string> named_device_tasks;
 };
 
-// The port layouts of device task `task` (kIrTaskName and kGroundTaskName send a sensor vector,
-// kPoseTaskName a pose, and the three read no messages; kWheelsTaskName takes a wheel command;
-// other names declare nothing). The
+// The port layouts of device task `task` (kIrTaskName, kGroundTaskName, kHingeStateTaskName and
+// every connector_<name> send a sensor vector, kPoseTaskName a pose, and these read no messages;
+// kWheelsTaskName takes a wheel command, kHingeTaskName a hinge target [rad]; other names declare
+// nothing). The
 // device tasks are made with these (TaskOptions::ports), however they are made (the default
 // `sensor` and `actuator_sink` tasks, whose types say only `any`, or a board's tasks made in
 // code), so that Node::hook refuses `ir -> wheels` from the shell, a scenario or a genome alike.
@@ -77,6 +91,12 @@ os::PortDeclaration device_task_ports(std::string_view task);
 // one_plus_one).
 kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, RobotDevices devices,
                                             ProgramReader read_program);
+
+class RobotSystem;
+// The robot named `name` among `robots`, or null; the first cycle of answers one of their nodes
+// cut (os/message.hpp, kMaxHops), or empty. What every session asks of its robots.
+RobotSystem* find_robot(const std::vector<std::unique_ptr<RobotSystem>>& robots, std::string_view name);
+std::string first_cycle_error(const std::vector<std::unique_ptr<RobotSystem>>& robots);
 
 class RobotSystem {
  public:

@@ -14,11 +14,26 @@
 //           out with the sender's robot index (mEDEA's medium)
 // In-process they sit on simulated drivers; on a board, on the serial link (see docs/scenarios.md).
 //
+// A 3D world (`world: {kind: mujoco}`, run by mujoco/organism_session.hpp) holds modules instead:
+// each robot names its module kind file (`module:`), and its device tasks come from the module's
+// devices (mujoco/mujoco_devices.hpp):
+//   ir            4 IR proximities (front, back, left, right), 0..1, per control period (port 0)
+//   hinge_state   [angle rad, speed rad/s] of the hinge per control period (port 0)
+//   hinge         the hinge's position servo: takes [target rad]
+//   wheels        as in 2D, [left, right] Thymio motor units (kinds with wheels only)
+//   connector_<n> [state, open, peer] of connector n, made only when the robot's hooks name it;
+//                 its ioctls (open, close, latch, unlatch, state) reach it from a shell or an event
+// Modules may start docked (`world.docked`), a hook may reach a task on another module over the
+// organism bus (`to: robot/task`, RobotSpec::remote_hooks), and in either world `events` run shell
+// lines on a robot's node at given times. Every name above, `connector_` with any suffix
+// included, is taken in both worlds (is_device_task_name), so a file means one thing in each.
+//
 // File format: docs/scenarios.md. Parsing: scenario_parser.cpp (yaml-cpp).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -29,6 +44,8 @@
 #include "symb/os/hook.hpp"
 #include "symb/os/param.hpp"
 #include "symb/os/task_type_registry.hpp"
+#include "symb/sim/mujoco/mjcf_model.hpp"
+#include "symb/sim/mujoco/module_kind.hpp"
 #include "symb/sim/world_spec.hpp"
 
 namespace symb::sim {
@@ -39,12 +56,18 @@ inline constexpr std::string_view kWheelsTaskName = "wheels";
 inline constexpr std::string_view kPoseTaskName = "pose";
 inline constexpr std::string_view kGroundTaskName = "ground";
 inline constexpr std::string_view kRadioTaskName = "radio";
+// ... and those only a 3D module has.
+inline constexpr std::string_view kHingeTaskName = "hinge";
+inline constexpr std::string_view kHingeStateTaskName = "hinge_state";
+inline constexpr std::string_view kConnectorTaskPrefix = "connector_";
 
 // Whether `name` is one of the device tasks above (taken, radio included, even where the world
-// has no radio: a scenario must not mean something else once it gets one).
+// has no radio: a scenario must not mean something else once it gets one; and the 3D ones in a
+// 2D world too, for the same reason).
 inline bool is_device_task_name(std::string_view name) {
   return name == kIrTaskName || name == kWheelsTaskName || name == kPoseTaskName || name == kGroundTaskName ||
-         name == kRadioTaskName;
+         name == kRadioTaskName || name == kHingeTaskName || name == kHingeStateTaskName ||
+         name.substr(0, kConnectorTaskPrefix.size()) == kConnectorTaskPrefix;
 }
 
 // Every robot keeps a disc of this radius (cm) around its start point free: no wall surface and
@@ -58,6 +81,8 @@ inline constexpr int kMaxNesting = 64;           // mappings and sequences insid
 inline constexpr std::size_t kMaxRobots = 1000;  // after `count` expansion
 inline constexpr std::size_t kMaxWalls = 2000;
 inline constexpr std::size_t kMaxZones = 100;
+inline constexpr std::size_t kMaxEvents = 10000;
+inline constexpr std::size_t kMaxDocked = 4000;  // pairs in world.docked
 // The longest run: a scenario's `duration` and the commands' --duration (symb run, sim, evolve)
 // all stop here. 168 h (a week) simulated is hours of wall clock for a swarm at full speed; and
 // a HIL run's sequence numbers last 139 h at 30 ms.
@@ -84,12 +109,70 @@ struct HookSpec {
   SourceLocation where;
 };
 
+// A hook from a task of this robot to a task of another robot (`to: robot/task`), carried by the
+// organism bus (3D worlds with world.bus). The parser checks that both ends exist; whoever runs
+// the scenario wires it (OrganismSession::wire_remote_hooks).
+struct RemoteHookSpec {
+  std::string from;          // a task of this robot (its own or a device task)
+  std::string to_robot;      // the other robot's name
+  std::size_t to_index = 0;  // ... and its index in Scenario::robots
+  std::string to;            // a task of that robot
+  os::HookOptions options;
+  SourceLocation where;     // the hook's entry
+  SourceLocation to_where;  // its `to` value
+};
+
 struct RobotSpec {
   std::string name;
   RobotKind kind = RobotKind::kThymio2;
-  Pose start;  // theta in radians; the file gives degrees
+  // Where it starts: theta in radians (the file gives degrees); x, y in cm. In a 3D world, also
+  // for a module placed by docking (the place docking computed).
+  Pose start;
   std::vector<TaskSpec> tasks;
   std::vector<HookSpec> hooks;
+  std::vector<RemoteHookSpec> remote_hooks;  // 3D worlds with a bus only
+  SourceLocation where;
+  // 3D worlds only: the module kind file as written (relative to the scenario's folder), its
+  // contents, and the start in the world's units (metres, radians).
+  std::string module;
+  SourceLocation module_where;
+  sim::mujoco::ModuleKind module_kind;
+  sim::mujoco::StartPose module_start;
+};
+
+// Which world a scenario describes: the 2D Enki arena (the default) or the 3D MuJoCo world of
+// modules (`world: {kind: mujoco}`).
+enum class WorldKind : std::uint8_t { kEnki, kMujoco };
+
+// world.bus: the organism bus's wire (CAN-like): bits per second and the delay of one frame.
+struct BusSpec {
+  std::uint64_t bandwidth = 1'000'000;                      // bit/s
+  kernel::Duration latency = std::chrono::milliseconds(1);  // per frame, on top of its bits
+  SourceLocation where;
+};
+
+// One world.docked pair: connector `connector_a` of robot `a` latched to `connector_b` of robot
+// `b` before the run starts (indices into Scenario::robots, names as in the module kinds).
+struct DockSpec {
+  std::size_t a = 0;
+  std::string connector_a;
+  std::size_t b = 0;
+  std::string connector_b;
+  SourceLocation where;
+};
+
+// What only a 3D world has.
+struct OrganismWorldSpec {
+  std::vector<DockSpec> docked;
+  std::optional<BusSpec> bus;
+};
+
+// One `events` entry: at `at` after the run's start, `line` runs through a shell on robot
+// `robot`'s node (the same commands a user has); the reply goes to that node's log.
+struct EventSpec {
+  kernel::Duration at{0};
+  std::size_t robot = 0;  // index into Scenario::robots
+  std::string line;
   SourceLocation where;
 };
 
@@ -101,14 +184,30 @@ struct Scenario {
   std::uint64_t seed = 1;
   kernel::Duration duration = std::chrono::minutes(10);
   kernel::Duration control_period = std::chrono::milliseconds(30);
-  WorldSpec world;
+  WorldKind world_kind = WorldKind::kEnki;
+  WorldSpec world;                // the 2D world (its arena is empty in a 3D one)
+  OrganismWorldSpec organism;     // the 3D world's docks and bus
   std::vector<RobotSpec> robots;  // `count: N` entries are expanded, names made unique
+  std::vector<EventSpec> events;  // in file order (those at one time run in that order)
+};
+
+// Reads a module kind file named in a scenario (the name as written, resolved by the reader) and
+// gives its text; parse_scenario parses it, so its errors keep their own file:line:column.
+using ModuleKindReader = std::function<kernel::Result<std::string>(std::string_view)>;
+struct ScenarioParseOptions {
+  // Default: files relative to the folder of the scenario file's name.
+  ModuleKindReader read_module_kind;
 };
 
 // Structure, values and geometry: unknown or missing keys, wrong types, bad durations, walls
 // outside the arena, robots starting inside a wall or another robot, duplicate names, hooks to
 // tasks that the robot does not have. Never throws.
-kernel::Result<Scenario> parse_scenario(std::string_view yaml_text, std::string_view file_name);
+// In a 3D world also the modules: kind files that read and parse, starts clear of each other,
+// docked pairs whose connectors meet within MujocoWorld's latch tolerances; events at times within
+// the run, for robots that exist, with lines the shell can split; remote hooks between tasks that
+// exist.
+kernel::Result<Scenario> parse_scenario(std::string_view yaml_text, std::string_view file_name,
+                                        const ScenarioParseOptions& options = {});
 // Reads `path` and parses it; base_dir is the file's directory.
 kernel::Result<Scenario> load_scenario(const std::string& path);
 

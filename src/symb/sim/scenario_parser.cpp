@@ -20,6 +20,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include "symb/kernel/random_stream.hpp"
+#include "symb/shell/command_line.hpp"
+#include "symb/shell/shell.hpp"
+#include "symb/sim/mujoco/module_kind_file.hpp"
+#include "symb/sim/mujoco/mujoco_world.hpp"
 #include "symb/sim/scenario.hpp"
 #include "symb/sim/yaml_document.hpp"
 
@@ -45,6 +49,16 @@ constexpr std::size_t kMaxTotalParams = 200000;
 // Random starts are picked from a grid of at most about this many points.
 constexpr double kMaxPlacementCandidates = 10000;
 constexpr std::uint64_t kPlacementStream = 0x5ce7a810;
+constexpr double kCm = 0.01;  // m: the file's unit in the world's
+// A bus a CAN controller could run (10 kbit/s) up to a fast serial bus (100 Mbit/s).
+constexpr std::int64_t kMinBusBandwidth = 10'000;
+constexpr std::int64_t kMaxBusBandwidth = 100'000'000;
+// Modules of one organism may touch; two faces may not reach into each other by more than this.
+constexpr double kModuleOverlapSlack = 0.001;  // m
+
+// The keys only one kind of world has: a located error names the other's.
+constexpr std::string_view k2dWorldKeys[] = {"arena", "wall_height", "walls", "zones", "radio"};
+constexpr std::string_view k3dWorldKeys[] = {"docked", "bus"};
 
 using yaml::Failure;
 using yaml::Map;
@@ -122,13 +136,23 @@ struct Parser {
   std::size_t total_tasks = 0;
   std::size_t total_hooks = 0;
   std::size_t total_params = 0;
+  ModuleKindReader read_kind;
+  std::map<std::string, mujoco::ModuleKind, std::less<>> kinds;  // by the name as written
+  YAML::Node docked_node;                                        // world.docked, read once the robots are known
+  // Per robot (expanded): the start the file gives, if any, and where.
+  std::vector<std::optional<Pose>> given_start;
+  std::vector<SourceLocation> given_where;
+  std::map<std::string, std::size_t, std::less<>> robot_indices;  // expanded names, once all are known
 
-  explicit Parser(const Source& s) : src(s), rd(s) {}
+  Parser(const Source& s, ModuleKindReader reader) : src(s), rd(s), read_kind(std::move(reader)) {}
+
+  bool in_3d() const { return sc.world_kind == WorldKind::kMujoco; }
 
   void top(const YAML::Node& root) {
     if (!root.IsDefined() || root.IsNull())
       src.fail(SourceLocation{src.file(), 1, 1}, "the scenario is empty: it needs at least name, world and robots");
-    Map m(src, root, "the scenario", {"name", "description", "seed", "duration", "control_period", "world", "robots"});
+    Map m(src, root, "the scenario",
+          {"name", "description", "seed", "duration", "control_period", "world", "robots", "events"});
     sc.name = rd.name(m.require("name"), "name");
     if (auto d = m.get("description"); d.IsDefined() && !d.IsNull()) sc.description = rd.text(d, "description");
     if (auto s = m.get("seed"); s.IsDefined()) sc.seed = rd.unsigned_integer(s, "seed");
@@ -138,10 +162,37 @@ struct Parser {
       sc.control_period = rd.duration(p, "control_period", std::chrono::milliseconds(1), std::chrono::seconds(1));
     world(m.require("world"));
     robots(m.require("robots"));
+    if (in_3d()) {
+      docked();
+      place_modules();
+    }
+    resolve_remote_hooks();
+    events(m.get("events"));
   }
 
   void world(const YAML::Node& n) {
-    Map m(src, n, "world", {"arena", "wall_height", "walls", "zones", "radio"});
+    Map m(src, n, "world", {"kind", "arena", "wall_height", "walls", "zones", "radio", "docked", "bus"});
+    if (auto k = m.get("kind"); k.IsDefined()) {
+      const std::string kind = rd.text(k, "world kind");
+      if (kind == "mujoco")
+        sc.world_kind = WorldKind::kMujoco;
+      else if (kind != "enki")
+        src.fail(k, "unknown world kind '" + shown(kind) +
+                        "' (enki: the 2D arena, the default; mujoco: the 3D world of modules)");
+    }
+    if (in_3d()) {
+      for (const std::string_view key : k2dWorldKeys)
+        if (m.has(key))
+          src.fail(m.get(key), "'" + std::string(key) +
+                                   "' belongs to a 2D world: a 3D world (kind: mujoco) is an open floor without "
+                                   "arena, walls, zones or radio");
+      docked_node = m.get("docked");
+      if (auto b = m.get("bus"); b.IsDefined()) sc.organism.bus = bus(b);
+      return;
+    }
+    for (const std::string_view key : k3dWorldKeys)
+      if (m.has(key))
+        src.fail(m.get(key), "'" + std::string(key) + "' belongs to a 3D world: add kind: mujoco to the world");
     Map arena(src, m.require("arena"), "arena", {"width", "height"});
     sc.world.width = rd.number(arena.require("width"), "arena width (cm)", kMinArena, kMaxArena);
     sc.world.height = rd.number(arena.require("height"), "arena height (cm)", kMinArena, kMaxArena);
@@ -149,6 +200,20 @@ struct Parser {
     for (const auto& w : rd.list(m.get("walls"), "walls", kMaxWalls)) sc.world.walls.push_back(wall(w));
     for (const auto& z : rd.list(m.get("zones"), "zones", kMaxZones)) sc.world.zones.push_back(zone(z));
     if (auto r = m.get("radio"); r.IsDefined()) sc.world.radio = radio(r);
+  }
+
+  // {bandwidth: BITS_PER_S, latency: DURATION}
+  BusSpec bus(const YAML::Node& n) {
+    if (!n.IsMap()) src.fail(n, "bus is {bandwidth: BITS_PER_SECOND, latency: DURATION}" + Map::got(n));
+    Map m(src, n, "bus", {"bandwidth", "latency"});
+    BusSpec b;
+    b.where = src.at(n);
+    if (auto v = m.get("bandwidth"); v.IsDefined())
+      b.bandwidth =
+          static_cast<std::uint64_t>(rd.integer(v, "bus bandwidth (bit/s)", kMinBusBandwidth, kMaxBusBandwidth));
+    if (auto v = m.get("latency"); v.IsDefined())
+      b.latency = rd.duration(v, "bus latency", kernel::Duration{0}, std::chrono::seconds(1));
+    return b;
   }
 
   // {range: CM, max_message_bytes: N}
@@ -245,7 +310,7 @@ struct Parser {
       if (total > kMaxRobots) src.fail(item, "more than " + std::to_string(kMaxRobots) + " robots in one scenario");
       const Entry& e = entries.back();
       total_tasks += e.count * e.proto.tasks.size();
-      total_hooks += e.count * e.proto.hooks.size();
+      total_hooks += e.count * (e.proto.hooks.size() + e.proto.remote_hooks.size());
       for (const auto& t : e.proto.tasks) total_params += e.count * t.params.size();
       if (total_tasks > kMaxTotalTasks || total_hooks > kMaxTotalHooks || total_params > kMaxTotalParams)
         src.fail(item, "too big: more than " + std::to_string(kMaxTotalTasks) + " tasks, " +
@@ -263,6 +328,24 @@ struct Parser {
           src.fail(e.proto.where,
                    "robot name '" + nm + "' is already used (line " + std::to_string(it->second.line) + ")");
       }
+    if (in_3d()) {
+      // No arena to place in: starts as given (checked with the docks, place_modules).
+      for (const auto& e : entries)
+        for (std::size_t i = 0; i < e.count; ++i) {
+          RobotSpec r = e.proto;
+          if (e.counted) r.name += std::to_string(i);
+          std::optional<Pose> start;
+          SourceLocation where = e.proto.where;
+          if (i < e.starts.size()) {
+            start = e.starts[i];
+            where = e.start_where[i];
+          }
+          given_start.push_back(start);
+          given_where.push_back(std::move(where));
+          sc.robots.push_back(std::move(r));
+        }
+      return;
+    }
     // Explicit starts first, in file order; random ones then fill the free space around them.
     std::vector<Pose> placed;
     for (const auto& e : entries)
@@ -314,10 +397,27 @@ struct Parser {
 
   Entry robot(const YAML::Node& n) {
     Entry e;
-    Map m(src, n, "a robot", {"name", "kind", "count", "start", "tasks", "hooks"});
+    Map m(src, n, "a robot", {"name", "kind", "module", "count", "start", "tasks", "hooks"});
     RobotSpec& r = e.proto;
     r.where = src.at(n);
-    r.name = rd.name(m.require("name"), "robot name");
+    const YAML::Node name_node = m.require("name");
+    r.name = rd.name(name_node, "robot name");
+    if (in_3d()) {
+      if (r.name.find('-') != std::string::npos)
+        src.fail(name_node, "module name '" + r.name +
+                                "' has a '-': in a 3D world a name is letters, digits and '_' "
+                                "(the world names its bodies after it)");
+      if (auto k = m.get("kind"); k.IsDefined())
+        src.fail(k,
+                 "'kind' names a 2D robot; in a 3D world a robot names its module kind file: "
+                 "module: modules/cube.yaml");
+      const YAML::Node mod = m.require("module");
+      r.module = rd.text(mod, "module");
+      r.module_where = src.at(mod);
+      r.module_kind = module_kind(mod, r.module);
+    } else if (auto mod = m.get("module"); mod.IsDefined()) {
+      src.fail(mod, "'module' names a 3D module kind: only in a 3D world (world: {kind: mujoco})");
+    }
     if (auto k = m.get("kind"); k.IsDefined()) {
       const std::string kind = rd.text(k, "kind");
       if (kind != "thymio2") src.fail(k, "unknown robot kind '" + shown(kind) + "' (the only kind is thymio2)");
@@ -327,14 +427,14 @@ struct Parser {
       e.count = static_cast<std::size_t>(rd.integer(c, "count", 1, static_cast<std::int64_t>(kMaxRobots)));
       e.counted = true;
     }
-    e.start_node = m.require("start");
-    starts(e);
+    e.start_node = in_3d() ? m.get("start") : m.require("start");
+    if (e.start_node.IsDefined()) starts(e);
     for (const auto& t : rd.list(m.get("tasks"), "tasks", kMaxTasksPerRobot)) {
       TaskSpec ts = task(t);
       if (is_device_task_name(ts.name))
-        src.fail(ts.where, "task name '" + ts.name + "' is taken: it names a device task (" + std::string(kIrTaskName) +
-                               ", " + std::string(kWheelsTaskName) + ", " + std::string(kPoseTaskName) + ", " +
-                               std::string(kGroundTaskName) + ", " + std::string(kRadioTaskName) + ")");
+        src.fail(ts.where, "task name '" + ts.name +
+                               "' is taken: it names a device task (ir, wheels, pose, ground, radio, hinge, "
+                               "hinge_state, connector_*)");
       for (const auto& other : r.tasks)
         if (other.name == ts.name)
           src.fail(ts.where, "robot '" + r.name + "' already has a task '" + ts.name + "' (line " +
@@ -350,6 +450,10 @@ struct Parser {
     if (s.IsScalar()) {
       if (s.Scalar() != "random")
         src.fail(s, "start must be {x: X, y: Y, heading: DEGREES}, a list of those, or 'random'" + Map::got(s));
+      if (in_3d())
+        src.fail(s,
+                 "a 3D world has no arena to place modules at random: give {x: X, y: Y, heading: DEGREES}, "
+                 "or dock the module to one that has a start (world.docked)");
       e.random = true;
       return;
     }
@@ -365,7 +469,8 @@ struct Parser {
       return;
     }
     if (s.IsMap()) {
-      if (e.count != 1)
+      // In 3D one pose for N modules places the first; world.docked places the others.
+      if (e.count != 1 && !in_3d())
         src.fail(s, std::to_string(e.count) + " robots cannot all start at one pose: give a list of " +
                         std::to_string(e.count) + " poses or 'random'");
       e.starts.push_back(pose(s));
@@ -484,26 +589,51 @@ struct Parser {
     return t;
   }
 
+  // The device tasks robot `r` has in this world.
+  std::vector<std::string> device_tasks(const RobotSpec& r) const {
+    if (!in_3d()) {
+      std::vector<std::string> names{std::string(kIrTaskName), std::string(kWheelsTaskName), std::string(kPoseTaskName),
+                                     std::string(kGroundTaskName)};
+      if (sc.world.radio) names.emplace_back(kRadioTaskName);
+      return names;
+    }
+    std::vector<std::string> names{std::string(kIrTaskName), std::string(kHingeStateTaskName),
+                                   std::string(kHingeTaskName)};
+    if (r.module_kind.has_wheels) names.emplace_back(kWheelsTaskName);
+    for (const auto& c : r.module_kind.connectors) names.push_back(std::string(kConnectorTaskPrefix) + c.name);
+    return names;
+  }
+
   // Every name a hook of robot `r` may use.
   bool has_task(const RobotSpec& r, std::string_view name) const {
-    if (name == kRadioTaskName) return sc.world.radio.has_value();
-    if (is_device_task_name(name)) return true;
+    if (is_device_task_name(name)) {
+      const auto devices = device_tasks(r);
+      return std::find(devices.begin(), devices.end(), name) != devices.end();
+    }
     return std::any_of(r.tasks.begin(), r.tasks.end(), [&](const TaskSpec& t) { return t.name == name; });
+  }
+
+  [[noreturn]] void no_task(const RobotSpec& r, const std::string& name, const SourceLocation& where) const {
+    const auto devices = device_tasks(r);
+    // The radio last, after the robot's own tasks: the order the hint breaks ties in.
+    std::vector<std::string_view> names;
+    for (const auto& d : devices)
+      if (d != kRadioTaskName) names.push_back(d);
+    for (const auto& t : r.tasks) names.push_back(t.name);
+    if (!in_3d() && sc.world.radio) names.push_back(kRadioTaskName);
+    std::string msg = "robot '" + r.name + "' has no task '" + name + "'";
+    if (name == kRadioTaskName && !in_3d())
+      msg += ": robots have a radio only in a world that declares one (world: radio: {range: CM})";
+    else if (name == kWheelsTaskName && in_3d())
+      msg += ": its module kind '" + r.module_kind.name + "' has no wheels";
+    else if (auto hint = os::closest_name(name, names); !hint.empty())
+      msg += " (did you mean '" + hint + "'?)";
+    src.fail(where, msg);
   }
 
   void add_hook(RobotSpec& r, HookSpec h, const SourceLocation& to_where) {
     for (const std::string* end : {&h.from, &h.to})
-      if (!has_task(r, *end)) {
-        std::vector<std::string_view> names{kIrTaskName, kWheelsTaskName, kPoseTaskName, kGroundTaskName};
-        for (const auto& t : r.tasks) names.push_back(t.name);
-        if (sc.world.radio) names.push_back(kRadioTaskName);
-        std::string msg = "robot '" + r.name + "' has no task '" + *end + "'";
-        if (*end == kRadioTaskName)
-          msg += ": robots have a radio only in a world that declares one (world: radio: {range: CM})";
-        else if (auto hint = os::closest_name(*end, names); !hint.empty())
-          msg += " (did you mean '" + hint + "'?)";
-        src.fail(end == &h.from ? h.where : to_where, msg);
-      }
+      if (!has_task(r, *end)) no_task(r, *end, end == &h.from ? h.where : to_where);
     if (h.from == h.to) src.fail(h.where, "task '" + h.from + "' is hooked to itself");
     for (const auto& o : r.hooks)
       if (o.from == h.from && o.to == h.to && os::same_hook_key(o.options.port, h.options.port))
@@ -532,6 +662,9 @@ struct Parser {
             one_line ? src.at(n.Mark(), quote + static_cast<int>(from + std::min(lead, part.size()))) : src.at(n);
         const std::string name = trim(part);
         if (name.empty()) src.fail(where, "hook '" + shown(s) + "' is missing a task name; write 'sender -> receiver'");
+        if (name.find('/') != std::string::npos)
+          src.fail(where, "'" + shown(name) + "' names another robot's task: write that hook in the long form, " +
+                              "{from: TASK, to: ROBOT/TASK}");
         if (!os::is_valid_name(name))
           src.fail(where, "'" + shown(name) + "' in hook '" + shown(s) + "' is not a task name");
         names.emplace_back(name, where);
@@ -554,7 +687,19 @@ struct Parser {
     h.where = src.at(n);
     h.from = rd.task_name(m.require("from"), "hook 'from'");
     const YAML::Node to = m.require("to");
-    h.to = rd.task_name(to, "hook 'to'");
+    const bool remote = to.IsScalar() && to.Scalar().find('/') != std::string::npos;
+    if (remote) {
+      if (!in_3d())
+        src.fail(to,
+                 "a hook to another robot's task (ROBOT/TASK) rides the organism bus: only in a 3D world "
+                 "(world: {kind: mujoco, bus: {...}})");
+      if (!sc.organism.bus)
+        src.fail(to,
+                 "a hook to another robot's task (ROBOT/TASK) rides the organism bus, and this world has none: "
+                 "add world.bus: {bandwidth: BITS_PER_SECOND, latency: DURATION}");
+    } else {
+      h.to = rd.task_name(to, "hook 'to'");
+    }
     if (auto v = m.get("port"); v.IsDefined())
       h.options.port = static_cast<std::int32_t>(rd.integer(v, "port", 0, kMaxPort));
     if (auto v = m.get("priority"); v.IsDefined())
@@ -571,20 +716,303 @@ struct Parser {
     if (auto v = m.get("suppress"); v.IsDefined())
       h.options.suppress_window = rd.duration(v, "suppress", kernel::Duration{0}, std::chrono::hours(1));
     if (auto v = m.get("enabled"); v.IsDefined()) h.options.enabled = rd.boolean(v, "enabled");
+    if (remote) {
+      add_remote_hook(r, std::move(h), to);
+      return;
+    }
     add_hook(r, std::move(h), src.at(to));
+  }
+
+  // {from: TASK, to: ROBOT/TASK}: `from` is checked here, the other end once every robot is known.
+  void add_remote_hook(RobotSpec& r, HookSpec h, const YAML::Node& to) {
+    const std::string& text = to.Scalar();
+    const std::size_t slash = text.find('/');
+    const std::string robot = text.substr(0, slash), task = text.substr(slash + 1);
+    if (!is_scenario_name(robot))
+      src.fail(to, "'" + shown(robot) + "' in '" + shown(text) + "' is not a robot name; write ROBOT/TASK");
+    if (!os::is_valid_name(task))
+      src.fail(to, "'" + shown(task) + "' in '" + shown(text) + "' is not a task name; write ROBOT/TASK");
+    if (!has_task(r, h.from)) no_task(r, h.from, h.where);
+    for (const auto& o : r.remote_hooks)
+      if (o.from == h.from && o.to_robot == robot && o.to == task && os::same_hook_key(o.options.port, h.options.port))
+        src.fail(h.where, "hook " + h.from + " -> " + text + " is given twice (first at line " +
+                              std::to_string(o.where.line) + ")");
+    if (r.hooks.size() + r.remote_hooks.size() >= kMaxHooksPerRobot)
+      src.fail(h.where, "more than " + std::to_string(kMaxHooksPerRobot) + " hooks for one robot");
+    RemoteHookSpec rh;
+    rh.from = h.from;
+    rh.to_robot = robot;
+    rh.to = task;
+    rh.options = h.options;
+    rh.where = h.where;
+    rh.to_where = src.at(to);
+    r.remote_hooks.push_back(std::move(rh));
+  }
+
+  std::optional<std::size_t> robot_index(std::string_view name) {
+    if (robot_indices.size() != sc.robots.size())
+      for (std::size_t i = robot_indices.size(); i < sc.robots.size(); ++i) robot_indices.emplace(sc.robots[i].name, i);
+    if (auto it = robot_indices.find(name); it != robot_indices.end()) return it->second;
+    return std::nullopt;
+  }
+
+  [[noreturn]] void no_robot(std::string_view name, const SourceLocation& where) const {
+    std::vector<std::string_view> names;
+    for (const auto& r : sc.robots) names.push_back(r.name);
+    std::string msg = "there is no robot '" + shown(name) + "'";
+    if (auto hint = os::closest_name(name, names); !hint.empty()) msg += " (did you mean '" + hint + "'?)";
+    src.fail(where, msg);
+  }
+
+  void resolve_remote_hooks() {
+    for (std::size_t i = 0; i < sc.robots.size(); ++i)
+      for (RemoteHookSpec& h : sc.robots[i].remote_hooks) {
+        const auto to = robot_index(h.to_robot);
+        if (!to) no_robot(h.to_robot, h.to_where);
+        if (*to == i)
+          src.fail(h.to_where, "'" + h.to_robot + "' is this hook's own robot: hook its own task as 'from -> to'");
+        if (!has_task(sc.robots[*to], h.to)) no_task(sc.robots[*to], h.to, h.to_where);
+        h.to_index = *to;
+      }
+  }
+
+  // A module kind file named by `module` (the node), read once however many robots name it.
+  mujoco::ModuleKind module_kind(const YAML::Node& n, const std::string& name) {
+    if (auto it = kinds.find(name); it != kinds.end()) return it->second;
+    if (name.empty()) src.fail(n, "module names no file: module: modules/cube.yaml");
+    auto text = read_kind(name);
+    if (!text) src.fail(n, "cannot read module kind '" + shown(name) + "': " + text.error());
+    namespace fs = std::filesystem;
+    fs::path shown_path{name};
+    if (shown_path.is_relative()) shown_path = fs::path(sc.base_dir) / shown_path;
+    auto kind = mujoco::parse_module_kind(*text, shown_path.lexically_normal().string());
+    if (!kind) throw Failure{kind.error() + " (the module kind named at " + src.at(n).str() + ")"};
+    if (const std::string why = mujoco::check(*kind); !why.empty())
+      src.fail(n, "module kind '" + shown(name) + "' cannot be built: " + why);
+    kinds.emplace(name, *kind);
+    return *kind;
+  }
+
+  // Where a module is on the floor: metres and radians, as the 3D world takes it.
+  struct Placed {
+    double x = 0, y = 0, yaw = 0;
+  };
+
+  static mujoco::Vec3 turned(double yaw, const mujoco::Vec3& v) {
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    return {c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]};
+  }
+  static const mujoco::ConnectorSpec& connector(const RobotSpec& r, std::string_view name) {
+    return *std::find_if(r.module_kind.connectors.begin(), r.module_kind.connectors.end(),
+                         [&](const mujoco::ConnectorSpec& c) { return c.name == name; });
+  }
+  // The connector's centre in the world, the module at rest at `p` with its hinge straight.
+  static mujoco::Vec3 connector_at(const RobotSpec& r, const Placed& p, const mujoco::ConnectorSpec& c) {
+    const mujoco::Vec3 v = turned(p.yaw, c.position);
+    return {p.x + v[0], p.y + v[1], mujoco::rest_height(r.module_kind) + v[2]};
+  }
+
+  // How far two modules' boxes (seen from above) reach into each other, m; <= 0 when apart. The
+  // separating-axis test over the four edge directions of two rectangles.
+  static double overlap(const RobotSpec& ra, const Placed& a, const RobotSpec& rb, const Placed& b) {
+    const double d[2] = {b.x - a.x, b.y - a.y};
+    double least = std::numeric_limits<double>::infinity();
+    for (const double axis_yaw : {a.yaw, a.yaw + std::numbers::pi / 2, b.yaw, b.yaw + std::numbers::pi / 2}) {
+      const double ax = std::cos(axis_yaw), ay = std::sin(axis_yaw);
+      auto reach = [&](const RobotSpec& r, const Placed& p) {
+        const auto& size = r.module_kind.body.size;
+        return size[0] / 2 * std::abs(std::cos(p.yaw) * ax + std::sin(p.yaw) * ay) +
+               size[1] / 2 * std::abs(-std::sin(p.yaw) * ax + std::cos(p.yaw) * ay);
+      };
+      least = std::min(least, reach(ra, a) + reach(rb, b) - std::abs(d[0] * ax + d[1] * ay));
+    }
+    return least;
+  }
+
+  static std::string mm(double metres) { return Reader::fmt(std::round(metres * 10000) / 10) + " mm"; }
+
+  // Each organism (modules joined by world.docked) from the start of its first module in the
+  // file, every other module where its dock puts it: turned so the two connectors face each other,
+  // moved so they coincide. Then every pair is checked against the latch tolerances (a pair that
+  // closes a ring, or joins kinds of different heights, may not meet) and no two bodies overlap.
+  void place_modules() {
+    const std::size_t n = sc.robots.size();
+    const auto& docks = sc.organism.docked;
+    std::vector<std::optional<Placed>> placed(n);
+    std::vector<SourceLocation> placed_by(n);
+    std::vector<std::size_t> placed_by_dock(n, mujoco::kNoIndex);
+    std::vector<std::vector<std::size_t>> docks_of(n);
+    for (std::size_t k = 0; k < docks.size(); ++k) {
+      docks_of[docks[k].a].push_back(k);
+      docks_of[docks[k].b].push_back(k);
+    }
+    for (std::size_t root = 0; root < n; ++root) {
+      if (placed[root] || !given_start[root]) continue;
+      const Pose& g = *given_start[root];
+      placed[root] = Placed{g.x * kCm, g.y * kCm, g.theta};
+      placed_by[root] = given_where[root];
+      std::vector<std::size_t> queue{root};
+      for (std::size_t qi = 0; qi < queue.size(); ++qi) {
+        const std::size_t u = queue[qi];
+        for (const std::size_t k : docks_of[u]) {
+          const DockSpec& d = docks[k];
+          const bool u_is_a = d.a == u;
+          const std::size_t v = u_is_a ? d.b : d.a;
+          if (placed[v]) continue;  // a ring: checked with every pair below
+          if (given_start[v])
+            src.fail(given_where[v], "robot '" + sc.robots[v].name + "' is placed by docking (world.docked, line " +
+                                         std::to_string(d.where.line) + ") in the organism of '" +
+                                         sc.robots[root].name +
+                                         "', which has a start: an organism takes one "
+                                         "start, its first module's; remove this one");
+          const auto& cu = connector(sc.robots[u], u_is_a ? d.connector_a : d.connector_b);
+          const auto& cv = connector(sc.robots[v], u_is_a ? d.connector_b : d.connector_a);
+          const mujoco::Vec3 nu = turned(placed[u]->yaw, mujoco::face_normal(cu.face));
+          const mujoco::Vec3 nv = mujoco::face_normal(cv.face);
+          const double yaw = std::remainder(std::atan2(nu[1], nu[0]) + std::numbers::pi - std::atan2(nv[1], nv[0]),
+                                            2 * std::numbers::pi);
+          const mujoco::Vec3 at = connector_at(sc.robots[u], *placed[u], cu);
+          const mujoco::Vec3 offset = turned(yaw, cv.position);
+          placed[v] = Placed{at[0] - offset[0], at[1] - offset[1], yaw};
+          placed_by[v] = d.where;
+          placed_by_dock[v] = k;
+          queue.push_back(v);
+        }
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      if (!placed[i]) {
+        if (docks_of[i].empty())
+          src.fail(sc.robots[i].where, "robot '" + sc.robots[i].name +
+                                           "' has no start: give it start: {x: X, y: Y, heading: DEGREES}, or "
+                                           "dock it (world.docked) to a module that has one");
+        src.fail(docks[docks_of[i].front()].where,
+                 "the organism of '" + sc.robots[i].name + "' has no start: give its first module a start");
+      }
+    for (std::size_t k = 0; k < docks.size(); ++k) {
+      const DockSpec& d = docks[k];
+      const RobotSpec &ra = sc.robots[d.a], &rb = sc.robots[d.b];
+      const auto &ca = connector(ra, d.connector_a), &cb = connector(rb, d.connector_b);
+      const mujoco::Vec3 pa = connector_at(ra, *placed[d.a], ca), pb = connector_at(rb, *placed[d.b], cb);
+      const double distance = std::hypot(pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]);
+      const mujoco::Vec3 na = turned(placed[d.a]->yaw, mujoco::face_normal(ca.face));
+      const mujoco::Vec3 nb = turned(placed[d.b]->yaw, mujoco::face_normal(cb.face));
+      const double angle = std::acos(std::clamp(-(na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2]), -1.0, 1.0));
+      const std::string pair = ra.name + "." + d.connector_a + " and " + rb.name + "." + d.connector_b;
+      if (distance > mujoco::kLatchPositionTolerance)
+        src.fail(d.where,
+                 pair + " cannot meet: placed " +
+                     (placed_by_dock[d.a] == k || placed_by_dock[d.b] == k ? std::string("face to face")
+                                                                           : std::string("by their other docks")) +
+                     ", their centres are " + mm(distance) + " apart (" + mm(std::abs(pa[2] - pb[2])) +
+                     " in height); latching needs at most " + mm(mujoco::kLatchPositionTolerance));
+      if (angle > mujoco::kLatchAngleTolerance)
+        src.fail(d.where, pair + " cannot meet: placed by their other docks, they face " +
+                              Reader::fmt(std::round(angle * 1800 / std::numbers::pi) / 10) +
+                              " degrees away from each other; latching needs at most 10");
+    }
+    for (std::size_t j = 0; j < n; ++j)
+      for (std::size_t i = 0; i < j; ++i)
+        if (const double o = overlap(sc.robots[i], *placed[i], sc.robots[j], *placed[j]); o > kModuleOverlapSlack)
+          src.fail(placed_by[j], "robot '" + sc.robots[j].name + "' would start inside robot '" + sc.robots[i].name +
+                                     "': their bodies overlap by " + mm(o));
+    for (std::size_t i = 0; i < n; ++i) {
+      RobotSpec& r = sc.robots[i];
+      r.module_start = {placed[i]->x, placed[i]->y, placed[i]->yaw};
+      r.start = Pose{placed[i]->x / kCm, placed[i]->y / kCm, placed[i]->yaw};
+    }
+  }
+
+  // events: [{at: DURATION, robot: NAME, shell: LINE}, ...]
+  void events(const YAML::Node& n) {
+    for (const auto& item : rd.list(n, "events", kMaxEvents)) {
+      Map m(src, item, "an event", {"at", "robot", "shell"});
+      EventSpec e;
+      e.where = src.at(item);
+      e.at = rd.duration(m.require("at"), "event time 'at'", kernel::Duration{0}, sc.duration);
+      const YAML::Node robot = m.require("robot");
+      const std::string name = rd.text(robot, "event robot");
+      const auto index = robot_index(name);
+      if (!index) no_robot(name, src.at(robot));
+      e.robot = *index;
+      const YAML::Node line = m.require("shell");
+      e.line = rd.text(line, "event shell line");
+      auto tokens = shell::tokenize(e.line);
+      if (!tokens) src.fail(line, "event shell line: " + tokens.error());
+      if (tokens->empty()) src.fail(line, "event shell line has no command");
+      const std::string& command = tokens->front().text;
+      std::vector<std::string_view> commands;
+      for (const auto& c : shell::Shell::commands()) commands.push_back(c.name);
+      if (std::find(commands.begin(), commands.end(), command) == commands.end()) {
+        std::string msg = "event shell line: unknown command '" + shown(command) + "'";
+        if (auto hint = os::closest_name(command, commands); !hint.empty()) msg += " (did you mean '" + hint + "'?)";
+        src.fail(line, msg);
+      }
+      sc.events.push_back(std::move(e));
+    }
+    std::stable_sort(sc.events.begin(), sc.events.end(),
+                     [](const EventSpec& a, const EventSpec& b) { return a.at < b.at; });
+  }
+
+  // world.docked: [[a.back, b.front], ...]
+  void docked() {
+    std::map<std::pair<std::size_t, std::string>, SourceLocation> used;
+    for (const auto& item : rd.list(docked_node, "docked", kMaxDocked)) {
+      if (!item.IsSequence() || item.size() != 2)
+        src.fail(item,
+                 "a docked pair is [ROBOT.CONNECTOR, ROBOT.CONNECTOR], e.g. [m0.back, m1.front]" + Map::got(item));
+      DockSpec d;
+      d.where = src.at(item);
+      std::size_t* robot[2] = {&d.a, &d.b};
+      std::string* connector[2] = {&d.connector_a, &d.connector_b};
+      for (int k = 0; k < 2; ++k) {
+        const YAML::Node end = item[k];
+        const std::string text = rd.text(end, "a docked connector");
+        const std::size_t dot = text.find('.');
+        if (dot == std::string::npos)
+          src.fail(end, "'" + shown(text) + "' names no connector: write ROBOT.CONNECTOR, e.g. m0.back");
+        const std::string rname = text.substr(0, dot), cname = text.substr(dot + 1);
+        const auto index = robot_index(rname);
+        if (!index) no_robot(rname, src.at(end));
+        const mujoco::ModuleKind& kind = sc.robots[*index].module_kind;
+        if (std::none_of(kind.connectors.begin(), kind.connectors.end(),
+                         [&](const mujoco::ConnectorSpec& c) { return c.name == cname; })) {
+          std::vector<std::string_view> names;
+          for (const auto& c : kind.connectors) names.push_back(c.name);
+          std::string msg =
+              "robot '" + rname + "' (module kind '" + kind.name + "') has no connector '" + shown(cname) + "'";
+          if (auto hint = os::closest_name(cname, names); !hint.empty()) msg += " (did you mean '" + hint + "'?)";
+          src.fail(end, msg);
+        }
+        if (auto [it, fresh] = used.emplace(std::pair{*index, cname}, src.at(end)); !fresh)
+          src.fail(end, "'" + text + "' is docked twice (first at line " + std::to_string(it->second.line) + ")");
+        *robot[k] = *index;
+        *connector[k] = cname;
+      }
+      if (d.a == d.b) src.fail(d.where, "robot '" + sc.robots[d.a].name + "' is docked to itself");
+      sc.organism.docked.push_back(std::move(d));
+    }
   }
 };
 
 }  // namespace
 
-kernel::Result<Scenario> parse_scenario(std::string_view yaml_text, std::string_view file_name) {
+kernel::Result<Scenario> parse_scenario(std::string_view yaml_text, std::string_view file_name,
+                                        const ScenarioParseOptions& options) {
+  const std::string dir = std::filesystem::path(std::string(file_name)).parent_path().string();
+  const std::string base_dir = dir.empty() ? "." : dir;
+  ModuleKindReader reader = options.read_module_kind;
+  if (!reader)
+    reader = [base_dir](std::string_view name) -> kernel::Result<std::string> {
+      std::filesystem::path p{std::string(name)};
+      if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
+      return yaml::read_text_file(p.lexically_normal().string(), mujoco::kMaxModuleKindBytes, "module kind");
+    };
   return yaml::parse_document<Scenario>(yaml_text, file_name, "a scenario", kMaxScenarioBytes, kMaxNesting,
                                         [&](const Source& src, const YAML::Node& root) {
-                                          Parser p(src);
+                                          Parser p(src, reader);
                                           p.sc.file = std::string(file_name);
-                                          const std::string dir =
-                                              std::filesystem::path(p.sc.file).parent_path().string();
-                                          p.sc.base_dir = dir.empty() ? "." : dir;
+                                          p.sc.base_dir = base_dir;
                                           p.top(root);
                                           return std::move(p.sc);
                                         });

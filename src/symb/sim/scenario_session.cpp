@@ -9,6 +9,8 @@ namespace symb::sim {
 kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const Scenario& scenario,
                                                                          kernel::Executor& executor,
                                                                          SessionOptions options) {
+  if (scenario.world_kind != WorldKind::kEnki)
+    return kernel::Error{scenario.file + ": this scenario describes a 3D world: an OrganismSession runs it"};
   std::unique_ptr<ScenarioSession> s(new ScenarioSession());
   s->scenario_ = scenario;
   s->seed_ = options.seed.value_or(scenario.seed);
@@ -46,37 +48,38 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
     auto built =
         RobotSystem::build(executor, scenario.robots[i],
                            RobotDevices{s->runner_->ir_sensor(i), s->runner_->wheels(i), s->runner_->pose_sensor(i),
-                                        s->runner_->ground_sensor(i), s->radio_.get(), i},
+                                        s->runner_->ground_sensor(i), s->radio_.get(), i, std::nullopt},
                            std::move(ro));
     if (!built) return kernel::Error{built.error()};
     s->robots_.push_back(std::move(built).value());
+  }
+  if (!scenario.events.empty()) {
+    std::vector<ScenarioEvents::Robot> targets;
+    for (std::size_t i = 0; i < s->robots_.size(); ++i)
+      targets.push_back({&s->robots_[i]->node(), world_runner_devices(*s->runner_, i)});
+    s->events_ = std::make_unique<ScenarioEvents>(executor, scenario.events, std::move(targets));
   }
   return s;
 }
 
 ScenarioSession::~ScenarioSession() {
+  events_.reset();
   if (runner_) runner_->stop();
   robots_.clear();  // every node emptied (RobotSystem's destructor) before the drivers' runner goes
 }
 
 void ScenarioSession::start() {
   if (runner_ && !runner_->running()) (void)runner_->start();
+  if (events_) (void)events_->start();
 }
 
 void ScenarioSession::stop() {
+  if (events_) events_->stop();
   if (runner_) runner_->stop();
 }
 
-std::string ScenarioSession::cycle_error() const {
-  for (const auto& r : robots_)
-    if (auto e = r->node().cycle_error(); !e.empty()) return e;
-  return {};
-}
+std::string ScenarioSession::cycle_error() const { return first_cycle_error(robots_); }
 
-RobotSystem* ScenarioSession::find_robot(std::string_view name) {
-  for (auto& r : robots_)
-    if (r->name() == name) return r.get();
-  return nullptr;
-}
+RobotSystem* ScenarioSession::find_robot(std::string_view name) { return sim::find_robot(robots_, name); }
 
 }  // namespace symb::sim

@@ -4,8 +4,8 @@
 // what tests drive step by step; recording and output files are the caller's business (observe
 // the runner).
 //
-// Lifetime: create() builds everything but starts nothing; start() attaches the runner (the
-// robots' tasks already run: they wait for sensor data); the destructor stops the runner and
+// Lifetime: create() builds everything but starts nothing; start() attaches the runner and the
+// scenario's events (the robots' tasks already run: they wait for sensor data); the destructor stops the runner and
 // empties every node before the world goes away, so no task touches a freed driver.
 #pragma once
 
@@ -19,6 +19,7 @@
 #include "symb/sim/local_radio.hpp"
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
+#include "symb/sim/scenario_events.hpp"
 #include "symb/sim/world.hpp"
 #include "symb/sim/world_runner.hpp"
 
@@ -55,6 +56,8 @@ class ScenarioSession {
   std::string cycle_error() const;
   // The world's radio medium (world.radio in the scenario), or null.
   LocalRadio* radio() { return radio_.get(); }
+  // The scenario's events (scenario.events), or null when it has none.
+  ScenarioEvents* events() { return events_.get(); }
 
  private:
   ScenarioSession() = default;
@@ -64,6 +67,7 @@ class ScenarioSession {
   std::unique_ptr<LocalRadio> radio_;  // observes runner_: destroyed after it
   std::unique_ptr<WorldRunner> runner_;
   std::vector<std::unique_ptr<RobotSystem>> robots_;  // destroyed before runner_ and world_
+  std::unique_ptr<ScenarioEvents> events_;            // stopped before robots_ go
 };
 
 }  // namespace symb::sim
