@@ -33,7 +33,7 @@ inline constexpr os::PortLayout kPose{"pose", "[x, y, heading]"};
 inline constexpr os::PortLayout kSchemaVector{"schema-vector", "[vx, vy]"};
 // [bit, 0 or 1]: sets or clears an external interrupt bit of an MDL2e program.
 inline constexpr os::PortLayout kExternalBit{"external-bit", "[bit, 0 or 1]"};
-// [angle]: a joint's target, rad (a hinge's position servo).
+// [angle]: a joint's target, rad (a hinge's position servo; an oscillator's output).
 inline constexpr os::PortLayout kJointTarget{"joint-target", "[angle rad]"};
 // [id, phase]: an oscillator's place in its chain and its phase, rad (control/cpg).
 inline constexpr os::PortLayout kOscillatorPhase{"oscillator-phase", "[id, phase rad]"};

@@ -17,10 +17,6 @@ namespace symb::sim {
 namespace {
 
 constexpr std::uintmax_t kMaxProgramBytes = 1 << 20;
-// The hinge's position servo target: one number, radians. Its own layout so that a wheel command
-// (two numbers in motor units) cannot be hooked into a hinge.
-constexpr os::PortLayout kHingeTarget{"hinge-target", "[target angle, rad]"};
-
 kernel::Error at(const SourceLocation& where, const std::string& what) { return {where.str() + ": " + what}; }
 
 }  // namespace
@@ -34,7 +30,8 @@ os::PortDeclaration device_task_ports(std::string_view task) {
   if (task == kPoseTaskName) return {reads_nothing, {{robot::kDataPort, "pose", layout::kPose}}};
   if (task == kWheelsTaskName) return {{{robot::kDataPort, "wheels", layout::kWheelCommand}}, {}};
   if (task == kHingeStateTaskName) return {reads_nothing, {{robot::kDataPort, "hinge_state", layout::kSensorVector}}};
-  if (task == kHingeTaskName) return {{{robot::kDataPort, "hinge", kHingeTarget}}, {}};
+  // Its own layout, so that a wheel command (two numbers in motor units) cannot be hooked into a hinge.
+  if (task == kHingeTaskName) return {{{robot::kDataPort, "hinge", layout::kJointTarget}}, {}};
   if (task.substr(0, kConnectorTaskPrefix.size()) == kConnectorTaskPrefix)
     return {reads_nothing, {{robot::kDataPort, "connector", layout::kSensorVector}}};
   return {};
