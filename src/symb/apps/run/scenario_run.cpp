@@ -11,6 +11,7 @@
 
 #include "symb/apps/cli_args.hpp"
 #include "symb/apps/run/maze_svg.hpp"
+#include "symb/apps/run/organism_run.hpp"
 #include "symb/apps/run/probe_plot.hpp"
 #include "symb/apps/run/probe_recorder.hpp"
 #include "symb/apps/run/run_loop.hpp"
@@ -23,6 +24,7 @@
 #include "symb/os/syslog.hpp"
 #include "symb/shell/shell_task.hpp"
 #include "symb/shell/tcp_shell.hpp"
+#include "symb/sim/mujoco/organism_session.hpp"
 #include "symb/sim/scenario_session.hpp"
 
 namespace symb::apps::run {
@@ -107,6 +109,11 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
 
   sim::SessionOptions session_options;
   session_options.seed = options.seed;
+  if (scenario.world_kind == sim::WorldKind::kMujoco) {
+    auto organism = sim::mujoco::OrganismSession::create(scenario, *executor, session_options);
+    if (!organism) return Error{organism.error()};
+    return run_organism(**organism, virtual_time, scenario, options, std::move(result));
+  }
   auto created = sim::ScenarioSession::create(scenario, *executor, session_options);
   if (!created) return Error{created.error()};
   std::unique_ptr<sim::ScenarioSession> session = std::move(created).value();
