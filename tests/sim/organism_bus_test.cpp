@@ -128,15 +128,15 @@ TEST(OrganismBus, TwoModulesDeliverInOrderAtTheConfiguredLatency) {
   ASSERT_TRUE(id.ok()) << id.error();
   EXPECT_TRUE(rig.bus->linked(0, 1));
   rig.ex.run_for(1s);
-  // One number: a 22 + 4 byte hook frame, 32 bytes encoded, 256 bits: 256 us at 1 Mbit/s.
-  ASSERT_EQ(io::hook_frame_wire_bytes(1), 32U);
-  ASSERT_EQ(rig.bus->wire_time(1), 256us);
+  // One number: a 20 + 4 byte hook frame, 30 bytes encoded, 240 bits: 240 us at 1 Mbit/s.
+  ASSERT_EQ(io::hook_frame_wire_bytes(1), 30U);
+  ASSERT_EQ(rig.bus->wire_time(1), 240us);
   ASSERT_GE(src->sent.size(), 99U);
   ASSERT_GE(rec->seen.size(), src->sent.size() - 1);  // the last may still travel
   for (std::size_t k = 0; k < rec->seen.size(); ++k) {
     EXPECT_EQ(rec->seen[k].first, static_cast<float>(k));
     EXPECT_EQ(rec->seen[k].port, 3);
-    EXPECT_EQ(rec->seen[k].time, src->sent[k] + 256us + 100us) << k;
+    EXPECT_EQ(rec->seen[k].time, src->sent[k] + 240us + 100us) << k;
   }
   const auto info = rig.bus->info(*id);
   ASSERT_TRUE(info.has_value());
@@ -184,7 +184,7 @@ TEST(OrganismBus, FiveModuleChainCarriesHooksInOrder) {
 }
 
 TEST(OrganismBus, UnderLoadTheWireIsFullAndTheBooksCloseAtEveryInstant) {
-  // 100 kbit/s; frames of 4 numbers are 44 bytes, 352 bits: 3.52 ms on the wire. The sender sends
+  // 100 kbit/s; frames of 4 numbers are 42 bytes, 336 bits: 3.36 ms on the wire. The sender sends
   // one every 1 ms, so the transmit queue (8 frames) fills and the rest is refused.
   const OrganismBusOptions options{.bandwidth = 100e3, .latency = 200us, .tx_queue_frames = 8};
   BusRig rig(2, options);
@@ -193,7 +193,7 @@ TEST(OrganismBus, UnderLoadTheWireIsFullAndTheBooksCloseAtEveryInstant) {
   auto id = rig.bus->hook("m0/fast", "m1/sink");
   ASSERT_TRUE(id.ok()) << id.error();
   const kernel::Duration wire = rig.bus->wire_time(4);
-  ASSERT_EQ(wire, 3520us);
+  ASSERT_EQ(wire, 3360us);
   std::size_t checks = 0;
   std::uint64_t max_in_flight = 0;
   for (int step = 0; step < 4000; ++step) {  // every 250 us for 1 s: 4000 instants
@@ -213,12 +213,12 @@ TEST(OrganismBus, UnderLoadTheWireIsFullAndTheBooksCloseAtEveryInstant) {
   // At most the transmit queue, the frame on the wire and the frames within the latency.
   EXPECT_LE(max_in_flight, 8U + 1 + 1);
   // Back to back: from the second frame on, arrivals are exactly one wire time apart, so the
-  // throughput is the bandwidth: 1 frame per 3.52 ms.
+  // throughput is the bandwidth: 1 frame per 3.36 ms.
   ASSERT_GE(rec->seen.size(), 280U);
   EXPECT_EQ(rec->seen[0].time, src->sent[0] + wire + 200us);
   for (std::size_t k = 1; k < rec->seen.size(); ++k) ASSERT_EQ(rec->seen[k].time - rec->seen[k - 1].time, wire) << k;
   const double seconds = kernel::to_seconds(rec->seen.back().time - rec->seen.front().time);
-  const double throughput = static_cast<double>((rec->seen.size() - 1) * 352) / seconds;
+  const double throughput = static_cast<double>((rec->seen.size() - 1) * 336) / seconds;
   EXPECT_DOUBLE_EQ(throughput, 100e3);
   // In order, with gaps where the queue refused.
   for (std::size_t k = 1; k < rec->seen.size(); ++k) EXPECT_LT(rec->seen[k - 1].first, rec->seen[k].first);
@@ -228,7 +228,7 @@ TEST(OrganismBus, HigherPriorityWinsTheWire) {
   // Two senders on one module, each faster than the bus: the high-priority hook takes the wire
   // whenever it has a frame; the low one gets what is left.
   BusRig rig(2, {.bandwidth = 100e3, .latency = 0us, .tx_queue_frames = 4});
-  rig.add(0, "hi", std::make_unique<BusSource>(), 5ms);  // 1 frame per 5 ms: 2.56 ms each
+  rig.add(0, "hi", std::make_unique<BusSource>(), 5ms);  // 1 frame per 5 ms: 2.4 ms each
   rig.add(0, "lo", std::make_unique<BusSource>(), 1ms);  // wants far more than the rest
   auto* rec_hi = rig.add(1, "rhi", std::make_unique<BusRecorder>());
   auto* rec_lo = rig.add(1, "rlo", std::make_unique<BusRecorder>());
@@ -241,8 +241,8 @@ TEST(OrganismBus, HigherPriorityWinsTheWire) {
   EXPECT_TRUE(bl.closes());
   EXPECT_EQ(bh.dropped(), 0U);  // never waits more than one low frame's wire time
   EXPECT_GT(bl.dropped(io::HookDrop::kQueueFull), 0U);
-  // The wire is never idle: 1 s / 2.56 ms = 390 frames in all, within one of each.
-  EXPECT_NEAR(static_cast<double>(rec_hi->seen.size() + rec_lo->seen.size()), 390.0, 2.0);
+  // The wire is never idle: 1 s / 2.4 ms = 416 frames in all, within two.
+  EXPECT_NEAR(static_cast<double>(rec_hi->seen.size() + rec_lo->seen.size()), 416.0, 2.0);
   EXPECT_GE(rec_hi->seen.size(), 199U);
 }
 

@@ -34,7 +34,7 @@ void encode_hook_frame(const HookFrame& frame, std::vector<std::byte>& out) {
   put<std::uint32_t>(payload, frame.hook);
   put<std::uint32_t>(payload, frame.sequence);
   put<std::int64_t>(payload, frame.time.count());
-  put<std::int32_t>(payload, frame.port);
+  put<std::uint16_t>(payload, frame.port);
   payload.push_back(static_cast<std::byte>(numbers.size()));
   for (const float v : numbers) put<std::uint32_t>(payload, std::bit_cast<std::uint32_t>(v));
   out.clear();
@@ -47,9 +47,9 @@ kernel::Result<HookFrame> parse_hook_frame(std::span<const std::byte> payload) {
                          std::to_string(kHookFrameHeader) + "-byte header"};
   if (static_cast<std::uint8_t>(payload[0]) != kHookFrameType)
     return kernel::Error{"hook frame: byte 0 is type " + std::to_string(static_cast<int>(payload[0])) + ", not 'H'"};
-  const auto count = static_cast<std::size_t>(payload[21]);
+  const auto count = static_cast<std::size_t>(payload[19]);
   if (count > os::Payload::kInlineValues)
-    return kernel::Error{"hook frame: byte 21 counts " + std::to_string(count) + " numbers, more than " +
+    return kernel::Error{"hook frame: byte 19 counts " + std::to_string(count) + " numbers, more than " +
                          std::to_string(os::Payload::kInlineValues)};
   if (payload.size() != hook_frame_payload_bytes(count))
     return kernel::Error{"hook frame: " + std::to_string(payload.size()) + " bytes where " + std::to_string(count) +
@@ -58,7 +58,7 @@ kernel::Result<HookFrame> parse_hook_frame(std::span<const std::byte> payload) {
   f.hook = get<std::uint32_t>(payload, 1);
   f.sequence = get<std::uint32_t>(payload, 5);
   f.time = kernel::Time{get<std::int64_t>(payload, 9)};
-  f.port = get<std::int32_t>(payload, 17);
+  f.port = get<std::uint16_t>(payload, 17);
   f.payload.count = static_cast<std::uint8_t>(count);
   for (std::size_t i = 0; i < count; ++i)
     f.payload.values[i] = std::bit_cast<float>(get<std::uint32_t>(payload, kHookFrameHeader + 4 * i));

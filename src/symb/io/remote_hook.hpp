@@ -18,12 +18,12 @@
 //          1   u32   remote hook id
 //          5   u32   sequence number (per remote hook, from 0)
 //          9   i64   send time, ns of the sender's node clock
-//         17   i32   port
-//         21   u8    count of numbers (at most os::Payload::kInlineValues)
-//         22   f32   x count
-// so a hook frame's payload is 22 + 4 count bytes and its encoded frame hook_frame_wire_bytes()
+//         17   u16   port
+//         19   u8    count of numbers (at most os::Payload::kInlineValues)
+//         20   f32   x count
+// so a hook frame's payload is 20 + 4 count bytes and its encoded frame hook_frame_wire_bytes()
 // = payload + 6 (delimiters, version byte, CRC, one COBS code byte; one more per 254 bytes,
-// which a 150-byte payload never reaches).
+// which a 148-byte payload never reaches): 26 + 4 count bytes.
 //
 // Blob payloads (images, spike packets, io::Bytes) do not cross: the outbound proxy refuses them,
 // counted as HookDrop::kBlob. Sensor- and hormone-sized data travels inline.
@@ -51,7 +51,7 @@
 namespace symb::io {
 
 inline constexpr std::uint8_t kHookFrameType = 'H';
-inline constexpr std::size_t kHookFrameHeader = 22;
+inline constexpr std::size_t kHookFrameHeader = 20;
 
 struct HookFrame {
   std::uint32_t hook = 0;

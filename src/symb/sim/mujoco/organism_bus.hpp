@@ -12,7 +12,7 @@
 // wins (the remote hook's HookOptions::priority, higher first; then the lower remote hook id, as
 // a lower CAN id wins arbitration; then the older frame), and occupies the wire for
 //   wire_time = ceil(8 * frame bytes * 1e9 / bandwidth) ns,
-// the frame's bytes being its whole encoded io frame (io::hook_frame_wire_bytes: 28 + 4 numbers
+// the frame's bytes being its whole encoded io frame (io::hook_frame_wire_bytes: 26 + 4 numbers
 // bytes). It reaches the receiver's inbound proxy `latency` after its last bit left. A frame
 // offered to an idle segment starts at once. The bus wakes at those instants exactly: it is an
 // activity of the executor whose next tick is set to the next event (under the virtual-time
