@@ -315,6 +315,33 @@ TEST(OrganismBus, RefusesBadHooksWithTheirNames) {
   EXPECT_FALSE(rig.bus->info(first).has_value());
 }
 
+TEST(OrganismBus, AShellMakesAndListsRemoteHooks) {
+  BusRig rig(2, {.bandwidth = 1e6, .latency = 100us});
+  rig.add(0, "osc", std::make_unique<BusSource>(), 10ms);
+  auto* rec = rig.add(1, "osc", std::make_unique<BusRecorder>());
+  shell::Shell::Options options;
+  rig.bus->serve_shell(options);
+  shell::Shell sh(*rig.nodes[0], options);
+  auto reply = sh.execute("hook osc m1/osc --port 3 --priority 2");
+  ASSERT_TRUE(reply.ok) << reply.text;
+  EXPECT_NE(reply.text.find("remote hook 1: m0/osc -> m1/osc"), std::string::npos) << reply.text;
+  reply = sh.execute("hook osc m9/osc");
+  ASSERT_FALSE(reply.ok);
+  EXPECT_NE(reply.text.find("column 10: remote hook m0/osc -> m9/osc: no module 'm9'"), std::string::npos)
+      << reply.text;
+  reply = sh.execute("hook nope m1/osc");
+  EXPECT_FALSE(reply.ok);
+  rig.ex.run_for(200ms);
+  EXPECT_GE(rec->seen.size(), 19U);
+  reply = sh.execute("hooks");
+  ASSERT_TRUE(reply.ok) << reply.text;
+  EXPECT_NE(reply.text.find("remote hooks:"), std::string::npos) << reply.text;
+  EXPECT_NE(reply.text.find("1  m0/osc -> m1/osc  3  2  up  "), std::string::npos) << reply.text;
+  // Without a bus, a name with '/' is a local name, refused as one.
+  shell::Shell plain(*rig.nodes[0]);
+  EXPECT_FALSE(plain.execute("hook osc m1/osc").ok);
+}
+
 std::uint64_t bus_run_hash(std::uint64_t seed) {
   BusRig rig(3, {.bandwidth = 200e3, .latency = 30us, .tx_queue_frames = 4}, seed);
   std::vector<BusRecorder*> rec;

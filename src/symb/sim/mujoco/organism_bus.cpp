@@ -345,6 +345,16 @@ std::string OrganismBus::listing() const {
   return out.str();
 }
 
+void OrganismBus::serve_shell(shell::Shell::Options& options) {
+  options.remote_hook = [this](const std::string& sender, const std::string& receiver,
+                               const os::HookOptions& hook_options) -> kernel::Result<std::string> {
+    auto id = hook(sender, receiver, hook_options);
+    if (!id) return kernel::Error{id.error()};
+    return "remote hook " + std::to_string(id->value) + ": " + sender + " -> " + receiver + " (over the bus)";
+  };
+  options.remote_hooks = [this] { return listing(); };
+}
+
 // --- the medium --------------------------------------------------------------------------------
 
 void OrganismBus::transmit(std::uint32_t hook, std::span<const std::byte> frame, std::size_t numbers) {

@@ -57,6 +57,7 @@
 #include "symb/kernel/time.hpp"
 #include "symb/os/hook.hpp"
 #include "symb/os/ids.hpp"
+#include "symb/shell/shell.hpp"
 
 namespace symb::os {
 class Node;
@@ -135,8 +136,11 @@ class OrganismBus final : private io::HookMedium {
 
   std::optional<RemoteHookInfo> info(RemoteHookId id) const;
   std::vector<RemoteHookInfo> hooks() const;
-  // The remote hooks as a text table, for a shell's `bus` command.
+  // The remote hooks as a text table (a shell's `hooks` appends it).
   std::string listing() const;
+  // Lets a module's shell make remote hooks (`hook osc m2/osc --port 1`, the sender on the shell's
+  // own node) and list them (`hooks`). The shell must not outlive the bus.
+  void serve_shell(shell::Shell::Options& options);
 
   std::size_t module_count() const { return modules_.size(); }
   // Whether the two modules are on one segment now.
