@@ -10,11 +10,14 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/robot/actuator.hpp"
@@ -348,6 +351,84 @@ TEST(OrganismBus, AShellMakesAndListsRemoteHooks) {
   // Without a bus, a name with '/' is a local name, refused as one.
   shell::Shell plain(*rig.nodes[0]);
   EXPECT_FALSE(plain.execute("hook osc m1/osc").ok);
+}
+
+// Keeps the first number of every message, under a lock (read from the test's thread).
+class BusThreadRecorder final : public os::Task {
+ public:
+  std::vector<float> seen() const {
+    std::lock_guard lock(mu_);
+    return seen_;
+  }
+
+ protected:
+  void on_message(const os::Message& m) override {
+    std::lock_guard lock(mu_);
+    seen_.push_back(m.numbers()[0]);
+  }
+
+ private:
+  mutable std::mutex mu_;
+  std::vector<float> seen_;
+};
+
+TEST(OrganismBus, UnderTheThreadExecutorItCarriesClosesItsBooksAndGoesDown) {
+  kernel::ThreadExecutor ex;
+  MujocoWorld world = BusRig::make(2);
+  ASSERT_TRUE(world.step(100).ok());
+  const std::size_t front = *world.find_connector(0, "front");
+  ASSERT_TRUE(world.latch(0, front).ok());
+  os::Node a(ex, {.name = "m0", .seed = 1});
+  os::Node b(ex, {.name = "m1", .seed = 2});
+  auto bus = OrganismBus::create(ex, {&a, &b}, {.bandwidth = 1e6, .latency = 100us}).value();
+  {
+    MujocoRunner runner(ex, world);
+    runner.set_node(0, &a);
+    runner.set_node(1, &b);
+    bus->attach(runner);
+    ASSERT_TRUE(runner.start().ok());
+    auto rec_task = std::make_unique<BusThreadRecorder>();
+    auto* rec = rec_task.get();
+    ASSERT_TRUE(b.create("osc", std::move(rec_task)).ok());
+    auto src = a.create("osc", std::make_unique<BusSource>(), {.period = 2ms});
+    ASSERT_TRUE(src.ok());
+    auto id = bus->hook("m0/osc", "m1/osc");
+    ASSERT_TRUE(id.ok()) << id.error();
+    std::this_thread::sleep_for(300ms);
+    ASSERT_TRUE(a.suspend(*src).ok());
+    // Quiet: everything sent has arrived or been counted, within a second of wall time.
+    io::RemoteHookBooks books;
+    for (int i = 0; i < 100; ++i) {
+      std::this_thread::sleep_for(10ms);
+      books = bus->info(*id)->books;
+      if (books.in_flight == 0) break;
+    }
+    EXPECT_TRUE(books.closes());
+    EXPECT_EQ(books.in_flight, 0U);
+    EXPECT_GE(books.delivered, 50U);
+    const auto seen = rec->seen();
+    EXPECT_EQ(seen.size(), books.delivered);
+    for (std::size_t k = 1; k < seen.size(); ++k) EXPECT_LT(seen[k - 1], seen[k]);
+    // Undock: the hook goes down within a few runner ticks; sends are dropped, nothing hangs.
+    runner.with_world([&](MujocoWorld& w) { EXPECT_TRUE(w.unlatch(0, front).ok()); });
+    ASSERT_TRUE(a.resume(*src).ok());
+    LinkState state = LinkState::kUp;
+    for (int i = 0; i < 100 && state == LinkState::kUp; ++i) {
+      std::this_thread::sleep_for(10ms);
+      state = bus->info(*id)->state;
+    }
+    EXPECT_EQ(state, LinkState::kDown);
+    std::this_thread::sleep_for(50ms);
+    ASSERT_TRUE(a.suspend(*src).ok());
+    std::this_thread::sleep_for(20ms);
+    books = bus->info(*id)->books;
+    EXPECT_TRUE(books.closes());
+    EXPECT_GT(books.dropped(io::HookDrop::kLinkDown), 0U);
+    runner.stop();
+  }
+  a.clear();
+  b.clear();
+  bus.reset();
 }
 
 // Holds one command: sends the same numbers on the data port at every tick.
