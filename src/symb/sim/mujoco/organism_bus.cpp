@@ -279,6 +279,10 @@ kernel::Status OrganismBus::unhook(RemoteHookId id) {
     if (r == nullptr) return kernel::Error{"no remote hook " + std::to_string(id.value)};
     gone = *r;
     std::erase_if(remotes_, [&](const Remote& o) { return o.info.id == id; });
+    // Its queued frames go; one on the wire finishes (a wire cannot be taken back) and is not
+    // delivered.
+    for (auto& queue : tx_) std::erase_if(queue, [&](const Frame& f) { return f.hook == id.value; });
+    std::erase_if(propagating_, [&](const Frame& f) { return f.hook == id.value; });
   }
   (void)modules_[gone.info.sender_module]->remove(gone.outbound);
   (void)modules_[gone.info.receiver_module]->remove(gone.inbound);
