@@ -121,12 +121,15 @@ class OrganismBus final : private io::HookMedium {
   // may call it directly, on the executor's context).
   void update_topology(const MujocoWorld& world);
 
-  // Hooks task `sender` on module `sender_module` to task `receiver` on `receiver_module`, with
-  // `options` applying on the sender's side (port filter, priority on the bus, queue policy of
-  // the outbound proxy). The proxies are named "bus_to.m2.osc.<id>" and "bus_from.m1.osc.<id>"
-  // on their nodes. Fails (the
-  // message names both ends) for a bad module or task, a hook within one module (use a local
-  // hook), or the same sender, receiver and port twice.
+  // Hooks task `sender` on module `sender_module` to task `receiver` on `receiver_module`.
+  // `options`: the port filter, enabled flag and queue policy make the local hook sender ->
+  // outbound proxy; the priority is also the frames' priority on the bus; the policy and the
+  // suppression window (with the priority) make the local hook inbound proxy -> receiver, so
+  // subsumption works at the receiver as for a local hook. The proxies are named
+  // "bus_to.m2.osc.<id>" and "bus_from.m1.osc.<id>" on their nodes. Fails, with a message naming
+  // both ends ("remote hook m1/osc -> m2/osc: no task 'osc' on m2"), for a bad module or task, a
+  // hook within one module (use a local hook), or the same sender, receiver and port twice. A
+  // scenario adds its file's location in front.
   kernel::Result<RemoteHookId> hook(std::size_t sender_module, std::string_view sender, std::size_t receiver_module,
                                     std::string_view receiver, os::HookOptions options = {});
   // "m1/osc" style names: the module by its node's name.
