@@ -242,6 +242,40 @@ TEST(OrganismBus, UnderLoadTheWireIsFullAndTheBooksCloseAtEveryInstant) {
   for (std::size_t k = 1; k < rec->seen.size(); ++k) EXPECT_LT(rec->seen[k - 1].first, rec->seen[k].first);
 }
 
+TEST(OrganismBus, TwoOrganismsAreTwoSegmentsWithAWireEach) {
+  // A chain of four split in the middle (0-1 | 2-3): two segments, each with its own wire, so two
+  // senders faster than the bus each get the whole bandwidth; a hook from one organism to the
+  // other is down from the start.
+  BusRig rig(4, {.bandwidth = 100e3, .latency = 0us, .tx_queue_frames = 4});
+  bool parted = false;
+  rig.runner->with_world([&](MujocoWorld& w) { parted = w.unlatch(1, rig.front).ok(); });
+  ASSERT_TRUE(parted);
+  rig.ex.run_for(31ms);
+  EXPECT_EQ(rig.bus->segment_of(1), 0U);
+  EXPECT_EQ(rig.bus->segment_of(2), 2U);
+  EXPECT_EQ(rig.bus->segment_of(3), 2U);
+  rig.add(0, "a", std::make_unique<BusSource>(), 1ms);
+  rig.add(2, "b", std::make_unique<BusSource>(), 1ms);
+  auto* ra = rig.add(1, "ra", std::make_unique<BusRecorder>());
+  auto* rb = rig.add(3, "rb", std::make_unique<BusRecorder>());
+  auto* rx = rig.add(3, "rx", std::make_unique<BusRecorder>());
+  ASSERT_TRUE(rig.bus->hook("m0/a", "m1/ra").ok());
+  ASSERT_TRUE(rig.bus->hook("m2/b", "m3/rb").ok());
+  auto across = rig.bus->hook("m0/a", "m3/rx");
+  ASSERT_TRUE(across.ok());
+  EXPECT_EQ(rig.bus->info(*across)->state, LinkState::kDown);
+  rig.ex.run_for(1s);
+  const kernel::Duration wire = rig.bus->wire_time(1);  // 240 bits: 2.4 ms
+  for (const auto* r : {ra, rb}) {
+    ASSERT_GE(r->seen.size(), 400U);
+    for (std::size_t k = 1; k < r->seen.size(); ++k) ASSERT_EQ(r->seen[k].time - r->seen[k - 1].time, wire);
+  }
+  EXPECT_TRUE(rx->seen.empty());
+  const auto books = rig.bus->info(*across)->books;
+  EXPECT_TRUE(books.closes());
+  EXPECT_EQ(books.dropped(io::HookDrop::kLinkDown), books.attempted);
+}
+
 TEST(OrganismBus, HigherPriorityWinsTheWire) {
   // Two senders on one module, each faster than the bus: the high-priority hook takes the wire
   // whenever it has a frame; the low one gets what is left.
