@@ -210,7 +210,8 @@ std::span<const Shell::Command> Shell::table() {
         "send SENDER's output to RECEIVER's queue too",
         "--policy: what a full queue does (keep-newest overwrites the oldest, refuse drops the new one).\n"
         "--port: only messages on that port. --suppress: each delivery blocks lower-priority hooks into\n"
-        "RECEIVER for that long. Prints the hook's number."},
+        "RECEIVER for that long. Prints the hook's number. A RECEIVER of the form MODULE/TASK is a task on\n"
+        "another node, hooked over the bus that joins them (where the shell's owner gave it one)."},
        &Shell::cmd_hook,
        2,
        2,
@@ -647,7 +648,9 @@ Reply Shell::cmd_params(const Call& c) {
 Reply Shell::cmd_hook(const Call& c) {
   auto sender = task_named(c.pos()[0]);
   if (!sender) return fail(sender.error());
-  auto receiver = task_named(c.pos()[1]);
+  const bool remote = options_.remote_hook && c.pos()[1].text.find('/') != std::string::npos;
+  kernel::Result<os::TaskId> receiver = os::TaskId{};
+  if (!remote) receiver = task_named(c.pos()[1]);
   if (!receiver) return fail(receiver.error());
   os::HookOptions o;
   auto priority = c.args.integer("--priority", -kMaxPriority, kMaxPriority);
@@ -663,6 +666,11 @@ Reply Shell::cmd_hook(const Call& c) {
   if (*port) o.port = static_cast<std::int32_t>(**port);
   if (*suppress) o.suppress_window = **suppress;
   o.enabled = !c.args.has("--disabled");
+  if (remote) {
+    auto made = options_.remote_hook(node_.name() + "/" + c.pos()[0].text, c.pos()[1].text, o);
+    if (!made) return fail(at_column(c.pos()[1].column, made.error()));
+    return ok(*made);
+  }
   auto id = node_.hook(*sender, *receiver, o);
   if (!id) return fail(at_column(c.pos()[0].column, id.error()));
   return ok("hook " + std::to_string(id->serial) + ": " + c.pos()[0].text + " -> " + c.pos()[1].text);
@@ -727,6 +735,7 @@ Reply Shell::cmd_hooks(const Call& c) {
            h.options.suppress_window.count() > 0 ? duration_text(h.options.suppress_window) : "-",
            h.options.enabled ? "enabled" : "disabled",
            h.inhibited_until > now ? seconds_text(h.inhibited_until) : "-"});
+  if (options_.remote_hooks) return ok(t.str() + "remote hooks:\n" + options_.remote_hooks());
   return ok(t.str());
 }
 

@@ -21,6 +21,7 @@
 
 #include "symb/io/device.hpp"
 #include "symb/kernel/result.hpp"
+#include "symb/os/hook.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/syslog.hpp"
 #include "symb/shell/command_line.hpp"
@@ -62,6 +63,14 @@ class Shell {
     // How many script lines one top-level `run` may execute in all: a script that runs itself
     // twice would otherwise do 2^8 times the work.
     std::size_t max_script_lines = 100000;
+    // Hooks to tasks on other nodes, for whoever owns a bus between them (the organism bus,
+    // sim/mujoco/organism_bus.hpp): `hook SENDER MODULE/TASK` calls remote_hook("<this
+    // node>/SENDER", "MODULE/TASK", options), which answers the line to print or why not; `hooks`
+    // (text form) appends remote_hooks()'s table. Unset: a RECEIVER with '/' is a local name.
+    std::function<kernel::Result<std::string>(const std::string& sender, const std::string& receiver,
+                                              const os::HookOptions& options)>
+        remote_hook;
+    std::function<std::string()> remote_hooks;
   };
   static constexpr std::size_t kMaxScriptBytes = 1 << 20;
 

@@ -18,7 +18,8 @@ static_assert(kTimestep == 0.002, "kMjRunnerStepNs must follow the model's time 
 MujocoRunner::MujocoRunner(kernel::Executor& executor, MujocoWorld& world, Options options)
     : PeriodicRunner(executor, std::move(options)),
       access_(std::make_shared<WorldAccess>(world)),
-      period_ns_(std::chrono::duration_cast<std::chrono::nanoseconds>(this->options().period).count()) {
+      period_ns_(std::chrono::duration_cast<std::chrono::nanoseconds>(this->options().period).count()),
+      unpowered_(world.module_count()) {
   // The world is read here, before the runner can tick; afterwards only under access_'s lock.
   const std::size_t n = world.module_count();
   record_.modules.resize(n);
@@ -154,12 +155,14 @@ kernel::Status MujocoRunner::step_once(kernel::Time now) {
   access_->with_world([&](MujocoWorld& world) {
     for (std::size_t m = 0; m < record_.modules.size(); ++m) {
       ModuleStep& r = record_.modules[m];
-      r.hinge_target = hinge_[m]->command().target;
+      const bool powered = unpowered_[m].load(std::memory_order_relaxed) == 0;
+      r.hinge_target = powered ? hinge_[m]->command().target : world.hinge_angle(m);
       world.set_hinge_target(m, r.hinge_target);
       if (wheels_[m]) {
         const WheelCommand c = wheels_[m]->command();
         const double scale = wheel_speed_max_[m] / kWheelUnitsMax;
         r.wheels = {cm_per_s_to_wheel_units(c.left) * scale, cm_per_s_to_wheel_units(c.right) * scale};
+        if (!powered) r.wheels = {0, 0};
         if (auto st = world.set_wheels(m, r.wheels[0], r.wheels[1]); !st) {
           stepped = st;
           return;

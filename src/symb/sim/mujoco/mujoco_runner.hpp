@@ -117,6 +117,12 @@ class MujocoRunner final : public PeriodicRunner {
   // Any time, any thread.
   void add_observer(MujocoStepObserver observer);
 
+  // An unpowered module (its battery is empty: module_battery.hpp) gets no drive: from its next
+  // tick its wheels' commands are taken as 0 and its hinge holds the angle it has. Any thread.
+  // Throws std::out_of_range for a bad module.
+  void set_powered(std::size_t module, bool powered) { unpowered_.at(module) = powered ? 0 : 1; }
+  bool powered(std::size_t module) const { return unpowered_.at(module) == 0; }
+
   // Runs `fn(world)` with the world locked: safe against a tick running on another thread. False
   // (fn not run) never happens while the runner lives.
   template <class F>
@@ -161,6 +167,7 @@ class MujocoRunner final : public PeriodicRunner {
   std::mutex observers_mu_;
   std::vector<MujocoStepObserver> observers_;
   std::atomic<bool> has_observers_{false};
+  std::vector<std::atomic<std::uint8_t>> unpowered_;  // per module: 1 while its battery is empty
 };
 
 }  // namespace symb::sim::mujoco
