@@ -515,7 +515,9 @@ TEST(ModuleBattery, DrainFollowsTheModel) {
   EXPECT_NEAR(rig.batteries->energy(0) + hinge_part[0], 100 - 0.5 * 3.0 - 0.6 * 0.03 * static_cast<double>(driving),
               1e-9);
   EXPECT_NEAR(rig.batteries->energy(1) + hinge_part[1], 100 - 0.5 * 3.0, 1e-9);
-  EXPECT_LT(hinge_part[1], 0.25);  // measured: 0.18 J
+  // Measured 1.035 J: module 1, its wheels braked by their servo, is dragged along by module 0, and
+  // its hinge flexes as it goes.
+  EXPECT_LT(hinge_part[1], 1.5);
   const auto state = rig.batteries->device(1)->ioctl("state");
   ASSERT_TRUE(state.ok());
   EXPECT_NE(state->find("sharing off"), std::string::npos) << *state;

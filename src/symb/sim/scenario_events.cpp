@@ -88,6 +88,7 @@ void ScenarioEvents::run_due() {
     if (!shells_[e.robot]) {
       shell::Shell::Options options;
       options.devices = robot.devices;
+      if (robot.serve) robot.serve(options);
       shells_[e.robot] = std::make_unique<shell::Shell>(*robot.node, std::move(options));
     }
     const shell::Reply reply = shells_[e.robot]->execute(e.line);

@@ -16,6 +16,7 @@
 
 #include <condition_variable>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -40,6 +41,8 @@ class ScenarioEvents final : private kernel::Activity {
   struct Robot {
     os::Node* node = nullptr;
     std::shared_ptr<const shell::DeviceTable> devices;
+    // Adds what else the robot's shell offers (the organism bus's remote hooks); may be empty.
+    std::function<void(shell::Shell::Options&)> serve;
   };
   // `robots` in the scenario's order (EventSpec::robot indexes it). Throws std::out_of_range for
   // an event whose robot is not in `robots`.

@@ -56,7 +56,7 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
   if (!scenario.events.empty()) {
     std::vector<ScenarioEvents::Robot> targets;
     for (std::size_t i = 0; i < s->robots_.size(); ++i)
-      targets.push_back({&s->robots_[i]->node(), world_runner_devices(*s->runner_, i)});
+      targets.push_back({&s->robots_[i]->node(), world_runner_devices(*s->runner_, i), {}});
     s->events_ = std::make_unique<ScenarioEvents>(executor, scenario.events, std::move(targets));
   }
   return s;

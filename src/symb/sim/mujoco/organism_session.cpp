@@ -107,6 +107,17 @@ kernel::Result<std::unique_ptr<OrganismSession>> OrganismSession::create(const S
   kernel::Status docked;
   s->runner_->with_world([&](MujocoWorld& world) { docked = latch_docked(scenario, world); });
   if (!docked) return kernel::Error{docked.error()};
+  if (const auto& spec = scenario.organism.bus) {
+    std::vector<os::Node*> nodes;
+    for (auto& r : s->robots_) nodes.push_back(&r->node());
+    OrganismBusOptions bo;
+    bo.bandwidth = static_cast<double>(spec->bandwidth);
+    bo.latency = spec->latency;
+    auto bus = OrganismBus::create(executor, std::move(nodes), bo);
+    if (!bus) return kernel::Error{spec->where.str() + ": " + bus.error()};
+    s->bus_ = std::move(bus).value();
+    s->bus_->attach(*s->runner_);
+  }
   for (std::size_t i = 0; i < scenario.robots.size(); ++i)
     if (!scenario.robots[i].remote_hooks.empty())
       if (auto st = s->wire_remote_hooks(i, scenario.robots[i].remote_hooks); !st) return kernel::Error{st.error()};
@@ -116,7 +127,9 @@ kernel::Result<std::unique_ptr<OrganismSession>> OrganismSession::create(const S
     for (std::size_t i = 0; i < s->robots_.size(); ++i) {
       auto table = std::make_shared<shell::DeviceTable>();
       for (const auto& d : s->runner_->devices(i)) (*table)[d->name()] = d;
-      targets.push_back({&s->robots_[i]->node(), std::move(table)});
+      ScenarioEvents::Robot target{&s->robots_[i]->node(), std::move(table), {}};
+      if (OrganismBus* bus = s->bus_.get()) target.serve = [bus](shell::Shell::Options& o) { bus->serve_shell(o); };
+      targets.push_back(std::move(target));
     }
     s->events_ = std::make_unique<ScenarioEvents>(executor, scenario.events, std::move(targets));
   }
@@ -124,9 +137,12 @@ kernel::Result<std::unique_ptr<OrganismSession>> OrganismSession::create(const S
 }
 
 kernel::Status OrganismSession::wire_remote_hooks(std::size_t from_robot, const std::vector<RemoteHookSpec>& hooks) {
-  const RemoteHookSpec& h = hooks.front();
-  return kernel::Error{h.where.str() + ": hook " + scenario_.robots[from_robot].name + "/" + h.from + " -> " +
-                       h.to_robot + "/" + h.to + ": hooks between modules need the organism bus, not built yet"};
+  for (const RemoteHookSpec& h : hooks) {
+    if (!bus_) return kernel::Error{h.where.str() + ": a hook between modules needs world.bus"};  // parse checks it
+    auto made = bus_->hook(from_robot, h.from, h.to_index, h.to, h.options);
+    if (!made) return kernel::Error{h.where.str() + ": " + made.error()};
+  }
+  return {};
 }
 
 OrganismSession::~OrganismSession() {
@@ -135,6 +151,9 @@ OrganismSession::~OrganismSession() {
     runner_->stop();
     for (std::size_t i = 0; i < robots_.size(); ++i) runner_->set_node(i, nullptr);
   }
+  // The runner no longer ticks, so its observer (the bus's) is never called again; the bus takes
+  // its proxies off the nodes, which must still be there.
+  bus_.reset();
   robots_.clear();  // every node emptied (RobotSystem's destructor) before the devices' runner goes
   runner_.reset();
   world_.reset();

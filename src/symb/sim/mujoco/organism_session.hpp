@@ -10,9 +10,10 @@
 // latches each pair in file order through the world, and a pair the world refuses is an error at
 // its place in the file. The latches reach the modules' logs at the first tick, like any other.
 //
-// Hooks between modules (RobotSpec::remote_hooks) ride the organism bus: wire_remote_hooks() is
-// the one place that will connect them. Until the bus exists it refuses them with their location,
-// so a scenario that needs them fails to start rather than run without them.
+// Hooks between modules (RobotSpec::remote_hooks) ride the organism bus (organism_bus.hpp), made
+// when the scenario has `world.bus` with its bandwidth and latency and attached to the runner, so
+// the docked modules form its segments; a hook the bus refuses is an error at its place in the
+// file. The modules' shells (events) make and list remote hooks through it too.
 //
 // Lifetime: as ScenarioSession. create() builds everything but starts nothing; start() attaches
 // the runner and the events; the destructor stops both, detaches and empties every node, then
@@ -37,6 +38,7 @@
 #include "symb/kernel/result.hpp"
 #include "symb/sim/mujoco/mujoco_runner.hpp"
 #include "symb/sim/mujoco/mujoco_world.hpp"
+#include "symb/sim/mujoco/organism_bus.hpp"
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 #include "symb/sim/scenario_events.hpp"
@@ -73,12 +75,14 @@ class OrganismSession {
   std::string error() const;
   // The scenario's events, or null when it has none.
   ScenarioEvents* events() { return events_.get(); }
+  // The organism bus (world.bus in the scenario), or null.
+  OrganismBus* bus() { return bus_.get(); }
 
  private:
   OrganismSession() = default;
   // Connects the hooks of module `from_robot` that reach other modules' tasks over the organism
   // bus (scenario().organism.bus). Called by create() for every module that has any, after every
-  // module's tasks exist. The bus is not built yet: refuses the first hook, at its place.
+  // module's tasks exist; the first hook the bus refuses is the error, at its place.
   kernel::Status wire_remote_hooks(std::size_t from_robot, const std::vector<RemoteHookSpec>& hooks);
 
   Scenario scenario_;
@@ -86,6 +90,7 @@ class OrganismSession {
   std::unique_ptr<MujocoWorld> world_;
   std::unique_ptr<MujocoRunner> runner_;
   std::vector<std::unique_ptr<RobotSystem>> robots_;  // emptied before runner_ and world_ go
+  std::unique_ptr<OrganismBus> bus_;                  // goes after the runner stops, before robots_
   std::unique_ptr<ScenarioEvents> events_;            // stopped before robots_ go
 };
 
