@@ -195,6 +195,22 @@ TEST(OscillatorTask, DrivesItsJointFromItsPhaseAndCountsWhatItIgnores) {
   EXPECT_EQ(s.heard, 1u);
 }
 
+TEST(OscillatorTask, ARandomPhaseComesFromTheSeedAndTheName) {
+  auto phase_after_start = [](std::uint64_t seed, const char* name) {
+    kernel::VirtualTimeExecutor ex;
+    os::Node node(ex, {.name = "m", .seed = seed});
+    auto task = std::make_unique<OscillatorTask>(OscillatorOptions{.random_phase = true});
+    OscillatorTask* t = task.get();
+    EXPECT_TRUE(node.create(name, std::move(task), {.period = 20ms}).ok());
+    ex.run_for(1ms);  // started, not yet ticked
+    return t->phase();
+  };
+  EXPECT_EQ(phase_after_start(1, "osc"), phase_after_start(1, "osc"));
+  EXPECT_NE(phase_after_start(1, "osc"), phase_after_start(2, "osc"));
+  EXPECT_NE(phase_after_start(1, "osc"), phase_after_start(1, "osc2"));
+  EXPECT_NE(phase_after_start(1, "osc"), 0.0);
+}
+
 TEST(OscillatorTask, TheTypeChecksItsParameters) {
   CpgRig rig;
   auto create = [&](std::string_view text) {

@@ -31,6 +31,8 @@ kernel::Status register_cpg_task_types(os::TaskTypeRegistry& registry, const Con
       .doc("a neighbour not heard from for this long stops pulling")
       .live();
   p.add("initial_phase", &OscillatorOptions::initial_phase).range(-2 * kPi, 2 * kPi).doc("rad");
+  p.add("random_phase", &OscillatorOptions::random_phase)
+      .doc("start at a phase drawn from the task's random stream instead of initial_phase");
   auto t = os::declare_task_type(
       "oscillator",
       "CPG phase oscillator: neighbours' [id, phase] in on port 1; the joint target [angle] out on port 0 and "

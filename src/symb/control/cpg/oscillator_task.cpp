@@ -1,6 +1,7 @@
 #include "symb/control/cpg/oscillator_task.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <string>
 
 namespace symb::control::cpg {
@@ -22,6 +23,11 @@ OscillatorTask::OscillatorTask(OscillatorOptions options)
 }
 
 double OscillatorTask::seconds(kernel::Time t) { return kernel::to_seconds(t); }
+
+void OscillatorTask::on_start() {
+  if (o_.random_phase) oscillator_.set_phase(random().uniform(0.0, 2 * std::numbers::pi));
+  phase_.store(oscillator_.phase(), std::memory_order_relaxed);
+}
 
 void OscillatorTask::on_tick() {
   oscillator_.step(seconds(now()));

@@ -40,6 +40,9 @@ struct OscillatorOptions {
   double lag = 1.5707963267948966;
   kernel::Duration neighbour_timeout = std::chrono::milliseconds(500);
   double initial_phase = 0;
+  // Draw the initial phase uniformly from [0, 2 pi) with the task's own random stream instead: the
+  // seed then decides where each oscillator of a chain starts (and the chain must still lock).
+  bool random_phase = false;
 };
 
 struct OscillatorStats {
@@ -59,6 +62,7 @@ class OscillatorTask : public os::Task {
   static OscillatorParams params_of(const OscillatorOptions& options);
 
  protected:
+  void on_start() override;
   void on_tick() override;
   void on_message(const os::Message& m) override;
   kernel::Status on_parameter_changed(std::string_view name) override;

@@ -54,6 +54,7 @@ class PhaseOscillator {
   const OscillatorParams& params() const { return p_; }
   // Takes new parameters (not the phase or what was heard).
   void set_params(const OscillatorParams& params) { p_ = params; }
+  void set_phase(double phase) { phase_ = wrap(phase); }
 
   static double wrap(double angle);  // to [0, 2 pi)
 
