@@ -26,6 +26,8 @@
 #include <gtest/gtest.h>
 
 #include "symb/apps/run/organism_recorder.hpp"
+#include "symb/apps/run/probe_plot.hpp"
+#include "symb/apps/run/probe_recorder.hpp"
 #include "symb/apps/text_file.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
@@ -437,6 +439,44 @@ TEST(OrganismRun, RunsASessionInSlicesStopsOnRequestAndWritesTheFolder) {
   EXPECT_EQ(second->steps, run->steps);
   EXPECT_EQ(second->trajectory_hash, run->trajectory_hash);
   fs::remove_all(run->out_dir);
+}
+
+}  // namespace
+}  // namespace symb::apps::run
+
+namespace symb::apps::run {
+namespace {
+
+// Feeds `recorder` one sample of (robot, task, channel, values) at time t.
+void probe_sample(ProbeRecorder& recorder, double t, std::string_view robot, std::string_view task,
+                  std::string_view channel, std::vector<float> values) {
+  os::ProbeSample s;
+  s.time = std::chrono::duration_cast<kernel::Time>(std::chrono::duration<double>(t));
+  s.node = robot;
+  s.task = task;
+  s.channel = channel;
+  s.values = values;
+  recorder.record(s);
+}
+
+TEST(ModuleSeries, OneCompartmentPerModuleIsOneChartAndAWholeNetworkPerRobotIsNot) {
+  ProbeRecorder recorder(nullptr);
+  for (int k = 0; k < 3; ++k) {
+    // Modules m0..m2 each step compartment k of one network: one gradient chart.
+    for (int m = 0; m < 3; ++m)
+      probe_sample(recorder, k, "m" + std::to_string(m), "hormones", "hormones/c" + std::to_string(m),
+                   {static_cast<float>(m + k)});
+    // Robots a and b each run a whole two-compartment network: one chart per compartment.
+    for (const char* r : {"a", "b"})
+      for (int c = 0; c < 2; ++c) probe_sample(recorder, k, r, "ahhs", "hormones/c" + std::to_string(c), {1.0f});
+  }
+  const auto series = module_series(recorder, "hormones/", 4);
+  std::vector<std::string> names;
+  for (const auto& s : series) names.push_back(s.task + " " + s.channel + " " + std::to_string(s.labels.size()));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"hormones hormones/*.v0 3", "ahhs hormones/c0.v0 2", "ahhs hormones/c1.v0 2"}));
+  ASSERT_FALSE(series.empty());
+  EXPECT_EQ(series[0].labels, (std::vector<std::string>{"m0", "m1", "m2"}));
 }
 
 }  // namespace

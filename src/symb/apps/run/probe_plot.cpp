@@ -172,7 +172,23 @@ kernel::Result<std::vector<std::filesystem::path>> write_charts(const std::files
 
 std::vector<ProbeSeries> module_series(const ProbeRecorder& probes, std::string_view channel_prefix,
                                        std::size_t max_values) {
-  const auto kinds = series_by_kind(probes, channel_prefix);
+  auto kinds = series_by_kind(probes, channel_prefix);
+  // An organism whose modules each run one compartment of a network probes "hormones/c0" on one
+  // module, "hormones/c1" on the next: kinds of one task, one series each, from different robots,
+  // are one kind then (channel "<prefix>*"), so the gradient along the organism is one chart.
+  std::vector<std::vector<const ProbeSeries*>> merged;
+  for (auto& kind : kinds) {
+    auto same_task = std::find_if(merged.begin(), merged.end(), [&](const auto& m) {
+      return m.front()->task == kind.front()->task && kind.size() == 1 &&
+             std::none_of(m.begin(), m.end(), [&](const ProbeSeries* s) { return s->robot == kind.front()->robot; });
+    });
+    if (same_task != merged.end() &&
+        (same_task->size() == 1 || same_task->front()->channel != same_task->back()->channel))
+      same_task->push_back(kind.front());
+    else
+      merged.push_back(std::move(kind));
+  }
+  kinds = std::move(merged);
   std::vector<ProbeSeries> out;
   for (const auto& kind : kinds) {
     std::size_t width = 0;
@@ -181,7 +197,9 @@ std::vector<ProbeSeries> module_series(const ProbeRecorder& probes, std::string_
       ProbeSeries c;
       c.robot = "modules";
       c.task = kind.front()->task;
-      c.channel = kind.front()->channel + ".v" + std::to_string(k);
+      const bool one_channel = std::all_of(kind.begin(), kind.end(),
+                                           [&](const ProbeSeries* s) { return s->channel == kind.front()->channel; });
+      c.channel = (one_channel ? kind.front()->channel : std::string(channel_prefix) + "*") + ".v" + std::to_string(k);
       c.width = kind.size();
       // One robot's samples after another's: each line is one unbroken run of rows.
       for (std::size_t r = 0; r < kind.size(); ++r) {
