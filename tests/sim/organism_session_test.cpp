@@ -330,3 +330,58 @@ TEST(OrganismSession, EachSessionTakesOnlyItsOwnKindOfWorld) {
 
 }  // namespace
 }  // namespace symb::sim::mujoco
+
+namespace symb::sim::mujoco {
+namespace {
+
+TEST(OrganismSession, WorldBatteryGivesEveryModuleABatteryThatItsTasksAndShellsReach) {
+  Scenario sc = org_parse(R"(name: powered
+duration: 3s
+world:
+  kind: mujoco
+  battery: {capacity: 40, share: true}
+  docked: [[a.back, b.front]]
+robots:
+  - name: a
+    module: modules/cube.yaml
+    start: {x: 0, y: 0}
+    tasks:
+      - {name: controller, type: mdl2e, params: {program: mdl2e/organism_forward.mdl2e}}
+      - {name: power, type: sensor, params: {device: battery}}
+    hooks:
+      - controller -> wheels
+  - name: b
+    module: modules/cube.yaml
+events:
+  - {at: 2s, robot: b, shell: "ioctl battery state"}
+)");
+  ASSERT_TRUE(sc.organism.battery.has_value());
+  kernel::VirtualTimeExecutor ex;
+  auto made = OrganismSession::create(sc, ex);
+  ASSERT_TRUE(made.ok()) << made.error();
+  OrganismSession& s = **made;
+  ASSERT_NE(s.batteries(), nullptr);
+  s.start();
+  ex.run_for(sc.duration);
+  // a drives and b idles, but they share, so they hold the same charge: together they lost more
+  // than their idle draw (2 x 0.5 W for 3 s) by a's driving.
+  const double ea = s.batteries()->energy(0), eb = s.batteries()->energy(1);
+  EXPECT_NEAR(ea, eb, 1e-6);
+  EXPECT_LT(ea + eb, 80 - 3.0 - 0.5);
+  EXPECT_TRUE(s.batteries()->sharing(1));
+  const auto events = org_log(s.robot(1), "event");
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_NE(events[0].text.find("ioctl battery state: "), std::string::npos) << events[0].text;
+  EXPECT_NE(s.robot(0).node().find("power"), std::nullopt);
+
+  auto bad = parse_scenario("name: x\nworld:\n  kind: mujoco\n  battery: {capacity: 0}\nrobots: []\n", "b.yaml");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().find("b.yaml:4:23: battery capacity (J)"), std::string::npos) << bad.error();
+  auto flat = parse_scenario(
+      "name: x\nworld:\n  arena: {width: 100, height: 100}\n  battery: {capacity: 10}\nrobots: []\n", "f.yaml");
+  ASSERT_FALSE(flat.ok());
+  EXPECT_NE(flat.error().find("f.yaml:4:12: 'battery' belongs to a 3D world"), std::string::npos) << flat.error();
+}
+
+}  // namespace
+}  // namespace symb::sim::mujoco

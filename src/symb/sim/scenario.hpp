@@ -162,9 +162,18 @@ struct DockSpec {
 };
 
 // What only a 3D world has.
+// world.battery: every module gets a battery (sim/mujoco/module_battery.hpp) drained by its
+// actuators; without it, modules have power without end.
+struct BatterySpec {
+  double capacity = 3600;  // J
+  bool share = false;      // docked modules share their charge from the start
+  SourceLocation where;
+};
+
 struct OrganismWorldSpec {
   std::vector<DockSpec> docked;
   std::optional<BusSpec> bus;
+  std::optional<BatterySpec> battery;
 };
 
 // One `events` entry: at `at` after the run's start, `line` runs through a shell on robot

@@ -58,7 +58,7 @@ constexpr double kModuleOverlapSlack = 0.001;  // m
 
 // The keys only one kind of world has: a located error names the other's.
 constexpr std::string_view k2dWorldKeys[] = {"arena", "wall_height", "walls", "zones", "radio"};
-constexpr std::string_view k3dWorldKeys[] = {"docked", "bus"};
+constexpr std::string_view k3dWorldKeys[] = {"docked", "bus", "battery"};
 
 using yaml::Failure;
 using yaml::Map;
@@ -171,7 +171,7 @@ struct Parser {
   }
 
   void world(const YAML::Node& n) {
-    Map m(src, n, "world", {"kind", "arena", "wall_height", "walls", "zones", "radio", "docked", "bus"});
+    Map m(src, n, "world", {"kind", "arena", "wall_height", "walls", "zones", "radio", "docked", "bus", "battery"});
     if (auto k = m.get("kind"); k.IsDefined()) {
       const std::string kind = rd.text(k, "world kind");
       if (kind == "mujoco")
@@ -188,6 +188,7 @@ struct Parser {
                                    "arena, walls, zones or radio");
       docked_node = m.get("docked");
       if (auto b = m.get("bus"); b.IsDefined()) sc.organism.bus = bus(b);
+      if (auto b = m.get("battery"); b.IsDefined()) sc.organism.battery = battery(b);
       return;
     }
     for (const std::string_view key : k3dWorldKeys)
@@ -213,6 +214,17 @@ struct Parser {
           static_cast<std::uint64_t>(rd.integer(v, "bus bandwidth (bit/s)", kMinBusBandwidth, kMaxBusBandwidth));
     if (auto v = m.get("latency"); v.IsDefined())
       b.latency = rd.duration(v, "bus latency", kernel::Duration{0}, std::chrono::seconds(1));
+    return b;
+  }
+
+  // {capacity: JOULES, share: BOOL}
+  BatterySpec battery(const YAML::Node& n) {
+    if (!n.IsMap()) src.fail(n, "battery is {capacity: JOULES, share: true|false}" + Map::got(n));
+    Map m(src, n, "battery", {"capacity", "share"});
+    BatterySpec b;
+    b.where = src.at(n);
+    if (auto v = m.get("capacity"); v.IsDefined()) b.capacity = rd.number(v, "battery capacity (J)", 1, 1e7);
+    if (auto v = m.get("share"); v.IsDefined()) b.share = rd.boolean(v, "battery share");
     return b;
   }
 

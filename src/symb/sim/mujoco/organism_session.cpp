@@ -89,6 +89,14 @@ kernel::Result<std::unique_ptr<OrganismSession>> OrganismSession::create(const S
     return kernel::Error{scenario.file + ": " + e.what()};
   }
 
+  if (const auto& spec = scenario.organism.battery) {
+    BatteryModel battery;
+    battery.capacity = spec->capacity;
+    auto made_batteries = ModuleBatteries::create(*s->runner_, battery);
+    if (!made_batteries) return kernel::Error{spec->where.str() + ": " + made_batteries.error()};
+    s->batteries_ = std::move(made_batteries).value();
+    for (std::size_t i = 0; i < scenario.robots.size(); ++i) s->batteries_->set_sharing(i, spec->share);
+  }
   for (std::size_t i = 0; i < scenario.robots.size(); ++i) {
     RobotSystemOptions ro;
     ro.control_period = scenario.control_period;
@@ -98,6 +106,14 @@ kernel::Result<std::unique_ptr<OrganismSession>> OrganismSession::create(const S
     ro.named_device_tasks = organism_named_tasks(scenario, i);
     RobotDevices devices;
     devices.module = s->runner_->device_lookups(i);
+    if (s->batteries_) {
+      // The battery is one more sensor of the module, by name, for `sensor device=battery`.
+      devices.module->sensor = [battery = s->batteries_->device(i), others = devices.module->sensor](
+                                   std::string_view name) -> std::shared_ptr<robot::Sensor> {
+        if (name == battery->name()) return battery;
+        return others ? others(name) : nullptr;
+      };
+    }
     auto built = RobotSystem::build(executor, scenario.robots[i], std::move(devices), std::move(ro));
     if (!built) return kernel::Error{built.error()};
     s->robots_.push_back(std::move(built).value());
@@ -127,6 +143,7 @@ kernel::Result<std::unique_ptr<OrganismSession>> OrganismSession::create(const S
     for (std::size_t i = 0; i < s->robots_.size(); ++i) {
       auto table = std::make_shared<shell::DeviceTable>();
       for (const auto& d : s->runner_->devices(i)) (*table)[d->name()] = d;
+      if (s->batteries_) (*table)[s->batteries_->device(i)->name()] = s->batteries_->device(i);
       ScenarioEvents::Robot target{&s->robots_[i]->node(), std::move(table), {}};
       if (OrganismBus* bus = s->bus_.get()) target.serve = [bus](shell::Shell::Options& o) { bus->serve_shell(o); };
       targets.push_back(std::move(target));
@@ -154,7 +171,8 @@ OrganismSession::~OrganismSession() {
   // The runner no longer ticks, so its observer (the bus's) is never called again; the bus takes
   // its proxies off the nodes, which must still be there.
   bus_.reset();
-  robots_.clear();  // every node emptied (RobotSystem's destructor) before the devices' runner goes
+  robots_.clear();     // every node emptied (RobotSystem's destructor) before the devices' runner goes
+  batteries_.reset();  // the runner no longer ticks: its observer (the batteries') is not called again
   runner_.reset();
   world_.reset();
 }

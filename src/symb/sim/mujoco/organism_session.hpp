@@ -36,6 +36,7 @@
 
 #include "symb/kernel/executor.hpp"
 #include "symb/kernel/result.hpp"
+#include "symb/sim/mujoco/module_battery.hpp"
 #include "symb/sim/mujoco/mujoco_runner.hpp"
 #include "symb/sim/mujoco/mujoco_world.hpp"
 #include "symb/sim/mujoco/organism_bus.hpp"
@@ -77,6 +78,8 @@ class OrganismSession {
   ScenarioEvents* events() { return events_.get(); }
   // The organism bus (world.bus in the scenario), or null.
   OrganismBus* bus() { return bus_.get(); }
+  // The modules' batteries (world.battery in the scenario), or null.
+  ModuleBatteries* batteries() { return batteries_.get(); }
 
  private:
   OrganismSession() = default;
@@ -91,6 +94,7 @@ class OrganismSession {
   std::unique_ptr<MujocoRunner> runner_;
   std::vector<std::unique_ptr<RobotSystem>> robots_;  // emptied before runner_ and world_ go
   std::unique_ptr<OrganismBus> bus_;                  // goes after the runner stops, before robots_
+  std::unique_ptr<ModuleBatteries> batteries_;        // outlives robots_ (their devices point at it)
   std::unique_ptr<ScenarioEvents> events_;            // stopped before robots_ go
 };
 
