@@ -54,6 +54,10 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
     return kExitUsage;
   }
   const std::size_t module = std::get<std::size_t>(index);
+  if (auto st = sim::mujoco::HilOrganism::check(sc, module); !st) {
+    ctx.err << kCommand << ": " << st.error() << "\n";
+    return kExitFailure;
+  }
   const std::uint64_t seed = args.seed.value_or(sc.seed);
   kernel::VirtualTimeExecutor ex;
   sim::SessionOptions so;

@@ -27,12 +27,8 @@ std::string describe(const HilOrganismStats& s) {
          std::to_string(s.dock_refused) + " refused)";
 }
 
-kernel::Result<std::unique_ptr<HilOrganism>> HilOrganism::create(OrganismSession& session,
-                                                                 kernel::VirtualTimeExecutor& executor,
-                                                                 std::size_t module, std::shared_ptr<io::IOStream> port,
-                                                                 HilOrganismOptions options) {
-  const Scenario& sc = session.scenario();
-  if (module >= session.robot_count())
+kernel::Status HilOrganism::check(const Scenario& sc, std::size_t module) {
+  if (module >= sc.robots.size())
     return kernel::Error{sc.file + ": no module " + std::to_string(module) + " for the board"};
   const RobotSpec& spec = sc.robots[module];
   if (!spec.remote_hooks.empty())
@@ -47,6 +43,15 @@ kernel::Result<std::unique_ptr<HilOrganism>> HilOrganism::create(OrganismSession
     if (e.robot == module)
       return kernel::Error{e.where.str() + ": module " + spec.name +
                            " runs on the board: its events belong to the board's shell"};
+  return {};
+}
+
+kernel::Result<std::unique_ptr<HilOrganism>> HilOrganism::create(OrganismSession& session,
+                                                                 kernel::VirtualTimeExecutor& executor,
+                                                                 std::size_t module, std::shared_ptr<io::IOStream> port,
+                                                                 HilOrganismOptions options) {
+  if (auto st = check(session.scenario(), module); !st) return kernel::Error{st.error()};
+  const Scenario& sc = session.scenario();
   if (!(options.corrupt >= 0 && options.corrupt <= 1))
     return kernel::Error{"the corruption fraction must be in [0, 1]"};
   if (options.answer_wait < kernel::Duration{0}) return kernel::Error{"the answer wait must not be negative"};

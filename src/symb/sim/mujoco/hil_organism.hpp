@@ -86,6 +86,9 @@ class HilOrganism {
                                                              kernel::VirtualTimeExecutor& executor, std::size_t module,
                                                              std::shared_ptr<io::IOStream> port,
                                                              HilOrganismOptions options = {});
+  // What create() checks of the scenario: the module exists, has no events and no hooks over
+  // the organism bus. An error at its place in the file.
+  static kernel::Status check(const Scenario& scenario, std::size_t module);
   ~HilOrganism();
   HilOrganism(const HilOrganism&) = delete;
   HilOrganism& operator=(const HilOrganism&) = delete;
