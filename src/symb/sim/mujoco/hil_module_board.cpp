@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "symb/sim/mujoco/mujoco_devices.hpp"
+#include "symb/sim/mujoco/mujoco_runner.hpp"
 #include "symb/sim/periodic_runner.hpp"
 #include "symb/sim/sim_drivers.hpp"
 
@@ -146,18 +147,7 @@ robot::RobotDevices HilModuleBoard::device_lookups() const {
   sensors.insert(sensors.end(), shared_->connectors.begin(), shared_->connectors.end());
   std::vector<std::shared_ptr<robot::Actuator>> actuators{shared_->hinge};
   if (shared_->wheels) actuators.push_back(shared_->wheels);
-  robot::RobotDevices lookups;
-  lookups.sensor = [sensors](std::string_view name) -> std::shared_ptr<robot::Sensor> {
-    for (const auto& s : sensors)
-      if (s->name() == name) return s;
-    return nullptr;
-  };
-  lookups.actuator = [actuators](std::string_view name) -> std::shared_ptr<robot::Actuator> {
-    for (const auto& a : actuators)
-      if (a->name() == name) return a;
-    return nullptr;
-  };
-  return lookups;
+  return device_lookups_of(std::move(sensors), std::move(actuators));
 }
 
 std::vector<std::shared_ptr<io::Device>> HilModuleBoard::devices() const {
@@ -201,11 +191,12 @@ void HilModuleBoard::handle(std::span<const std::byte> payload, std::size_t& han
     return;
   }
   const auto now = std::chrono::steady_clock::now();
-  if (!link_up_ && stats_.frames + stats_.handshakes > 0) {
+  if (!link_up_ && stats_.link_losses > recoveries_seen_) {
     const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now - last_frame_wall_).count();
     event("link back after " + std::to_string(ms) + " ms");
     std::lock_guard lock(stats_mu_);
     ++stats_.link_recoveries;
+    recoveries_seen_ = stats_.link_recoveries;
   }
   link_up_ = true;
   last_frame_wall_ = now;

@@ -120,6 +120,7 @@ class HilModuleBoard {
   std::vector<std::byte> frame_;
   std::chrono::steady_clock::time_point last_frame_wall_;
   bool link_up_ = false;
+  std::uint64_t recoveries_seen_ = 0;  // link_recoveries as this thread last wrote it
   bool started_ = false;
   mutable std::mutex stats_mu_;
   HilModuleBoardStats stats_;
