@@ -161,6 +161,39 @@ TEST_F(Hil3Cli, CorruptedFramesAreCountedExactlyAtWallClockPace) {
   EXPECT_GT(link.at("applied"), 100);
 }
 
+// `symb link` stopped in the middle of a run and started again 0.5 s later: both sides reopen
+// their paths, the simulator exits 0, and the board's module answers again.
+TEST_F(Hil3Cli, BothSidesReopenTheirLinesWhenTheLinkComesBack) {
+  auto b = board();
+  Hil3Child sim("sim '" + kChain + "' --board m4 --quiet --duration 5s --serial '" + (dir_ / "tty" / "sim").string() +
+                    "' --out '" + (dir_ / "back").string() + "'",
+                dir_ / "back.log");
+  std::this_thread::sleep_for(1500ms);  // the run is under way
+  link_->interrupt();
+  ASSERT_EQ(link_->wait(), 0) << link_->output();
+  std::this_thread::sleep_for(500ms);  // the outage: no link at all
+  link_ = std::make_unique<Hil3Child>("link --dir '" + (dir_ / "tty").string() + "'", dir_ / "link2.log");
+  ASSERT_EQ(sim.wait(), 0) << sim.output();
+  const auto link = hil3_fields(hil3_read(dir_ / "back" / "summary.txt"), "link-stats:");
+  EXPECT_EQ(link.at("line_losses"), 1) << sim.output();
+  EXPECT_EQ(link.at("line_reopens"), 1) << sim.output();
+  EXPECT_EQ(link.at("line_open"), 1);
+  EXPECT_GE(link.at("line_down_ms"), 400);
+  EXPECT_GT(link.at("unsent"), 0);
+  EXPECT_NE(sim.output().find("open again after"), std::string::npos) << sim.output();
+  b->interrupt();
+  ASSERT_EQ(b->wait(), 0) << b->output();
+  const auto bs = hil3_fields(b->output(), "board-stats:");
+  EXPECT_EQ(bs.at("line_losses"), 1) << b->output();
+  EXPECT_EQ(bs.at("line_reopens"), 1) << b->output();
+  EXPECT_EQ(bs.at("line_open"), 1);
+  // The board answered after the line came back: more than the ticks before the outage were
+  // applied (1.5 s is 50 ticks; the run is 166).
+  EXPECT_GT(link.at("applied"), 100) << sim.output();
+  std::printf("3D HIL, link stopped for 0.5 s: sim down %lld ms, %lld unsent, %lld applied of 166 ticks\n",
+              link.at("line_down_ms"), link.at("unsent"), link.at("applied"));
+}
+
 TEST(Hil3CliUsage, TheBoardsModuleIsNamedAndChecked) {
   const fs::path log = fs::temp_directory_path() / ("symb-hil3-usage-" + std::to_string(::getpid()) + ".log");
   {

@@ -12,6 +12,7 @@
 #include "symb/apps/hil/hil_common.hpp"
 #include "symb/apps/progress_line.hpp"
 #include "symb/apps/run/organism_recorder.hpp"
+#include "symb/io/reopen_backoff.hpp"
 #include "symb/io/serial_port.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/shell/shell_task.hpp"
@@ -131,7 +132,14 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
          << "link-stats: sent=" << st.frames_sent << " corrupted=" << st.corrupted << " received=" << st.received
          << " bad=" << st.bad_frames() << " applied=" << st.applied << " late=" << st.late << " stale=" << st.stale
          << " missing=" << st.missing << " silences=" << st.silences << " docking=" << st.dock_commands
-         << " docking_refused=" << st.dock_refused << "\n";
+         << " docking_refused=" << st.dock_refused << " unsent=" << st.unsent << " line_losses=" << st.line_losses
+         << " line_reopens=" << st.line_reopens << " line_down_ms=" << kernel::to_milliseconds(st.line_down)
+         << " line_open=" << (st.line_open ? 1 : 0) << "\n";
+  const std::string dead = st.line_open ? std::string()
+                                        : args.board + " (down " +
+                                              fixed(std::chrono::duration<double>(st.line_down).count(), 1) +
+                                              " s in all, " + std::to_string(st.line_losses) + " loss(es))";
+  if (!dead.empty()) header << "dead link: the serial line was down at the end of the run: " << dead << "\n";
   const std::filesystem::path dir = args.out_dir.value_or(std::filesystem::path("out") / (sc.name + "-hil"));
   auto files = recorder.finish(dir, header.str());
   if (!files) {
@@ -143,6 +151,10 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
           << "  link " << args.board << ": " << sim::mujoco::describe(st) << "\n"
           << "  trajectory hash: " << hex64(recorder.summary().hash) << "\n"
           << "results in " << dir.string() << "/\n";
+  if (!dead.empty()) {
+    ctx.err << kCommand << ": dead link: the serial line was down at the end of the run: " << dead << "\n";
+    return kExitFailure;
+  }
   return kExitOk;
 }
 
@@ -221,15 +233,31 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
   InterruptFlag interrupt;
   const auto start = std::chrono::steady_clock::now();
   auto next_stats = start + args.stats_every;
-  std::string cycle, line_error;
+  std::string cycle;
+  io::ReopenBackoff backoff;
+  const auto steady = [] {
+    return std::chrono::duration_cast<kernel::Time>(std::chrono::steady_clock::now().time_since_epoch());
+  };
   while (!interrupt.raised() && (!args.duration || std::chrono::steady_clock::now() - start < *args.duration)) {
-    auto served = board.serve(20ms);
-    if (!served) {
-      // The device went away: try the same path again, as the 2D board does, without a busy loop.
-      if (line_error.empty()) ctx.err << "board " << spec.name << ": " << served.error() << "\n" << std::flush;
-      line_error = served.error();
-      std::this_thread::sleep_for(200ms);
-      if (port->open()) line_error.clear();
+    if (backoff.down()) {
+      // The device went away: its path again with backoff (100 ms doubling to 2 s), as in 2D.
+      if (backoff.due(steady())) {
+        if (auto st = port->open(); st) {
+          (void)port->ioctl("flush");
+          ctx.err << "board " << spec.name << ": serial line open again after "
+                  << kernel::to_milliseconds(backoff.reopened(steady())) << " ms\n"
+                  << std::flush;
+        } else {
+          const auto wait = backoff.failed(steady());
+          ctx.err << "board " << spec.name << ": reopen attempt " << backoff.attempts() << " failed: " << st.error()
+                  << "; next in " << kernel::to_milliseconds(wait) << " ms\n"
+                  << std::flush;
+        }
+      }
+      if (backoff.down()) std::this_thread::sleep_for(20ms);
+    } else if (auto served = board.serve(20ms); !served) {
+      backoff.lost(steady());
+      ctx.err << "board " << spec.name << ": " << served.error() << ": reopening it with backoff\n" << std::flush;
     }
     ex.run_injected();  // the shell's input, between frames
     if (cycle = system->node().cycle_error(); !cycle.empty()) break;
@@ -244,7 +272,10 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
           << "board-stats: good=" << s.frames << " bad=" << s.bad_frames() << " missed=" << s.missed
           << " out_of_order=" << s.out_of_order << " malformed=" << s.malformed << " answers=" << s.answers
           << " docking=" << s.dock_commands << " not_taken=" << s.write_errors << " losses=" << s.link_losses
-          << " recoveries=" << s.link_recoveries << " line_open=" << (line_error.empty() ? 1 : 0) << "\n";
+          << " recoveries=" << s.link_recoveries << " line_losses=" << backoff.losses()
+          << " line_reopens=" << backoff.reopens()
+          << " line_down_ms=" << kernel::to_milliseconds(backoff.down_for(steady()))
+          << " line_open=" << (backoff.down() ? 0 : 1) << "\n";
   system.reset();
   port->close();
   if (shell_port) shell_port->close();
@@ -252,9 +283,10 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
     ctx.err << kCommand << ": " << cycle << "\n";
     return kExitFailure;
   }
-  if (!line_error.empty()) {
-    ctx.err << kCommand << ": the serial line " << args.serial << " was down when the board stopped: " << line_error
-            << "\n";
+  if (backoff.down()) {
+    ctx.err << kCommand << ": the serial line " << args.serial << " was down when the board stopped (down "
+            << fixed(std::chrono::duration<double>(backoff.down_for(steady())).count(), 1) << " s in all, "
+            << backoff.losses() << " loss(es), " << backoff.reopens() << " reopening(s))\n";
     return kExitFailure;
   }
   return kExitOk;

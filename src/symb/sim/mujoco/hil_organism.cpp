@@ -20,11 +20,11 @@ void connector_values(const MujocoRunner& runner, const MujocoWorld& world, std:
 
 std::string describe(const HilOrganismStats& s) {
   return "sent " + std::to_string(s.frames_sent) + " (" + std::to_string(s.corrupted) + " corrupted, " +
-         std::to_string(s.write_errors) + " not taken), received " + std::to_string(s.received) + " good, " +
-         std::to_string(s.bad_frames()) + " bad; applied " + std::to_string(s.applied) + ", " + std::to_string(s.late) +
-         " late, " + std::to_string(s.stale) + " stale, " + std::to_string(s.missing) + " ticks without; silent " +
-         std::to_string(s.silences) + " time(s); docking " + std::to_string(s.dock_commands) + " (" +
-         std::to_string(s.dock_refused) + " refused)";
+         std::to_string(s.write_errors) + " not taken, " + std::to_string(s.unsent) + " unsent), received " +
+         std::to_string(s.received) + " good, " + std::to_string(s.bad_frames()) + " bad; applied " +
+         std::to_string(s.applied) + ", " + std::to_string(s.late) + " late, " + std::to_string(s.stale) + " stale, " +
+         std::to_string(s.missing) + " ticks without; silent " + std::to_string(s.silences) + " time(s); docking " +
+         std::to_string(s.dock_commands) + " (" + std::to_string(s.dock_refused) + " refused)";
 }
 
 kernel::Status HilOrganism::check(const Scenario& sc, std::size_t module) {
@@ -78,7 +78,52 @@ HilOrganism::HilOrganism(OrganismSession& session, kernel::VirtualTimeExecutor& 
       options_(std::move(options)),
       layout_(HilModuleLayout::of(session.scenario().robots[module].module_kind)),
       corruptor_(options_.corrupt, options_.seed, 0x4849'4c33),  // "HIL3": its own stream
-      buf_(4096) {}
+      buf_(4096),
+      backoff_(options_.reopen_first, options_.reopen_most) {}
+
+namespace {
+
+kernel::Time steady_now() {
+  return std::chrono::duration_cast<kernel::Time>(std::chrono::steady_clock::now().time_since_epoch());
+}
+
+}  // namespace
+
+void HilOrganism::watch_line() {
+  const kernel::Time t = steady_now();
+  std::string note;
+  if (!port_->is_open()) {
+    if (!backoff_.down()) {
+      backoff_.lost(t);
+      const auto* fd = dynamic_cast<const io::FdStream*>(port_.get());
+      const std::string why = fd != nullptr ? fd->failure() : std::string();
+      event("serial line '" + port_->name() + "' down" + (why.empty() ? "" : " (" + why + ")") +
+            ": reopening it with backoff");
+    }
+    if (backoff_.due(t)) {
+      if (auto st = port_->open(); st) {
+        (void)port_->ioctl("flush");
+        decoder_.reset();
+        if (auto* fd = dynamic_cast<io::FdStream*>(port_.get()))
+          fd->set_write_timeout(session_.scenario().control_period / 4);
+        note = "serial line '" + port_->name() + "' open again after " +
+               std::to_string(kernel::to_milliseconds(backoff_.reopened(t))) + " ms";
+      } else {
+        const kernel::Duration wait = backoff_.failed(t);
+        event("reopen attempt " + std::to_string(backoff_.attempts()) + " failed: " + st.error() + "; next in " +
+              std::to_string(kernel::to_milliseconds(wait)) + " ms");
+      }
+    }
+  }
+  {
+    std::lock_guard lock(stats_mu_);
+    stats_.line_losses = backoff_.losses();
+    stats_.line_reopens = backoff_.reopens();
+    stats_.line_down = backoff_.down_for(t);
+    stats_.line_open = !backoff_.down();
+  }
+  if (!note.empty()) event(note);
+}
 
 HilOrganism::~HilOrganism() = default;
 
@@ -92,6 +137,11 @@ void HilOrganism::send_sensors(std::uint32_t seq) {
   f.values = readings_;
   frame_.clear();
   io::encode_frame(encode_module_sensors(f), frame_);
+  if (!port_->is_open()) {
+    std::lock_guard lock(stats_mu_);
+    ++stats_.unsent;  // never into a line that is down
+    return;
+  }
   const bool corrupt = corruptor_.roll() && corrupt_frame(frame_, corruptor_.random());
   corruptor_.count(corrupt);
   const bool ok = static_cast<bool>(port_->write_all(frame_));
@@ -221,6 +271,7 @@ kernel::Status HilOrganism::wait_for_board(kernel::Duration timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   const kernel::Duration period = session_.scenario().control_period;
   while (std::chrono::steady_clock::now() < deadline) {
+    watch_line();
     send_sensors(0);
     if (read_board(period, 0)) return {};
   }
@@ -252,6 +303,7 @@ kernel::Result<std::uint64_t> HilOrganism::run_ticks(std::uint64_t ticks) {
   std::uint64_t done = 0;
   for (; done < ticks; ++done) {
     if (seq_ >= kHilMaxSequence) return kernel::Error{"the run is out of sequence numbers (2^24 ticks)"};
+    watch_line();
     apply();
     const std::uint32_t k = seq_ + 1;
     executor_.run_until(period * static_cast<std::int64_t>(k));

@@ -20,6 +20,10 @@
 // The handshake is the 2D one: [0, readings before the first step] each period until the board
 // answers; the answer is never applied.
 //
+// A line whose device goes away (a USB adapter pulled, `symb link` stopped) is reported, reopened
+// by its path with backoff and used again once it is back, as in 2D; stats() says how long it was
+// down.
+//
 // Limits: the board's module has no events and no hooks over the organism bus (create() says so at
 // the scenario's place); its imu, touch, laser and camera are not carried.
 #pragma once
@@ -34,6 +38,7 @@
 #include <vector>
 
 #include "symb/io/frame_codec.hpp"
+#include "symb/io/reopen_backoff.hpp"
 #include "symb/io/stream.hpp"
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/result.hpp"
@@ -54,6 +59,10 @@ struct HilOrganismOptions {
   double corrupt = 0;  // fraction of sensor frames corrupted on purpose (corrupt_frame), [0, 1]
   std::uint64_t seed = 1;
   std::function<void(const std::string&)> on_event;  // link events for the person
+  // A line whose device went away is reopened by its path at once, then after reopen_first,
+  // doubling up to reopen_most (io::ReopenBackoff), as in 2D; meanwhile frames are counted unsent.
+  kernel::Duration reopen_first = std::chrono::milliseconds(100);
+  kernel::Duration reopen_most = std::chrono::seconds(2);
 };
 
 struct HilOrganismStats {
@@ -70,7 +79,12 @@ struct HilOrganismStats {
   std::uint64_t silences = 0;       // times the board fell silent for `hold` (module stopped)
   std::uint64_t dock_commands = 0;  // docking frames applied to the world
   std::uint64_t dock_refused = 0;   // ... that the world refused
-  bool answered = false;            // the handshake was answered
+  std::uint64_t unsent = 0;         // frames not written at all: the line was down
+  std::uint64_t line_losses = 0;    // times the device went away
+  std::uint64_t line_reopens = 0;   // times it was opened again
+  kernel::Duration line_down{0};    // in all, the outage in progress included
+  bool line_open = true;
+  bool answered = false;  // the handshake was answered
   std::uint32_t last_applied = 0;
 
   std::uint64_t bad_frames() const { return decoder.dropped() + malformed; }
@@ -110,6 +124,8 @@ class HilOrganism {
   // Reads what came for up to `wait` (0: what is there); true once an answer to `want` came.
   bool read_board(kernel::Duration wait, std::uint32_t want);
   void apply();
+  // Notices a line that went away and reopens it with backoff (before each tick and handshake).
+  void watch_line();
   void event(const std::string& text);
 
   OrganismSession& session_;
@@ -126,6 +142,7 @@ class HilOrganism {
   std::shared_ptr<std::vector<float>> observed_;  // ... as the runner's observer took them
   std::optional<HilModuleCommand> best_;
   std::vector<HilDockCommand> docks_;
+  io::ReopenBackoff backoff_;
   std::uint32_t seq_ = 0;
   std::uint64_t quiet_ticks_ = 0;  // ticks since the last applied command
   bool started_ = false;
