@@ -24,7 +24,7 @@ constexpr std::string_view kBoardCommand = "symb board";
 constexpr OptionSpec kBoardOptions[] = {
     {"--serial", "PATH", "the data line to the simulator"},
     {"--shell", "PATH", "a second serial line for the command shell (symb shell --serial ...)"},
-    {"--robot", "NAME", "the scenario's robot this board runs (default: the first)"},
+    {"--robot", "NAME", "the scenario's robot this board runs (default: the first; 3D: required)"},
     {"--duration", "D", "stop after this long (default: at Ctrl-C)"},
     {"--seed", "S", "the run's seed, for the node's random streams (default: the scenario's)"},
     {"--stats-every", "D", "print the link statistics this often (default 5s)"},
@@ -84,6 +84,17 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     return kExitFailure;
   }
   const sim::Scenario& sc = *loaded;
+  if (sc.world_kind == sim::WorldKind::kMujoco) {
+    BoardOrganismArgs oa;
+    oa.serial = serial;
+    oa.shell = shell_path;
+    oa.robot = robot_name;
+    oa.seed = seed;
+    oa.duration = duration;
+    oa.stats_every = stats_every;
+    oa.quiet = quiet;
+    return run_board_organism(sc, oa, ctx);
+  }
   std::size_t index = 0;
   if (!robot_name.empty()) {
     while (index < sc.robots.size() && sc.robots[index].name != robot_name) ++index;

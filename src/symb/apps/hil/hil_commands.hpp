@@ -8,10 +8,16 @@
 // Command-line handling and the loops around the sim layer's HilSimulator and BoardLink.
 #pragma once
 
+#include <filesystem>
+#include <optional>
 #include <span>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "symb/apps/cli_args.hpp"
+#include "symb/kernel/time.hpp"
+#include "symb/sim/scenario.hpp"
 
 namespace symb::apps::hil {
 
@@ -19,5 +25,29 @@ namespace symb::apps::hil {
 int run_link_command(std::span<const std::string_view> args, const CliContext& ctx);
 int run_sim_command(std::span<const std::string_view> args, const CliContext& ctx);
 int run_board_command(std::span<const std::string_view> args, const CliContext& ctx);
+
+// The 3D forms (hil_organism_commands.cpp): one module of the organism on the board.
+struct SimOrganismArgs {
+  std::vector<std::string> serial;  // exactly one
+  std::string board;                // --board: the module on the board
+  std::optional<std::uint64_t> seed;
+  kernel::Duration duration{0};
+  kernel::Duration hold = std::chrono::milliseconds(300);
+  kernel::Duration wait = std::chrono::seconds(60);
+  double corrupt = 0;
+  bool lockstep = false;  // wait for every answer (up to 1 s) instead of keeping the wall-clock pace
+  bool quiet = false;
+  std::optional<std::filesystem::path> out_dir;
+};
+int run_sim_organism(const sim::Scenario& scenario, const SimOrganismArgs& args, const CliContext& ctx);
+
+struct BoardOrganismArgs {
+  std::string serial, shell, robot;
+  std::optional<std::uint64_t> seed;
+  std::optional<kernel::Duration> duration;
+  kernel::Duration stats_every = std::chrono::seconds(5);
+  bool quiet = false;
+};
+int run_board_organism(const sim::Scenario& scenario, const BoardOrganismArgs& args, const CliContext& ctx);
 
 }  // namespace symb::apps::hil

@@ -37,6 +37,8 @@ constexpr OptionSpec kSimOptions[] = {
     {"--corrupt", "P", "corrupt this fraction of the IR frames sent (0..1, default 0)"},
     {"--hold", "D", "a silent board's robot keeps its speeds this long, then stops (default 300ms)"},
     {"--wait", "D", "how long to wait for the boards' first answer (default 60s)"},
+    {"--board", "NAME", "3D scenarios: the module that runs on the board (the others run here)"},
+    {"--lockstep", "", "3D scenarios: wait for every answer (up to 1 s) instead of the wall-clock pace"},
     {"--quiet", "", "no progress line"},
     {"--help", "", "this help"},
 };
@@ -69,8 +71,15 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   sim::HilSimulatorOptions so;
   kernel::Duration wait = 60s;
   bool quiet = false;
+  std::string board;
+  bool lockstep = false;
   for (const ParsedOption& o : a.options) {
-    if (o.name == "--serial") {
+    if (o.name == "--board") {
+      if (o.value.empty()) return usage_error(ctx, kSimCommand, UsageError{"--board: empty module name"});
+      board = o.value;
+    } else if (o.name == "--lockstep") {
+      lockstep = true;
+    } else if (o.name == "--serial") {
       std::string_view rest = o.value;
       while (true) {
         const auto comma = rest.find(',');
@@ -114,6 +123,25 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
     return kExitFailure;
   }
   const sim::Scenario& sc = *loaded;
+  if (sc.world_kind == sim::WorldKind::kMujoco) {
+    SimOrganismArgs oa;
+    oa.serial = serial;
+    oa.board = board;
+    oa.seed = seed;
+    oa.duration = duration.value_or(sc.duration);
+    oa.hold = so.hold;
+    oa.wait = wait;
+    oa.corrupt = so.corrupt;
+    oa.lockstep = lockstep;
+    oa.quiet = quiet;
+    oa.out_dir = out_dir;
+    return run_sim_organism(sc, oa, ctx);
+  }
+  if (!board.empty() || lockstep) {
+    ctx.err << kSimCommand << ": --board and --lockstep are for 3D scenarios; " << sc.file
+            << " describes a 2D world (one --serial path per robot)\n";
+    return kExitUsage;
+  }
   if (serial.size() != sc.robots.size()) {
     ctx.err << kSimCommand << ": the scenario has " << sc.robots.size() << " robot(s) but " << serial.size()
             << " --serial path(s) were given (one per robot, in scenario order)\n";

@@ -119,6 +119,11 @@ robot::RobotDevices MujocoRunner::device_lookups(std::size_t module) const {
   for (const auto& c : connectors_[module]) sensors.push_back(c);
   std::vector<std::shared_ptr<robot::Actuator>> actuators{hinge(module)};
   if (wheels_[module]) actuators.push_back(wheels_[module]);
+  return device_lookups_of(std::move(sensors), std::move(actuators));
+}
+
+robot::RobotDevices device_lookups_of(std::vector<std::shared_ptr<robot::Sensor>> sensors,
+                                      std::vector<std::shared_ptr<robot::Actuator>> actuators) {
   robot::RobotDevices lookups;
   lookups.sensor = [sensors](std::string_view name) -> std::shared_ptr<robot::Sensor> {
     for (const auto& s : sensors)

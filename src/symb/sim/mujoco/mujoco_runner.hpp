@@ -77,6 +77,11 @@ struct MujocoStepRecord {
 // observers; it may call with_world() and stop().
 using MujocoStepObserver = std::function<void(const MujocoStepRecord&)>;
 
+// Lookups by device name over the given devices (RobotDevices for the robot task types): what a
+// module's node binds to, whoever holds the devices (this runner, or a board's serial line).
+robot::RobotDevices device_lookups_of(std::vector<std::shared_ptr<robot::Sensor>> sensors,
+                                      std::vector<std::shared_ptr<robot::Actuator>> actuators);
+
 class MujocoRunner final : public PeriodicRunner {
  public:
   // `executor` and `world` must outlive the runner. Throws std::invalid_argument unless the period

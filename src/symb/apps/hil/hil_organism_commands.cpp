@@ -1,0 +1,295 @@
+// `symb sim` and `symb board` on a 3D scenario (world: {kind: mujoco}): hardware in the loop with
+// one module of the organism on the board (docs/hil.md, "3D: one module on a board"). The
+// simulator runs the organism in process (OrganismSession) with the board's module's node
+// replaced by the serial line (HilOrganism); the board runs that module's node over the line's
+// devices (HilModuleBoard). Called by run_sim_command and run_board_command once the scenario is
+// loaded and found to be 3D.
+#include <chrono>
+#include <sstream>
+#include <thread>
+
+#include "symb/apps/hil/hil_commands.hpp"
+#include "symb/apps/hil/hil_common.hpp"
+#include "symb/apps/progress_line.hpp"
+#include "symb/apps/run/organism_recorder.hpp"
+#include "symb/io/reopen_backoff.hpp"
+#include "symb/io/serial_port.hpp"
+#include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/shell/shell_task.hpp"
+#include "symb/sim/mujoco/hil_module_board.hpp"
+#include "symb/sim/mujoco/hil_organism.hpp"
+#include "symb/sim/mujoco/organism_session.hpp"
+#include "symb/sim/robot_system.hpp"
+
+namespace symb::apps::hil {
+
+namespace {
+
+using namespace std::chrono_literals;
+
+// The index of module `name`, or a usage error listing the names.
+std::variant<std::size_t, std::string> module_index(const sim::Scenario& sc, const std::string& name,
+                                                    const char* option) {
+  for (std::size_t i = 0; i < sc.robots.size(); ++i)
+    if (sc.robots[i].name == name) return i;
+  std::string names;
+  for (const auto& r : sc.robots) names += (names.empty() ? "" : ", ") + r.name;
+  return std::string(option) + ": the scenario has no module " + quote_arg(name) + " (it has " + names + ")";
+}
+
+}  // namespace
+
+int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const CliContext& ctx) {
+  constexpr std::string_view kCommand = "symb sim";
+  if (args.serial.size() != 1) {
+    ctx.err << kCommand << ": a 3D scenario runs one module on a board: give one --serial path\n";
+    return kExitUsage;
+  }
+  if (args.board.empty()) {
+    ctx.err << kCommand << ": a 3D scenario needs --board NAME, the module that runs on the board\n";
+    return kExitUsage;
+  }
+  auto index = module_index(sc, args.board, "--board");
+  if (auto* e = std::get_if<std::string>(&index)) {
+    ctx.err << kCommand << ": " << *e << "\n";
+    return kExitUsage;
+  }
+  const std::size_t module = std::get<std::size_t>(index);
+  if (auto st = sim::mujoco::HilOrganism::check(sc, module); !st) {
+    ctx.err << kCommand << ": " << st.error() << "\n";
+    return kExitFailure;
+  }
+  const std::uint64_t seed = args.seed.value_or(sc.seed);
+  kernel::VirtualTimeExecutor ex;
+  sim::SessionOptions so;
+  so.seed = seed;
+  auto made = sim::mujoco::OrganismSession::create(sc, ex, so);
+  if (!made) {
+    ctx.err << kCommand << ": " << made.error() << "\n";
+    return kExitFailure;
+  }
+  sim::mujoco::OrganismSession& session = **made;
+  auto port = std::make_shared<io::SerialPort>("data." + args.board, args.serial.front());
+  if (auto st = port->open(); !st) {
+    ctx.err << kCommand << ": " << st.error() << "\n";
+    return kExitFailure;
+  }
+  (void)port->ioctl("flush");
+  sim::mujoco::HilOrganismOptions ho;
+  ho.paced = !args.lockstep;
+  ho.answer_wait = args.lockstep ? std::chrono::duration_cast<kernel::Duration>(1s) : sc.control_period;
+  ho.hold = args.hold;
+  ho.corrupt = args.corrupt;
+  ho.seed = seed;
+  ho.on_event = [&ctx](const std::string& text) { ctx.err << "sim: " << text << "\n" << std::flush; };
+  auto hil = sim::mujoco::HilOrganism::create(session, ex, module, port, ho);
+  if (!hil) {
+    ctx.err << kCommand << ": " << hil.error() << "\n";
+    return kExitFailure;
+  }
+  run::OrganismRecorderOptions ro;
+  ro.caption = sc.name + " (module " + args.board + " on the board), seed " + std::to_string(seed);
+  run::OrganismRecorder recorder(session.runner(), ro);
+
+  ctx.err << "sim: " << sc.name << ", seed " << seed << ": waiting for the board (" << args.board << ") on "
+          << args.serial.front() << "\n"
+          << std::flush;
+  if (auto st = (*hil)->wait_for_board(args.wait); !st) {
+    ctx.err << kCommand << ": " << st.error() << "\n";
+    return kExitFailure;
+  }
+  const std::uint64_t ticks = static_cast<std::uint64_t>(args.duration / sc.control_period);
+  InterruptFlag interrupt;
+  ProgressLine progress(ctx.err, !args.quiet, ctx.err_is_terminal);
+  const auto wall_start = std::chrono::steady_clock::now();
+  std::uint64_t done = 0;
+  while (done < ticks && !interrupt.raised()) {
+    const std::uint64_t slice = std::min<std::uint64_t>(33, ticks - done);
+    auto ran = (*hil)->run_ticks(slice);
+    if (!ran) {
+      ctx.err << kCommand << ": " << ran.error() << "\n";
+      return kExitFailure;
+    }
+    done += *ran;
+    progress.update(static_cast<double>(done) / static_cast<double>(std::max<std::uint64_t>(ticks, 1)),
+                    "sim: tick " + std::to_string(done) + " / " + std::to_string(ticks));
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  const double simulated = std::chrono::duration<double>(sc.control_period).count() * static_cast<double>(done);
+  progress.finish("sim: " + fixed(simulated, 1) + " s simulated in " + fixed(wall, 1) + " s");
+  const auto st = (*hil)->stats();
+  std::ostringstream header;
+  header << "scenario: " << sc.name << " (" << sc.file << ")\n"
+         << "world: MuJoCo (3D), " << sc.robots.size() << " modules, " << args.board << " on the board\n"
+         << "seed: " << seed << "\n"
+         << "executor: hardware-in-the-loop, " << (args.lockstep ? "lockstep" : "wall clock") << "\n"
+         << "control period: " << fixed(std::chrono::duration<double>(sc.control_period).count() * 1000, 1) << " ms\n"
+         << "simulated: " << fixed(simulated, 2) << " s\n"
+         << "wall clock: " << fixed(wall, 3) << " s\n"
+         << "trajectory hash: " << hex64(recorder.summary().hash) << "\n"
+         << "corrupt: " << args.corrupt << "\n"
+         << "link: " << sim::mujoco::describe(st) << "\n"
+         << "link-stats: sent=" << st.frames_sent << " corrupted=" << st.corrupted << " received=" << st.received
+         << " bad=" << st.bad_frames() << " applied=" << st.applied << " late=" << st.late << " stale=" << st.stale
+         << " missing=" << st.missing << " silences=" << st.silences << " docking=" << st.dock_commands
+         << " docking_refused=" << st.dock_refused << " unsent=" << st.unsent << " line_losses=" << st.line_losses
+         << " line_reopens=" << st.line_reopens << " line_down_ms=" << kernel::to_milliseconds(st.line_down)
+         << " line_open=" << (st.line_open ? 1 : 0) << "\n";
+  const std::string dead = st.line_open ? std::string()
+                                        : args.board + " (down " +
+                                              fixed(std::chrono::duration<double>(st.line_down).count(), 1) +
+                                              " s in all, " + std::to_string(st.line_losses) + " loss(es))";
+  if (!dead.empty()) header << "dead link: the serial line was down at the end of the run: " << dead << "\n";
+  const std::filesystem::path dir = args.out_dir.value_or(std::filesystem::path("out") / (sc.name + "-hil"));
+  auto files = recorder.finish(dir, header.str());
+  if (!files) {
+    ctx.err << kCommand << ": " << files.error() << "\n";
+    return kExitFailure;
+  }
+  ctx.out << "sim: " << sc.name << ", seed " << seed << ", " << fixed(simulated, 1) << " s, module " << args.board
+          << " on the board\n"
+          << "  link " << args.board << ": " << sim::mujoco::describe(st) << "\n"
+          << "  trajectory hash: " << hex64(recorder.summary().hash) << "\n"
+          << "results in " << dir.string() << "/\n";
+  if (!dead.empty()) {
+    ctx.err << kCommand << ": dead link: the serial line was down at the end of the run: " << dead << "\n";
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, const CliContext& ctx) {
+  constexpr std::string_view kCommand = "symb board";
+  if (args.robot.empty()) {
+    ctx.err << kCommand << ": a 3D scenario needs --robot NAME, the module this board runs\n";
+    return kExitUsage;
+  }
+  auto index = module_index(sc, args.robot, "--robot");
+  if (auto* e = std::get_if<std::string>(&index)) {
+    ctx.err << kCommand << ": " << *e << "\n";
+    return kExitUsage;
+  }
+  const std::size_t module = std::get<std::size_t>(index);
+  const sim::RobotSpec& spec = sc.robots[module];
+  auto port = std::make_shared<io::SerialPort>("uart0", args.serial);
+  if (auto st = port->open(); !st) {
+    ctx.err << kCommand << ": " << st.error() << "\n";
+    return kExitFailure;
+  }
+  (void)port->ioctl("flush");
+  std::shared_ptr<io::SerialPort> shell_port;
+  if (!args.shell.empty()) {
+    shell_port = std::make_shared<io::SerialPort>("uart1", args.shell);
+    if (auto st = shell_port->open(); !st) {
+      ctx.err << kCommand << ": " << st.error() << "\n";
+      return kExitFailure;
+    }
+  }
+  kernel::VirtualTimeExecutor ex;
+  sim::mujoco::HilModuleBoardOptions bo;
+  bo.control_period = sc.control_period;
+  bo.on_event = [&ctx, &spec](const std::string& text) {
+    ctx.err << "board " << spec.name << ": " << text << "\n" << std::flush;
+  };
+  sim::mujoco::HilModuleBoard board(ex, spec.module_kind, port, bo);
+  sim::RobotSystemOptions ro;
+  ro.control_period = sc.control_period;
+  ro.seed = sim::robot_node_seed(args.seed.value_or(sc.seed), module);
+  ro.read_program = sim::file_program_reader(sc.base_dir);
+  sim::RobotDevices devices;
+  devices.module = board.device_lookups();
+  auto built = sim::RobotSystem::build(ex, spec, std::move(devices), ro);
+  if (!built) {
+    ctx.err << kCommand << ": " << built.error() << "\n";
+    return kExitFailure;
+  }
+  std::unique_ptr<sim::RobotSystem> system = std::move(built).value();
+  auto log_sink = std::make_shared<PrefixedLogSink>(ctx.err, "board " + spec.name + ": ");
+  if (!args.quiet) {
+    for (const os::LogEntry& e : system->node().log().since(0)) log_sink->write(e);
+    system->node().log().add_sink(log_sink);
+  }
+  if (shell_port) {
+    auto table = std::make_shared<shell::DeviceTable>();
+    for (const auto& d : board.devices()) (*table)[d->name()] = d;
+    (*table)["uart0"] = port;
+    (*table)["uart1"] = shell_port;
+    shell::ShellOptions so;
+    so.devices = table;
+    auto attached = shell::attach_shell(system->node(), shell_port, so);
+    if (!attached) {
+      ctx.err << kCommand << ": shell: " << attached.error() << "\n";
+      return kExitFailure;
+    }
+  }
+  if (auto st = board.start(); !st) {
+    ctx.err << kCommand << ": " << st.error() << "\n";
+    return kExitFailure;
+  }
+  ctx.out << "board: module " << spec.name << " of " << sc.name << " on " << args.serial
+          << (shell_port ? ", shell on " + args.shell : std::string()) << "; " << system->node().task_count()
+          << " tasks; its clock follows the simulator's frames; Ctrl-C to stop\n"
+          << std::flush;
+  InterruptFlag interrupt;
+  const auto start = std::chrono::steady_clock::now();
+  auto next_stats = start + args.stats_every;
+  std::string cycle;
+  io::ReopenBackoff backoff;
+  const auto steady = [] {
+    return std::chrono::duration_cast<kernel::Time>(std::chrono::steady_clock::now().time_since_epoch());
+  };
+  while (!interrupt.raised() && (!args.duration || std::chrono::steady_clock::now() - start < *args.duration)) {
+    if (backoff.down()) {
+      // The device went away: its path again with backoff (100 ms doubling to 2 s), as in 2D.
+      if (backoff.due(steady())) {
+        if (auto st = port->open(); st) {
+          (void)port->ioctl("flush");
+          ctx.err << "board " << spec.name << ": serial line open again after "
+                  << kernel::to_milliseconds(backoff.reopened(steady())) << " ms\n"
+                  << std::flush;
+        } else {
+          const auto wait = backoff.failed(steady());
+          ctx.err << "board " << spec.name << ": reopen attempt " << backoff.attempts() << " failed: " << st.error()
+                  << "; next in " << kernel::to_milliseconds(wait) << " ms\n"
+                  << std::flush;
+        }
+      }
+      if (backoff.down()) std::this_thread::sleep_for(20ms);
+    } else if (auto served = board.serve(20ms); !served) {
+      backoff.lost(steady());
+      ctx.err << "board " << spec.name << ": " << served.error() << ": reopening it with backoff\n" << std::flush;
+    }
+    ex.run_injected();  // the shell's input, between frames
+    if (cycle = system->node().cycle_error(); !cycle.empty()) break;
+    if (std::chrono::steady_clock::now() >= next_stats) {
+      next_stats += args.stats_every;
+      ctx.err << "board: " << sim::mujoco::describe(board.stats()) << "\n" << std::flush;
+    }
+  }
+  system->node().log().remove_sink(log_sink);
+  const auto s = board.stats();
+  ctx.out << "board: " << sim::mujoco::describe(s) << "\n"
+          << "board-stats: good=" << s.frames << " bad=" << s.bad_frames() << " missed=" << s.missed
+          << " out_of_order=" << s.out_of_order << " malformed=" << s.malformed << " answers=" << s.answers
+          << " docking=" << s.dock_commands << " not_taken=" << s.write_errors << " losses=" << s.link_losses
+          << " recoveries=" << s.link_recoveries << " line_losses=" << backoff.losses()
+          << " line_reopens=" << backoff.reopens()
+          << " line_down_ms=" << kernel::to_milliseconds(backoff.down_for(steady()))
+          << " line_open=" << (backoff.down() ? 0 : 1) << "\n";
+  system.reset();
+  port->close();
+  if (shell_port) shell_port->close();
+  if (!cycle.empty()) {
+    ctx.err << kCommand << ": " << cycle << "\n";
+    return kExitFailure;
+  }
+  if (backoff.down()) {
+    ctx.err << kCommand << ": the serial line " << args.serial << " was down when the board stopped (down "
+            << fixed(std::chrono::duration<double>(backoff.down_for(steady())).count(), 1) << " s in all, "
+            << backoff.losses() << " loss(es), " << backoff.reopens() << " reopening(s))\n";
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace symb::apps::hil
