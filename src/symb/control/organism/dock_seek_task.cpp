@@ -19,7 +19,9 @@ constexpr double kOffLine = 0.04;         // m off the target's normal line: sta
 constexpr double kOffHeading = 0.25;      // rad off face to face while docking: start over
 constexpr double kLatchDistance = 0.025;  // m: latch within this (and aligned) ...
 constexpr double kLatchHeading = 0.15;    // ... and this (rad): else it might be another's connector
-constexpr double kTooNear = 0.06;         // m: something this near ahead that is not the target
+constexpr double kTooNear = 0.06;
+constexpr double kFarSide = 1.2;  // rad: a target beyond this bearing is turned to first         // m: something this
+                                  // near ahead that is not the target
 
 }  // namespace
 
@@ -37,11 +39,12 @@ SeekOutput DockSeeker::step(const SeekInput& in, double dt, double wander) {
   }
   if (phase_ == SeekPhase::kDocked) phase_ = SeekPhase::kSearch;  // undocked by someone: seek again
   const bool seen = in.distance >= 0;
-  auto back_off = [&](double turn) {
+  auto back_off = [&](double speed, double turn) {
     if (phase_ == SeekPhase::kBackOff) return;
     resume_ = seen ? SeekPhase::kApproach : SeekPhase::kSearch;
     phase_ = SeekPhase::kBackOff;
     in_phase_ = 0;
+    backoff_speed_ = speed;
     backoff_turn_ = turn;
   };
   // Stuck: commanded to move for a whole window, yet neither the beacon nor the gyro moved.
@@ -50,7 +53,7 @@ SeekOutput DockSeeker::step(const SeekInput& in, double dt, double wander) {
   if (seen && window_distance_ < 0) window_distance_ = in.distance;
   if (window_ >= seconds(o_.stuck_time)) {
     const double moved = seen && window_distance_ >= 0 ? std::abs(in.distance - window_distance_) : 0.0;
-    if (commanded_ && turned_ < 0.05 && moved < 0.01 && phase_ != SeekPhase::kBackOff) back_off(1.0);
+    if (commanded_ && turned_ < 0.05 && moved < 0.01 && phase_ != SeekPhase::kBackOff) back_off(-0.07, 1.0);
     window_ = turned_ = 0;
     window_distance_ = -1;
     commanded_ = false;
@@ -58,8 +61,8 @@ SeekOutput DockSeeker::step(const SeekInput& in, double dt, double wander) {
   if (phase_ == SeekPhase::kBackOff) {
     in_phase_ += dt;
     if (in_phase_ < seconds(o_.backoff_time)) {
-      out = {-0.07, backoff_turn_, false};
-      commanded_ = true;
+      out = {backoff_speed_, backoff_turn_, false};
+      commanded_ = backoff_speed_ != 0;
       return out;
     }
     phase_ = resume_;
@@ -74,7 +77,7 @@ SeekOutput DockSeeker::step(const SeekInput& in, double dt, double wander) {
     const double spin = seconds(o_.search_spin), drive = seconds(o_.search_drive);
     if (in_phase_ >= spin + drive) in_phase_ = 0;
     if (in_phase_ < spin) {
-      out.w = 1.0;
+      out.w = search_turn_;  // towards where a beacon was seen last
     } else {
       if (in_phase_ - dt < spin) wander_ = wander;
       out.v = 0.1;
@@ -85,10 +88,14 @@ SeekOutput DockSeeker::step(const SeekInput& in, double dt, double wander) {
     return out;
   }
   if (phase_ == SeekPhase::kSearch) phase_ = SeekPhase::kApproach;
+  search_turn_ = in.bearing < 0 ? -1.0 : 1.0;
   if (in.front_ir && *in.front_ir < kTooNear && *in.front_ir < in.distance - 0.03) {
-    back_off(0.8);
-    out = {-0.07, backoff_turn_, false};
-    commanded_ = true;
+    // Another seeker (or the chain's side) nearer than the target: reverse, turning, and retry.
+    // (Standing still to let another seeker finish docking was tried: fewer seeds assembled,
+    // docs/organism.md.)
+    back_off(-0.07, 0.8);
+    out = {backoff_speed_, backoff_turn_, false};
+    commanded_ = backoff_speed_ != 0;
     return out;
   }
   // The target and its outward normal in my frame (x ahead of my connector), then the pre-dock
@@ -104,8 +111,24 @@ SeekOutput DockSeeker::step(const SeekInput& in, double dt, double wander) {
     phase_ = SeekPhase::kApproach;
   if (phase_ == SeekPhase::kApproach) {
     const double rp = std::hypot(px, py), ap = std::atan2(py, px);
-    out.v = std::min(0.12, 1.5 * rp) * std::max(0.0, std::cos(ap));
-    out.w = 3 * ap;
+    if (std::abs(ap) <= std::numbers::pi / 2) {
+      behind_turn_ = 0;
+      out.v = std::min(0.12, 1.5 * rp) * std::cos(ap);
+      out.w = 3 * ap;
+    } else if (in.distance > o_.predock || std::abs(in.bearing) > std::numbers::pi / 2 || behind_turn_ != 0) {
+      // The pre-dock point behind me, the target off to one side: turn on the spot towards the
+      // target until the point is ahead, so the target stays in the beacon's cone (turning the
+      // other way loses it and the search turns me back: a livelock). The side is kept until
+      // then, so a bearing near 0 or pi does not make it dither.
+      if (behind_turn_ == 0) behind_turn_ = in.bearing < 0 ? -1 : 1;
+      out.w = 1.5 * behind_turn_;
+    } else {
+      // The pre-dock point behind me, the target ahead (too close, or came in crooked): reverse
+      // onto the pre-dock point, steering by my back.
+      const double back = std::remainder(ap - std::numbers::pi, 2 * std::numbers::pi);
+      out.v = -std::min(0.08, 1.5 * rp) * std::abs(std::cos(ap));
+      out.w = 3 * back;
+    }
   } else if (phase_ == SeekPhase::kAlign) {
     out.w = std::clamp(6 * in.heading, -1.0, 1.0);
     if (std::abs(out.w) < 0.25) out.w = out.w < 0 ? -0.25 : 0.25;

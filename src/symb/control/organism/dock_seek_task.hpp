@@ -87,8 +87,11 @@ class DockSeeker {
   SeekPhase phase_ = SeekPhase::kSearch;
   SeekPhase resume_ = SeekPhase::kSearch;  // the phase a back-off returns to
   double in_phase_ = 0;                    // s in the current search cycle or back-off
+  double backoff_speed_ = -0.07;           // m/s
   double backoff_turn_ = 1;
   double wander_ = 0;
+  double search_turn_ = 1;  // rad/s while scanning
+  int behind_turn_ = 0;     // the side turned to while the pre-dock point is behind, 0 none
   // Stuck detection: motion seen in the current window.
   double window_ = 0, turned_ = 0, last_distance_ = -1, window_distance_ = -1;
   bool commanded_ = false;
