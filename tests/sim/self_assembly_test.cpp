@@ -137,8 +137,12 @@ void sa_place(Scenario& sc, std::uint64_t seed) {
   std::vector<std::array<double, 2>> placed = {{0, 0}};
   for (std::size_t i = 1; i < sc.robots.size(); ++i) {
     for (;;) {
-      const double x = rnd.uniform(-0.75, -0.2), y = rnd.uniform(-0.45, 0.45);
-      bool ok = true;
+      // SYMB_SELF_ASSEMBLY_ANYWHERE=1: anywhere around the seed instead (the exploration's
+      // [-0.6, 0.6]^2, 0.25 m from the seed), to measure the search.
+      const bool anywhere = std::getenv("SYMB_SELF_ASSEMBLY_ANYWHERE") != nullptr;
+      const double x = anywhere ? rnd.uniform(-0.6, 0.6) : rnd.uniform(-0.75, -0.2);
+      const double y = anywhere ? rnd.uniform(-0.6, 0.6) : rnd.uniform(-0.45, 0.45);
+      bool ok = !anywhere || std::hypot(x, y) > 0.25;
       for (const auto& p : placed) ok = ok && std::hypot(x - p[0], y - p[1]) > 0.2;
       if (!ok) continue;
       const double yaw = rnd.uniform(-kSaPi, kSaPi);
