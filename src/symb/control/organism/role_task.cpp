@@ -50,7 +50,8 @@ RoleStats RoleTask::stats() const {
   return RoleStats{.changes = counters_.changes.load(),
                    .readings = counters_.readings.load(),
                    .ignored = counters_.ignored.load(),
-                   .missing_tasks = counters_.missing_tasks.load()};
+                   .missing_tasks = counters_.missing_tasks.load(),
+                   .heartbeats = counters_.heartbeats.load()};
 }
 
 void RoleTask::on_message(const os::Message& m) {
