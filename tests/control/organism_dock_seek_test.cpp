@@ -62,6 +62,25 @@ TEST(DockSeeker, ATargetFacingSidewaysIsApproachedByWayOfItsPreDockPoint) {
   EXPECT_GT(out.w, 1.0);
 }
 
+TEST(DockSeeker, APreDockPointBehindIsReachedByTurningTowardsAFarTargetOrReversingFromANearOne) {
+  DockSeeker s;
+  // Target 0.5 m away, 86 deg to my right, facing the way I face: its pre-dock point lies behind
+  // me. Turn on the spot to the target's side (right), and keep that side while the point is
+  // behind, even when the bearing jumps to the other side.
+  SeekOutput out = s.step(seek_beacon(0.5, -1.5, 0), kSeekDt, 0);
+  EXPECT_EQ(s.phase(), SeekPhase::kApproach);
+  EXPECT_EQ(out.v, 0);
+  EXPECT_EQ(out.w, -1.5);
+  out = s.step(seek_beacon(0.5, 1.6, 0), kSeekDt, 0);  // the point still behind, the target now left
+  EXPECT_EQ(out.w, -1.5);
+  // Target straight ahead, face to face, 5 cm away: the pre-dock point is 0.2 m behind: reverse
+  // straight onto it.
+  DockSeeker near;
+  out = near.step(seek_beacon(0.05, 0, 0), kSeekDt, 0);
+  EXPECT_LT(out.v, 0);
+  EXPECT_NEAR(out.w, 0, 1e-9);
+}
+
 TEST(DockSeeker, AtThePreDockPointItAlignsThenDocksStraightIn) {
   DockSeekOptions o;
   DockSeeker s(o);

@@ -19,9 +19,7 @@ constexpr double kOffLine = 0.04;         // m off the target's normal line: sta
 constexpr double kOffHeading = 0.25;      // rad off face to face while docking: start over
 constexpr double kLatchDistance = 0.025;  // m: latch within this (and aligned) ...
 constexpr double kLatchHeading = 0.15;    // ... and this (rad): else it might be another's connector
-constexpr double kTooNear = 0.06;
-constexpr double kFarSide = 1.2;  // rad: a target beyond this bearing is turned to first         // m: something this
-                                  // near ahead that is not the target
+constexpr double kTooNear = 0.06;         // m: something this near ahead that is not the target
 
 }  // namespace
 
