@@ -36,7 +36,7 @@ kernel::Status register_organism_task_types(os::TaskTypeRegistry& registry, cons
         .doc("a module not heard for this long is gone");
     auto t = os::declare_task_type(
         "role",
-        "cell specialization: connector readings [state, open, peer] in; takes a role from the docked faces "
+        "cell specialization: connector readings [state, open, peer, ...] in; takes a role from the docked faces "
         "and runs that role's tasks; [role] out on port 0",
         std::move(p), [](const RoleOptions& o) { return organism::RoleTask::create(o); });
     t.defaults = os::TaskOptions{.priority = 3, .period = 50ms, .queue_capacity = 16};

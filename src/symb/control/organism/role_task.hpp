@@ -8,7 +8,8 @@
 // role decides which run.
 //
 //   in  any port, from the connector sensor tasks named by `front`, `back`, `left`, `right`:
-//       [state (0 free, 1 aligned, 2 docked), open, peer] (the 3D connector devices' reading)
+//       [state (0 free, 1 aligned, 2 docked), open, peer, ...] (the 3D connector devices' reading;
+//       the first three are read)
 //   out port 0: [role index] at every tick (kRoleNames order)
 //
 // Docking and undocking take a moment to settle (a latch is refused, a neighbour moves off), so a
