@@ -68,6 +68,15 @@ kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, Robo
   control::ControlResources resources;
   resources.read_program = std::move(read_program);
   if (devices.module) {
+    // Controllers that command a device by name (MDL2e `device` actions, the `dock_seek` task's
+    // connector ioctls) find the module's sensors and actuators.
+    resources.device = [m = *devices.module](std::string_view name) -> std::shared_ptr<io::Device> {
+      if (m.sensor)
+        if (auto s = m.sensor(name)) return s;
+      if (m.actuator)
+        if (auto a = m.actuator(name)) return a;
+      return nullptr;
+    };
     if (auto s = robot::register_robot_task_types(registry, *devices.module); !s) return s;
     if (auto st = control::register_control_task_types(registry, resources); !st) return st;
     return evo::register_evo_task_types(registry, resources);

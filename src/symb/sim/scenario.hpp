@@ -21,7 +21,8 @@
 //   hinge_state   [angle rad, speed rad/s] of the hinge per control period (port 0)
 //   hinge         the hinge's position servo: takes [target rad]
 //   wheels        as in 2D, [left, right] Thymio motor units (kinds with wheels only)
-//   connector_<n> [state, open, peer] of connector n, made only when the robot's hooks name it;
+//   connector_<n> [state, open, peer, beacon distance, bearing, heading] of connector n, made only when the robot's
+//   hooks name it;
 //                 its ioctls (open, close, latch, unlatch, state) reach it from a shell or an event
 // Modules may start docked (`world.docked`), a hook may reach a task on another module over the
 // organism bus (`to: robot/task`, RobotSpec::remote_hooks), and in either world `events` run shell

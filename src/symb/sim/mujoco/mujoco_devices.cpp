@@ -118,7 +118,10 @@ kernel::Status MujocoHinge::apply(std::span<const float> values) {
 std::vector<robot::ChannelSpec> MujocoConnector::channel_specs() {
   return {robot::ChannelSpec{"state", "0 free, 1 aligned, 2 docked", 0.0f, 2.0f},
           robot::ChannelSpec{"open", "flag", 0.0f, 1.0f},
-          robot::ChannelSpec{"peer", "module index, -1 none", -1.0f, 16777216.0f}};
+          robot::ChannelSpec{"peer", "module index, -1 none", -1.0f, 16777216.0f},
+          robot::ChannelSpec{"beacon_d", "m, -1 none", -1.0f, static_cast<float>(kBeaconRange)},
+          robot::ChannelSpec{"beacon_bearing", "rad", -3.1416f, 3.1416f},
+          robot::ChannelSpec{"beacon_heading", "rad", -3.1416f, 3.1416f}};
 }
 
 MujocoConnector::MujocoConnector(std::string name, std::shared_ptr<WorldAccess> access, std::size_t module,
@@ -157,10 +160,15 @@ MujocoConnector::MujocoConnector(std::string name, std::shared_ptr<WorldAccess> 
             [this](const os::ParamValue*) { return describe(); });
 }
 
-std::array<float, 3> MujocoConnector::reading(const MujocoWorld& world) const {
+ConnectorReading MujocoConnector::reading(const MujocoWorld& world) const {
   const auto peer = world.docked_to(module_, connector_);
+  const auto b = world.beacon(module_, connector_);
   return {static_cast<float>(world.connector_state(module_, connector_)),
-          world.is_open(module_, connector_) ? 1.0f : 0.0f, peer ? static_cast<float>(peer->first) : -1.0f};
+          world.is_open(module_, connector_) ? 1.0f : 0.0f,
+          peer ? static_cast<float>(peer->first) : -1.0f,
+          b ? static_cast<float>(b->distance) : -1.0f,
+          b ? static_cast<float>(b->bearing) : 0.0f,
+          b ? static_cast<float>(b->heading) : 0.0f};
 }
 
 kernel::Status MujocoConnector::latch() { return dock(true); }

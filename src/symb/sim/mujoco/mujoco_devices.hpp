@@ -29,11 +29,12 @@
 //                      which the sensor task forwards in the same message.
 // The runner publishes imu, touch, laser and camera only while a task listens to them (their
 // rays and contact sums cost nothing otherwise), ir and hinge_state every tick.
-//   MujocoConnector    "connector_<name>", one per connector, 3 channels: state (0 free, 1
+//   MujocoConnector    "connector_<name>", one per connector, 6 channels: state (0 free, 1
 //                      aligned, 2 docked), open (0 or 1), peer (the docked partner's module index,
-//                      -1 when not docked). Its ioctls act on the world at once and answer with its
-//                      verdict: `open`, `close` (the connector's mechanism: whether it accepts a
-//                      dock; closing a docked connector leaves it docked), `latch`, `unlatch` (the
+//                      -1 when not docked), then its docking beacon (MujocoWorld::beacon): beacon_d
+//                      (m, -1 when none is seen), beacon_bearing, beacon_heading (rad, 0 when none). Its ioctls act on
+//                      the world at once and answer with its verdict: `open`, `close` (the connector's mechanism:
+//                      whether it accepts a dock; closing a docked connector leaves it docked), `latch`, `unlatch` (the
 //                      answer is the world's refusal text when refused) and `state`. Every change is
 //                      written to the module's node log (and a dock's to its partner's).
 //
@@ -147,6 +148,11 @@ class MujocoHinge final : public robot::Actuator {
   HingeCommand cmd_;
 };
 
+// A connector's reading: state, open, peer, then its docking beacon (mujoco_world.hpp): distance,
+// bearing, heading; -1, 0, 0 when it sees none.
+inline constexpr std::size_t kConnectorChannels = 6;
+using ConnectorReading = std::array<float, kConnectorChannels>;
+
 class MujocoConnector final : public robot::Sensor {
  public:
   // Connector `connector` of module `module` of the world behind `access`.
@@ -162,8 +168,8 @@ class MujocoConnector final : public robot::Sensor {
   kernel::Status set_open(bool open);
 
   // For the runner, under the world's lock: this connector's reading now.
-  std::array<float, 3> reading(const MujocoWorld& world) const;
-  robot::PublishResult publish_reading(const std::array<float, 3>& reading, kernel::Time time) {
+  ConnectorReading reading(const MujocoWorld& world) const;
+  robot::PublishResult publish_reading(const ConnectorReading& reading, kernel::Time time) {
     return publish(std::span<const float>(reading.data(), reading.size()), time);
   }
 

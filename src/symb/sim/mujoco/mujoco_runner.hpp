@@ -150,8 +150,8 @@ class MujocoRunner final : public PeriodicRunner {
   std::vector<std::shared_ptr<MujocoHinge>> hinge_;
   std::vector<std::shared_ptr<SimWheels>> wheels_;
   std::vector<std::vector<std::shared_ptr<MujocoConnector>>> connectors_;
-  std::vector<std::vector<std::array<float, 3>>> connector_readings_;  // reused every tick
-  std::vector<std::vector<bool>> connector_listened_;                  // reused every tick
+  std::vector<std::vector<ConnectorReading>> connector_readings_;  // reused every tick
+  std::vector<std::vector<bool>> connector_listened_;              // reused every tick
   std::vector<double> ir_range_;  // per module and face (module * 4 + face), m; 0 without a sensor
   std::vector<std::shared_ptr<MujocoImuSensor>> imu_;
   std::vector<std::shared_ptr<MujocoTouchSensor>> touch_;

@@ -598,6 +598,42 @@ ConnectorState MujocoWorld::connector_state(std::size_t module, std::size_t conn
                                                                                   : ConnectorState::kFree;
 }
 
+std::optional<Beacon> MujocoWorld::beacon(std::size_t module, std::size_t connector) const {
+  const auto wrap = [](double a) { return std::remainder(a, 2 * std::numbers::pi); };
+  const auto opposite = [](Face f) {
+    switch (f) {
+      case Face::kFront: return Face::kBack;
+      case Face::kBack: return Face::kFront;
+      case Face::kLeft: return Face::kRight;
+      case Face::kRight: return Face::kLeft;
+    }
+    return Face::kBack;
+  };
+  s_->at(module, connector);  // range-checks both handles
+  const Face wanted = opposite(s_->specs[module].kind.connectors.at(connector).face);
+  const Vec3 ps = s_->position(module, connector), ns = s_->normal(module, connector);
+  const double phi = std::atan2(ns[1], ns[0]);
+  std::optional<Beacon> best;
+  for (std::size_t m = 0; m < s_->specs.size(); ++m) {
+    if (m == module) continue;
+    const auto& cs = s_->specs[m].kind.connectors;
+    for (std::size_t c = 0; c < cs.size(); ++c) {
+      if (cs[c].face != wanted) continue;
+      const auto& st = s_->at(m, c);
+      if (!st.open || st.weld != kNoIndex) continue;
+      const Vec3 pt = s_->position(m, c), nt = s_->normal(m, c);
+      const double dx = pt[0] - ps[0], dy = pt[1] - ps[1], d = std::hypot(dx, dy);
+      if (d > kBeaconRange || (best && d >= best->distance)) continue;
+      const double bearing = d > 0 ? wrap(std::atan2(dy, dx) - phi) : 0.0;
+      // The cosine of my place off the target's normal, seen from the target.
+      const double off = d > 0 ? -(dx * nt[0] + dy * nt[1]) / d : 1.0;
+      if (std::abs(bearing) > kBeaconCone || off < std::cos(kBeaconFaceCone)) continue;
+      best = Beacon{d, bearing, wrap(std::atan2(-nt[1], -nt[0]) - phi), m, c};
+    }
+  }
+  return best;
+}
+
 std::optional<std::pair<std::size_t, std::size_t>> MujocoWorld::docked_to(std::size_t module,
                                                                           std::size_t connector) const {
   const auto& c = s_->at(module, connector);

@@ -77,6 +77,23 @@ inline constexpr double kLatchAngleTolerance = 10.0 * std::numbers::pi / 180.0;
 inline constexpr std::size_t kNoIndex = static_cast<std::size_t>(-1);
 
 enum class ConnectorState { kFree, kAligned, kDocked };
+
+// The docking beacon (real modules dock with IR beacons that give a bearing). A connector sees
+// the nearest *suitable* connector of another module: open, undocked, on the opposite face (a
+// front sees backs, a left sees rights), within kBeaconRange of it, within kBeaconCone of its
+// own outward normal, and with the looking connector within kBeaconFaceCone of that target's
+// normal (the target's emitter shines out of its face). The figures are the ones the
+// self-assembly exploration worked with (docs/organism.md "Self-assembly").
+inline constexpr double kBeaconRange = 1.0;                         // m
+inline constexpr double kBeaconCone = 0.6 * std::numbers::pi;       // rad either side (108 deg)
+inline constexpr double kBeaconFaceCone = 0.45 * std::numbers::pi;  // rad either side (81 deg)
+struct Beacon {
+  double distance = 0;            // m, between the two connectors' centres (horizontal)
+  double bearing = 0;             // rad, CCW +, from my outward normal to the target's centre
+  double heading = 0;             // rad, from my outward normal to the target's reversed normal (0: face to face)
+  std::size_t module = kNoIndex;  // what is seen (for tests and logs; a real beacon would not say)
+  std::size_t connector = kNoIndex;
+};
 const char* state_name(ConnectorState state);
 
 struct Pose3 {
@@ -168,6 +185,9 @@ class MujocoWorld {
   ConnectorState connector_state(std::size_t module, std::size_t connector) const;
   // The connector this one is docked to, as {module, connector}; nothing when not docked.
   std::optional<std::pair<std::size_t, std::size_t>> docked_to(std::size_t module, std::size_t connector) const;
+
+  // What this connector's beacon receiver sees (above), or nothing.
+  std::optional<Beacon> beacon(std::size_t module, std::size_t connector) const;
 
   kernel::Status latch(std::size_t module, std::size_t connector);
   kernel::Status unlatch(std::size_t module, std::size_t connector);
