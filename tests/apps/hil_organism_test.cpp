@@ -19,6 +19,8 @@
 
 #include <gtest/gtest.h>
 
+#include "support/symb_child.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -26,43 +28,10 @@ using namespace std::chrono_literals;
 
 const std::string kChain = std::string(SYMB_SCENARIO_DIR) + "/organism_chain.yaml";
 
-std::string hil3_read(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// A child process running `symb args`, its stdout and stderr in `log`.
-class Hil3Child {
+// `symb args` as a child process (tests/support/symb_child.hpp).
+class Hil3Child : public symb::test_support::SymbChild {
  public:
-  Hil3Child(const std::string& args, fs::path log) : log_(std::move(log)) {
-    const std::string command = "exec '" + std::string(SYMB_BINARY) + "' " + args + " > '" + log_.string() + "' 2>&1";
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
-  }
-  ~Hil3Child() {
-    if (pid_ > 0 && !done_) {
-      ::kill(pid_, SIGKILL);
-      wait();
-    }
-  }
-  void interrupt() const { ::kill(pid_, SIGINT); }
-  int wait() {
-    int status = 0;
-    ::waitpid(pid_, &status, 0);
-    done_ = true;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  std::string output() const { return hil3_read(log_); }
-
- private:
-  fs::path log_;
-  pid_t pid_ = -1;
-  bool done_ = false;
+  Hil3Child(const std::string& args, fs::path log) : SymbChild(SYMB_BINARY, args, std::move(log)) {}
 };
 
 // The value after "KEY: " on its line, or empty.
@@ -127,8 +96,8 @@ TEST_F(Hil3Cli, InLockstepTheOrganismIsTheInProcessOneBitForBit) {
   ASSERT_EQ(sim.wait(), 0) << sim.output();
   b->interrupt();
   ASSERT_EQ(b->wait(), 0) << b->output();
-  const std::string in = hil3_read(dir_ / "inproc" / "summary.txt");
-  const std::string hil = hil3_read(dir_ / "hil" / "summary.txt");
+  const std::string in = symb::test_support::read_whole_file(dir_ / "inproc" / "summary.txt");
+  const std::string hil = symb::test_support::read_whole_file(dir_ / "hil" / "summary.txt");
   const std::string in_hash = hil3_line_value(in, "trajectory hash");
   ASSERT_FALSE(in_hash.empty()) << in;
   EXPECT_EQ(hil3_line_value(hil, "trajectory hash"), in_hash) << hil;
@@ -151,7 +120,7 @@ TEST_F(Hil3Cli, CorruptedFramesAreCountedExactlyAtWallClockPace) {
   ASSERT_EQ(sim.wait(), 0) << sim.output();
   b->interrupt();
   ASSERT_EQ(b->wait(), 0) << b->output();
-  const auto link = hil3_fields(hil3_read(dir_ / "hil" / "summary.txt"), "link-stats:");
+  const auto link = hil3_fields(symb::test_support::read_whole_file(dir_ / "hil" / "summary.txt"), "link-stats:");
   const auto bs = hil3_fields(b->output(), "board-stats:");
   std::printf("3D HIL at 5%% corruption: sent %lld, corrupted %lld, board bad %lld, good %lld, late %lld\n",
               link.at("sent"), link.at("corrupted"), bs.at("bad"), bs.at("good"), link.at("late"));
@@ -174,7 +143,7 @@ TEST_F(Hil3Cli, BothSidesReopenTheirLinesWhenTheLinkComesBack) {
   std::this_thread::sleep_for(500ms);  // the outage: no link at all
   link_ = std::make_unique<Hil3Child>("link --dir '" + (dir_ / "tty").string() + "'", dir_ / "link2.log");
   ASSERT_EQ(sim.wait(), 0) << sim.output();
-  const auto link = hil3_fields(hil3_read(dir_ / "back" / "summary.txt"), "link-stats:");
+  const auto link = hil3_fields(symb::test_support::read_whole_file(dir_ / "back" / "summary.txt"), "link-stats:");
   EXPECT_EQ(link.at("line_losses"), 1) << sim.output();
   EXPECT_EQ(link.at("line_reopens"), 1) << sim.output();
   EXPECT_EQ(link.at("line_open"), 1);

@@ -25,6 +25,8 @@
 
 #include <gtest/gtest.h>
 
+#include "support/symb_child.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -41,44 +43,10 @@ constexpr int kPathWindowSeconds = 15;  // the paths are compared step by step o
 
 const std::string kScenario = std::string(SYMB_SCENARIO_DIR) + "/maze.yaml";
 
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// A child process running `symb args`, its stdout and stderr in `log`.
-class Child {
+// `symb args` as a child process (tests/support/symb_child.hpp).
+class Child : public symb::test_support::SymbChild {
  public:
-  Child(const std::string& args, fs::path log) : log_(std::move(log)) {
-    const std::string command = "exec '" + std::string(SYMB_BINARY) + "' " + args + " > '" + log_.string() + "' 2>&1";
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
-  }
-  ~Child() {
-    if (pid_ > 0 && !done_) {
-      ::kill(pid_, SIGKILL);
-      wait();
-    }
-  }
-  // Ctrl-C, as a person would stop it.
-  void interrupt() const { ::kill(pid_, SIGINT); }
-  int wait() {
-    int status = 0;
-    ::waitpid(pid_, &status, 0);
-    done_ = true;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  std::string output() const { return read_file(log_); }
-
- private:
-  fs::path log_;
-  pid_t pid_ = -1;
-  bool done_ = false;
+  Child(const std::string& args, fs::path log) : SymbChild(SYMB_BINARY, args, std::move(log)) {}
 };
 
 struct Point {
@@ -126,7 +94,7 @@ std::map<std::string, long long> fields(const std::string& text, const std::stri
 
 // The link CSV row of `symb sim`'s summary.txt, by column name.
 std::map<std::string, long long> sim_link_stats(const fs::path& summary) {
-  std::stringstream s(read_file(summary));
+  std::stringstream s(symb::test_support::read_whole_file(summary));
   std::string line, header;
   std::map<std::string, long long> out;
   while (std::getline(s, line)) {
@@ -330,7 +298,7 @@ TEST_F(Hil, ADeadLinkFailsBothSides) {
   link_.reset();
   EXPECT_EQ(sim.wait(), 1) << sim.output();
   EXPECT_NE(sim.output().find("dead link"), std::string::npos) << sim.output();
-  const std::string summary = read_file(dir_ / "dead" / "summary.txt");
+  const std::string summary = symb::test_support::read_whole_file(dir_ / "dead" / "summary.txt");
   EXPECT_NE(summary.find("dead link: the serial line was down at the end of the run"), std::string::npos) << summary;
   const auto link = sim_link_stats(dir_ / "dead" / "summary.txt");
   EXPECT_EQ(link.at("line_open"), 0);
