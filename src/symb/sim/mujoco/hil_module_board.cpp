@@ -27,9 +27,9 @@ struct HilModuleBoard::Shared {
   std::mutex mu;  // pending, have_pending, outbox, readings
   std::uint32_t pending_seq = 0;
   bool have_pending = false;
-  std::vector<float> pending;                  // the newest sensor frame's values
-  std::vector<HilDockCommand> outbox;          // docking commands not sent yet
-  std::vector<std::array<float, 3>> readings;  // per connector, the newest
+  std::vector<float> pending;              // the newest sensor frame's values
+  std::vector<HilDockCommand> outbox;      // docking commands not sent yet
+  std::vector<ConnectorReading> readings;  // per connector, the newest
   std::shared_ptr<robot::Sensor> ir, hinge_state;
   std::vector<std::shared_ptr<robot::Sensor>> connectors;
   std::shared_ptr<robot::Actuator> hinge, wheels;  // wheels null without
@@ -98,7 +98,9 @@ class HilModuleBoard::Clock final : public PeriodicRunner {
     shared_->ir->publish(std::span<const float>(v.data() + (kHilSensorIr - 1), 4), now);
     shared_->hinge_state->publish(std::span<const float>(v.data() + (kHilSensorHinge - 1), 2), now);
     for (std::size_t c = 0; c < shared_->connectors.size(); ++c)
-      shared_->connectors[c]->publish(std::span<const float>(v.data() + (kHilSensorConnector - 1) + 3 * c, 3), now);
+      shared_->connectors[c]->publish(
+          std::span<const float>(v.data() + (kHilSensorConnector - 1) + kConnectorChannels * c, kConnectorChannels),
+          now);
     return {};
   }
 
@@ -131,7 +133,7 @@ HilModuleBoard::HilModuleBoard(kernel::VirtualTimeExecutor& executor, const Modu
   for (std::size_t c = 0; c < layout_.connectors.size(); ++c)
     shared_->connectors.push_back(
         std::make_shared<LinkConnector>("connector_" + layout_.connectors[c], shared_, static_cast<std::uint8_t>(c)));
-  shared_->readings.assign(layout_.connectors.size(), {0, 0, -1});
+  shared_->readings.assign(layout_.connectors.size(), ConnectorReading{0, 0, -1, -1, 0, 0});
   shared_->hinge = std::make_shared<LinkActuator>("hinge", MujocoHinge::channel_specs(kind.hinge.range));
   if (layout_.wheels) shared_->wheels = std::make_shared<LinkActuator>("wheels", SimWheels::channel_specs());
   PeriodicRunner::Options co;
@@ -243,7 +245,8 @@ void HilModuleBoard::handle(std::span<const std::byte> payload, std::size_t& han
     shared_->pending = f->values;
     shared_->have_pending = true;
     for (std::size_t c = 0; c < shared_->readings.size(); ++c)
-      for (std::size_t k = 0; k < 3; ++k) shared_->readings[c][k] = f->values[(kHilSensorConnector - 1) + 3 * c + k];
+      for (std::size_t k = 0; k < kConnectorChannels; ++k)
+        shared_->readings[c][k] = f->values[(kHilSensorConnector - 1) + kConnectorChannels * c + k];
   }
   // Everything the node does before the world's next step: up to just before tick seq + 1.
   const kernel::Time until = options_.control_period * (static_cast<std::int64_t>(f->seq) + 1) - kernel::Duration{1};

@@ -7,7 +7,7 @@
 // module's kind, which both sides read from the same scenario:
 //
 //   simulator -> board  'N' [seq, ir front, back, left, right, hinge angle, hinge speed,
-//                            (state, open, peer) per connector in the kind's order]
+//                            (state, open, peer, beacon distance, bearing, heading) per connector in the kind's order]
 //   board -> simulator  'N' [seq, wheels left, right, hinge target]   (a kind with wheels)
 //                       'N' [seq, hinge target]                        (a kind without)
 //                       'D' seq (u32 LE) connector (u8) op (u8)         a docking command
@@ -28,6 +28,7 @@
 
 #include "symb/kernel/result.hpp"
 #include "symb/sim/mujoco/module_kind.hpp"
+#include "symb/sim/mujoco/mujoco_devices.hpp"
 
 namespace symb::sim::mujoco {
 
@@ -37,8 +38,9 @@ struct HilModuleLayout {
   std::vector<std::string> connectors;  // the kind's connector names, in its order
 
   static HilModuleLayout of(const ModuleKind& kind);
-  // seq + 4 IR + 2 hinge + 3 per connector.
-  std::size_t sensor_values() const { return 1 + 4 + 2 + 3 * connectors.size(); }
+  // seq + 4 IR + 2 hinge + a connector's whole reading (kConnectorChannels: state, open, peer and
+  // the docking beacon's distance, bearing, heading) per connector.
+  std::size_t sensor_values() const { return 1 + 4 + 2 + kConnectorChannels * connectors.size(); }
   // seq + (left, right) + hinge.
   std::size_t command_values() const { return 1 + (wheels ? 2 : 0) + 1; }
 };

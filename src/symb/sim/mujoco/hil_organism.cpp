@@ -39,6 +39,13 @@ kernel::Status HilOrganism::check(const Scenario& sc, std::size_t module) {
       if (h.to_index == module)
         return kernel::Error{h.where.str() + ": module " + spec.name +
                              " runs on the board: hooks to it cannot ride the organism bus"};
+  // A sensor frame is 'N' and a float per value; the board's decoder takes payloads of 1024 bytes.
+  const std::size_t values = 1 + 4 + 2 + kConnectorChannels * spec.module_kind.connectors.size();
+  if (1 + 4 * values > 1024)
+    return kernel::Error{spec.module_where.str() + ": module " + spec.name + " has " +
+                         std::to_string(spec.module_kind.connectors.size()) +
+                         " connectors, more than a frame to the board carries (" +
+                         std::to_string(((1024 - 1) / 4 - 7) / kConnectorChannels) + ")"};
   for (const EventSpec& e : sc.events)
     if (e.robot == module)
       return kernel::Error{e.where.str() + ": module " + spec.name +
