@@ -9,9 +9,8 @@
 // timed over the stepping only, in that thread's CPU time: the box is shared, and wall time would
 // count the other processes' turns against whichever side they happened to interrupt. N = 5 (the
 // target: >= 90 %), 20 and 50.
-#include <unistd.h>
-
 #include <time.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -68,9 +67,10 @@ fs::path write_scenario(int modules) {
   for (int i = 0; i < modules; ++i) {
     y << "  - name: m" << i << "\n    module: " << SYMB_SCENARIO_DIR << "/modules/cube.yaml\n";
     if (i == 0) y << "    start: {x: 0, y: 0, heading: 0}\n";
-    y << "    tasks:\n      - {name: osc, type: oscillator, period: 20ms, params: {id: " << i << ", frequency: "
-      << kFrequency << ", amplitude: " << kAmplitude << ", lag: " << kLag << ", coupling: " << kCoupling
-      << ", initial_phase: " << initial_phase(i) << "}}\n    hooks:\n      - {from: osc, to: hinge, port: 0}\n";
+    y << "    tasks:\n      - {name: osc, type: oscillator, period: 20ms, params: {id: " << i
+      << ", frequency: " << kFrequency << ", amplitude: " << kAmplitude << ", lag: " << kLag
+      << ", coupling: " << kCoupling << ", initial_phase: " << initial_phase(i)
+      << "}}\n    hooks:\n      - {from: osc, to: hinge, port: 0}\n";
     if (i > 0) y << "      - {from: osc, to: m" << i - 1 << "/osc, port: 1}\n";
     if (i + 1 < modules) y << "      - {from: osc, to: m" << i + 1 << "/osc, port: 1}\n";
   }
@@ -130,8 +130,11 @@ void BM_RawMujoco(benchmark::State& state) {
     for (const auto& d : sc.organism.docked) (void)w.latch(d.a, *w.find_connector(d.a, d.connector_a));
     std::vector<symb::control::cpg::PhaseOscillator> osc;
     for (int i = 0; i < modules; ++i) {
-      osc.emplace_back(symb::control::cpg::OscillatorParams{.id = i, .frequency = kFrequency, .amplitude = kAmplitude,
-                                                            .coupling = kCoupling, .lag = kLag,
+      osc.emplace_back(symb::control::cpg::OscillatorParams{.id = i,
+                                                            .frequency = kFrequency,
+                                                            .amplitude = kAmplitude,
+                                                            .coupling = kCoupling,
+                                                            .lag = kLag,
                                                             .initial_phase = initial_phase(i)});
       (void)w.set_wheels(static_cast<std::size_t>(i), 0, 0);
     }
