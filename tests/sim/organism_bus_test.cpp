@@ -361,6 +361,16 @@ TEST(OrganismBus, RefusesBadHooksWithTheirNames) {
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.error().find("already hooked"), std::string::npos) << bad.error();
   EXPECT_TRUE(rig.bus->hook("m0/osc", "m1/osc", {.port = 3}).ok());
+  // The layouts the two ends declare must agree, as for a local hook: a joint target is no wheel
+  // command.
+  os::PortDeclaration joint{{}, {{0, "joint", robot::layout::kJointTarget}}};
+  os::PortDeclaration wheels{{{0, "wheels", robot::layout::kWheelCommand}}, {}};
+  ASSERT_TRUE(rig.nodes[0]->create("cpg", std::make_unique<BusSource>(), {.ports = joint}).ok());
+  ASSERT_TRUE(rig.nodes[1]->create("drive", std::make_unique<BusRecorder>(), {.ports = wheels}).ok());
+  bad = rig.bus->hook("m0/cpg", "m1/drive", {.port = 0});
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().find("remote hook m0/cpg -> m1/drive: cannot hook"), std::string::npos) << bad.error();
+  EXPECT_NE(bad.error().find("joint-target"), std::string::npos) << bad.error();
   const auto first = rig.bus->hooks().front().id;
   EXPECT_TRUE(rig.bus->unhook(first).ok());
   EXPECT_FALSE(rig.bus->unhook(first).ok());

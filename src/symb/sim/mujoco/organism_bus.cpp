@@ -9,6 +9,7 @@
 
 #include "symb/io/bytes.hpp"
 #include "symb/os/node.hpp"
+#include "symb/os/port_layout.hpp"
 #include "symb/sim/mujoco/mujoco_runner.hpp"
 #include "symb/sim/mujoco/mujoco_world.hpp"
 
@@ -197,6 +198,20 @@ kernel::Result<RemoteHookId> OrganismBus::hook(std::size_t sender_module, std::s
   if (!s) return kernel::Error{what + ": no task '" + std::string(sender) + "' on " + sn.name()};
   const auto r = rn.find(receiver);
   if (!r) return kernel::Error{what + ": no task '" + std::string(receiver) + "' on " + rn.name()};
+  {
+    // The rule of every hook (os::check_layouts) holds across the bus too: the two ends' declared
+    // layouts must agree on the ports the hook carries, as Node::hook makes them agree locally.
+    const auto s_info = sn.info(*s), r_info = rn.info(*r);
+    const auto s_ports = sn.ports(*s), r_ports = rn.ports(*r);
+    const os::PortDeclaration none;
+    const os::PortDeclaration& sp = s_ports ? *s_ports : none;
+    const os::PortDeclaration& rp = r_ports ? *r_ports : none;
+    if (s_info && r_info) {
+      const os::PortEnd from{sender_name, s_info->type, sp.inputs, sp.outputs};
+      const os::PortEnd to{receiver_name, r_info->type, rp.inputs, rp.outputs};
+      if (auto st = os::check_layouts(from, to, options.port); !st) return kernel::Error{what + ": " + st.error()};
+    }
+  }
 
   std::uint32_t id = 0;
   {
