@@ -3,14 +3,17 @@
 // hang. Every accepted scenario must obey the rules the parser promises (robots inside the arena,
 // clear of each other, unique names, hooks between existing tasks; in 3D, docks between two
 // modules, finite starts, remote hooks and events that name robots that exist) and survive
-// check_scenario. Module kind files come from memory (the shipped cube and long kinds, under the
-// names modules/cube.yaml and modules/long.yaml): the fuzzer never reads the disk.
+// check_scenario. Module kind files are the shipped cube and long kinds, read once at the start
+// and served from memory under the names modules/cube.yaml and modules/long.yaml: the fuzzed
+// inputs never make the fuzzer read the disk.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
 #include <string_view>
 
@@ -41,60 +44,23 @@ bool located(const std::string& e, std::string_view text) {
 }
 
 // scenarios/modules/cube.yaml and long.yaml without their comments.
-constexpr std::string_view kCubeKind = R"(name: cube
-body:
-  size: [0.10, 0.10, 0.08]
-  mass: 0.40
-wheels:
-  radius: 0.025
-  width: 0.012
-  mass: 0.02
-  max_speed: 0.15
-  gain: 0.004
-hinge:
-  axis: [0, 1, 0]
-  range: [-1.2, 1.2]
-  gain: 4.0
-  damping: 0.06
-connectors:
-  - {name: front, face: front, position: [0.05, 0, 0]}
-  - {name: back, face: back, position: [-0.05, 0, 0]}
-  - {name: left, face: left, position: [0.025, 0.05, 0]}
-  - {name: right, face: right, position: [0.025, -0.05, 0]}
-ir:
-  - {face: front, position: [0.05, 0, 0.02], range: 0.15}
-  - {face: back, position: [-0.05, 0, 0.02], range: 0.15}
-  - {face: left, position: [0.025, 0.05, 0.02], range: 0.15}
-  - {face: right, position: [0.025, -0.05, 0.02], range: 0.15}
-)";
-constexpr std::string_view kLongKind = R"(name: long
-body:
-  size: [0.16, 0.10, 0.08]
-  mass: 0.6
-wheels: none
-hinge:
-  axis: [0, 1, 0]
-  range: [-1.2, 1.2]
-  gain: 8.0
-  damping: 0.12
-connectors:
-  - {name: front, face: front, position: [0.08, 0, 0]}
-  - {name: back, face: back, position: [-0.08, 0, 0]}
-  - {name: left, face: left, position: [0.04, 0.05, 0]}
-  - {name: right, face: right, position: [0.04, -0.05, 0]}
-ir:
-  - {face: front, position: [0.08, 0, 0.02], range: 0.15}
-  - {face: back, position: [-0.08, 0, 0.02], range: 0.15}
-  - {face: left, position: [0.04, 0.05, 0.02], range: 0.15}
-  - {face: right, position: [0.04, -0.05, 0.02], range: 0.15}
-)";
+// The shipped kind files, read once: the fuzzer serves exactly what scenarios name, and a kind
+// file that changes cannot leave a stale copy here.
+std::string shipped_kind(const char* file) {
+  std::ifstream in(std::string(SYMB_SCENARIO_DIR) + "/modules/" + file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in || text.str().empty()) std::abort();
+  return text.str();
+}
 
 const ScenarioParseOptions& from_memory() {
   static const ScenarioParseOptions options = [] {
     ScenarioParseOptions o;
-    o.read_module_kind = [](std::string_view name) -> kernel::Result<std::string> {
-      if (name == "modules/cube.yaml") return std::string(kCubeKind);
-      if (name == "modules/long.yaml") return std::string(kLongKind);
+    o.read_module_kind = [cube = shipped_kind("cube.yaml"),
+                          long_kind = shipped_kind("long.yaml")](std::string_view name) -> kernel::Result<std::string> {
+      if (name == "modules/cube.yaml") return cube;
+      if (name == "modules/long.yaml") return long_kind;
       return kernel::Error{"no such kind file (the fuzzer serves modules/cube.yaml and modules/long.yaml)"};
     };
     return o;
