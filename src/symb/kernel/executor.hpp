@@ -5,6 +5,7 @@
 //  - VirtualTimeExecutor: discrete events on one thread, deterministic, faster than real time.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <string>
 
@@ -22,6 +23,7 @@ struct ActivityOptions {
 // Implemented by whatever an executor runs. Every call for one activity happens on that
 // activity's own execution context, one at a time, never two at once.
 class ActivitySlot;
+class ParallelFor;  // kernel/parallel_for.hpp
 
 class Activity {
  public:
@@ -79,6 +81,13 @@ class Executor {
   // a simulated device, published from a handler, skip the hand-over a foreign thread needs
   // (it costs a fifth of a message delivery). The thread executor's inject() is already direct.
   virtual bool on_own_context() const { return false; }
+  // The executor for node number `index` of a group of nodes that meet one another only through
+  // state stepped at fixed instants (a simulated world and its radio): an executor that runs such
+  // nodes in parallel between those instants gives each its own lane; every other executor is
+  // its own lane. Valid as long as the executor.
+  virtual Executor& lane(std::size_t /*index*/) { return *this; }
+  // Threads for a world's per-robot work between its steps, or null (do it serially).
+  virtual ParallelFor* parallel() { return nullptr; }
 };
 
 }  // namespace symb::kernel
