@@ -223,7 +223,8 @@ class RawEnkiLoop {
     Enki::random.setSeed(static_cast<unsigned long>(enki_random_.next_u64()));
     world_.step(kDt, 1);
     pose_[0] = symb::sim::Pose{robot_->pos.x, robot_->pos.y, robot_->angle};
-    const symb::sim::IrReadings r = ir_model_->read(0, pose_, noise_);
+    ir_model_->set_robots(pose_);
+    const symb::sim::IrReadings r = ir_model_->read(0, noise_);
     for (std::size_t i = 0; i < kIrCount; ++i) ir_[i] = static_cast<float>(r[i]);
   }
 

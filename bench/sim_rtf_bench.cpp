@@ -149,7 +149,8 @@ class RawEnki {
     if (!enki_ir_) {
       for (std::size_t i = 0; i < robots_.size(); ++i)
         poses_[i] = symb::sim::Pose{robots_[i]->pos.x, robots_[i]->pos.y, robots_[i]->angle};
-      for (std::size_t i = 0; i < robots_.size(); ++i) ir_[i] = ir_model_->read(i, poses_, noise_);
+      ir_model_->set_robots(poses_);
+      for (std::size_t i = 0; i < robots_.size(); ++i) ir_[i] = ir_model_->read(i, noise_);
     }
   }
 

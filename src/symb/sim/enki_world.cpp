@@ -232,10 +232,11 @@ void EnkiWorld::step(double dt) {
     st.in_contact = r.body->touched || touched_sides(*r.body, spec_.width, spec_.height);
     if (st.in_contact) ++st.contact_steps;
   }
-  // IR after the bodies have moved, from every robot's new pose.
+  // IR after the bodies have moved, from every robot's new pose; noise drawn in robot order.
   poses_.resize(robots_.size());
   for (std::size_t i = 0; i < robots_.size(); ++i) poses_[i] = robots_[i].state.pose;
-  for (std::size_t i = 0; i < robots_.size(); ++i) robots_[i].ir = ir_model_->read(i, poses_, ir_noise_);
+  ir_model_->set_robots(poses_);
+  for (std::size_t i = 0; i < robots_.size(); ++i) robots_[i].ir = ir_model_->read(i, ir_noise_);
   ++steps_;
   time_ += dt;
 }

@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <iterator>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "symb/robot/thymio_ir.hpp"
@@ -49,26 +50,85 @@ double hit_segment(double px, double py, double ux, double uy, double ax, double
   return t;
 }
 
+// What a ray of a sensor of a robot at p can hit lies within kRange + 1 of the sensor, and every
+// sensor within kMountReach of p: so within kReach of p.
+constexpr double kReach = IrModel::kRange + 1 + kMountReach;
+constexpr double kRobotReach = IrModel::kRobotRadius + kReach;  // of another robot's centre
+
+// Squared distance from (px, py) to the segment from a to b.
+double distance2_to_segment(double px, double py, double ax, double ay, double bx, double by) {
+  const double ex = bx - ax, ey = by - ay;
+  const double len2 = ex * ex + ey * ey;
+  double t = len2 > 0 ? ((px - ax) * ex + (py - ay) * ey) / len2 : 0;
+  t = std::clamp(t, 0.0, 1.0);
+  const double dx = ax + t * ex - px, dy = ay + t * ey - py;
+  return dx * dx + dy * dy;
+}
+
+// What one read keeps: on the stack up to N items (a robot among a few dozen walls and robots),
+// on the heap beyond, so that reads share nothing and allocate only in the rare crowded case.
+template <class T, std::size_t N>
+class NearList {
+ public:
+  void push(const T& v) {
+    if (size_ < N) {
+      fixed_[size_] = v;
+    } else {
+      if (size_ == N) spill_.assign(fixed_.begin(), fixed_.end());
+      spill_.push_back(v);
+    }
+    ++size_;
+  }
+  std::span<const T> items() const { return size_ <= N ? std::span<const T>(fixed_.data(), size_) : spill_; }
+
+ private:
+  std::array<T, N> fixed_;
+  std::size_t size_ = 0;
+  std::vector<T> spill_;
+};
+
+GridBox around(const Pose& p, double reach) { return {p.x - reach, p.y - reach, p.x + reach, p.y + reach}; }
+
 }  // namespace
 
 IrModel::IrModel(std::vector<Rect> walls) {
-  walls_.reserve(walls.size());
+  edges_.reserve(4 * walls.size());
   for (const Rect& r : walls) {
     const double c = std::cos(r.angle), s = std::sin(r.angle);
     const double lx = c * r.half_length, ly = s * r.half_length;  // along
     const double wx = -s * r.half_width, wy = c * r.half_width;   // across
     const double xs[4] = {r.cx + lx + wx, r.cx - lx + wx, r.cx - lx - wx, r.cx + lx - wx};
     const double ys[4] = {r.cy + ly + wy, r.cy - ly + wy, r.cy - ly - wy, r.cy + ly - wy};
-    Wall w{r.cx, r.cy, std::hypot(r.half_length, r.half_width), {}};
-    for (int i = 0; i < 4; ++i) w.edges[i] = {xs[i], ys[i], xs[(i + 1) % 4], ys[(i + 1) % 4]};
-    walls_.push_back(w);
+    for (int i = 0; i < 4; ++i) edges_.push_back({xs[i], ys[i], xs[(i + 1) % 4], ys[(i + 1) % 4]});
   }
+  std::vector<GridBox> boxes;
+  boxes.reserve(edges_.size());
+  GridBox area{};
+  for (const Segment& e : edges_) {
+    boxes.push_back({std::min(e.x1, e.x2), std::min(e.y1, e.y2), std::max(e.x1, e.x2), std::max(e.y1, e.y2)});
+    const GridBox& b = boxes.back();
+    area = boxes.size() == 1 ? b
+                             : GridBox{std::min(area.min_x, b.min_x), std::min(area.min_y, b.min_y),
+                                       std::max(area.max_x, b.max_x), std::max(area.max_y, b.max_y)};
+  }
+  // Cells as wide as a read's reach; few enough that walls crossing a huge arena stay cheap to
+  // index (a query then meets more edges, each rejected by one distance test).
+  edge_grid_.layout(area, kReach, std::max<std::size_t>(4096, 16 * edges_.size()));
+  edge_grid_.set_boxes(boxes);
 }
 
-double IrModel::ray(double px, double py, double ux, double uy) const {
+void IrModel::set_robots(std::span<const Pose> robots) {
+  robots_.assign(robots.begin(), robots.end());
+  // Over where the robots are (wherever physics put them), a few cells per robot at most.
+  robot_grid_.layout(SpatialGrid::bounds(robots_), kRobotReach, 4 * robots_.size() + 64);
+  robot_grid_.set_points(robots_);
+}
+
+double IrModel::ray(double px, double py, double ux, double uy, std::span<const Segment> edges,
+                    std::span<const Pose> robots) {
   double best = kRange + 1;  // beyond range: no response
-  for (const Segment& e : near_edges_) best = std::min(best, hit_segment(px, py, ux, uy, e.x1, e.y1, e.x2, e.y2, best));
-  for (const Pose& robot : near_robots_) {
+  for (const Segment& e : edges) best = std::min(best, hit_segment(px, py, ux, uy, e.x1, e.y1, e.x2, e.y2, best));
+  for (const Pose& robot : robots) {
     const double dx = robot.x - px, dy = robot.y - py;
     const double along = dx * ux + dy * uy;
     const double across2 = dx * dx + dy * dy - along * along;
@@ -83,23 +143,25 @@ double IrModel::ray(double px, double py, double ux, double uy) const {
   return best;
 }
 
-IrReadings IrModel::read(std::size_t self, std::span<const Pose> robots, kernel::RandomStream& noise) const {
-  const Pose& p = robots[self];
-  // Anything a ray can hit lies within kRange + 1 of a sensor, and every sensor within
-  // kMountReach of the robot's centre.
-  near_edges_.clear();
-  for (const Wall& w : walls_) {
-    const double reach = w.reach + kRange + 1 + kMountReach;
-    const double dx = w.cx - p.x, dy = w.cy - p.y;
-    if (dx * dx + dy * dy <= reach * reach)
-      near_edges_.insert(near_edges_.end(), std::begin(w.edges), std::end(w.edges));
-  }
-  near_robots_.clear();
-  const double robot_reach = kRobotRadius + kRange + 1 + kMountReach;
-  for (std::size_t j = 0; j < robots.size(); ++j) {
-    const double dx = robots[j].x - p.x, dy = robots[j].y - p.y;
-    if (j != self && dx * dx + dy * dy <= robot_reach * robot_reach) near_robots_.push_back(robots[j]);
-  }
+IrReadings IrModel::read(std::size_t self, kernel::RandomStream& noise) const {
+  if (self >= robots_.size())
+    throw std::out_of_range("ir model: no robot " + std::to_string(self) + " (" + std::to_string(robots_.size()) +
+                            " set)");
+  const Pose& p = robots_[self];
+  // Each ray keeps the nearest hit, so leaving out edges and robots that no ray can reach changes
+  // nothing; a non-finite pose fails every test, as nothing is near it.
+  NearList<Segment, 64> near_edges;
+  edge_grid_.for_each(around(p, kReach), [&](std::size_t i) {
+    const Segment& e = edges_[i];
+    if (distance2_to_segment(p.x, p.y, e.x1, e.y1, e.x2, e.y2) <= kReach * kReach) near_edges.push(e);
+  });
+  NearList<Pose, 32> near_robots;
+  robot_grid_.for_each(around(p, kRobotReach), [&](std::size_t j) {
+    const double dx = robots_[j].x - p.x, dy = robots_[j].y - p.y;
+    if (j != self && dx * dx + dy * dy <= kRobotReach * kRobotReach) near_robots.push(robots_[j]);
+  });
+  const std::span<const Segment> edges = near_edges.items();
+  const std::span<const Pose> robots = near_robots.items();
   // One sine and cosine per reading: the 21 ray directions are the robot's heading turned by the
   // fixed angles in ray_directions().
   const double c = std::cos(p.theta), s = std::sin(p.theta);
@@ -111,7 +173,7 @@ IrReadings IrModel::read(std::size_t self, std::span<const Pose> robots, kernel:
     double d[3];
     for (int k = 0; k < 3; ++k) {
       const auto [rc, rs] = dirs[i][k];
-      d[k] = ray(sx, sy, c * rc - s * rs, s * rc + c * rs);
+      d[k] = ray(sx, sy, c * rc - s * rs, s * rc + c * rs, edges, robots);
     }
     const double left = d[0], centre = d[1], right = d[2];
     double v = response(left) + response(centre) + response(right) - 2 * response(centre / std::cos(kAperture));

@@ -10,8 +10,15 @@
 //    range; combined as F(d_left) + F(d_centre) + F(d_right) - 2 F(d_centre / cos 15deg);
 //  - Gaussian noise, sd 2.87, from the world's own random stream; clamped to [0, 4505].
 // Obstacles are wall rectangles and other robots (circles of the Thymio's half width). Each read
-// first keeps the walls and robots near enough to be seen by any of its 21 rays, so a reading costs
-// about the same in a maze of 1,000 walls as in an empty box.
+// first keeps the wall edges and robots near enough to be seen by any of its 21 rays, found on two
+// spatial grids (spatial_grid.hpp): the walls' edges, built once, and the robots' positions, built
+// by set_robots() (about 10 ns a robot). So a reading costs about the same in a maze of 1,000
+// walls as in an empty box, and in a swarm of 10,000 robots as among 10. Leaving out what cannot be
+// hit changes no reading: each ray keeps the nearest hit, and nothing left out is within its reach.
+//
+// Use: set_robots(poses) once after the bodies move, then read(i, noise) for each robot. read() is
+// const and keeps no scratch in the model, so several threads may read different robots at once
+// (each with its own noise stream); set_robots() must not run concurrently with reads.
 #pragma once
 
 #include <span>
@@ -19,6 +26,7 @@
 
 #include "symb/kernel/random_stream.hpp"
 #include "symb/robot/thymio_ir.hpp"
+#include "symb/sim/spatial_grid.hpp"
 #include "symb/sim/world.hpp"
 #include "symb/sim/world_spec.hpp"
 
@@ -32,27 +40,27 @@ class IrModel {
   // Walls as rectangles centred on (cx, cy), `angle` along their length.
   explicit IrModel(std::vector<Rect> walls);
 
-  // Readings of the robot at `self` among robots at `others` (self excluded by index).
-  IrReadings read(std::size_t self, std::span<const Pose> robots, kernel::RandomStream& noise) const;
+  // The robots the following reads see: robot i at robots[i] (copied). Their grid is rebuilt.
+  void set_robots(std::span<const Pose> robots);
+  // Readings of robot `self` (of the last set_robots()) among the others and the walls; draws 7
+  // normals from `noise`, one per sensor in order. Throws std::out_of_range for a bad index.
+  IrReadings read(std::size_t self, kernel::RandomStream& noise) const;
 
   static constexpr double kRange = robot::thymio::kIrRange;  // cm
   static constexpr double kRobotRadius = 5.5;                // cm, as seen by another robot's sensors
 
  private:
-  // Distance to the nearest obstacle along (ux, uy) from (px, py); above kRange when none.
-  double ray(double px, double py, double ux, double uy) const;
-
   struct Segment {
     double x1, y1, x2, y2;
   };
-  struct Wall {
-    double cx, cy, reach;  // bounding circle
-    Segment edges[4];
-  };
-  std::vector<Wall> walls_;
-  // Scratch of read(): what its rays can reach (mutable: reused to avoid allocating per reading).
-  mutable std::vector<Segment> near_edges_;
-  mutable std::vector<Pose> near_robots_;
+  // Distance to the nearest obstacle along (ux, uy) from (px, py); above kRange when none.
+  static double ray(double px, double py, double ux, double uy, std::span<const Segment> edges,
+                    std::span<const Pose> robots);
+
+  std::vector<Segment> edges_;  // of every wall, 4 per wall
+  SpatialGrid edge_grid_;       // edges_ by their bounding boxes
+  std::vector<Pose> robots_;    // of the last set_robots()
+  SpatialGrid robot_grid_;      // robots_ by position
 };
 
 }  // namespace symb::sim
