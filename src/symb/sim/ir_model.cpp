@@ -166,17 +166,23 @@ IrReadings IrModel::read(std::size_t self, kernel::RandomStream& noise) const {
   // fixed angles in ray_directions().
   const double c = std::cos(p.theta), s = std::sin(p.theta);
   const RayDirections& dirs = ray_directions();
+  // With nothing near, every ray reaches kRange + 1 and every response is 0 (most robots of a
+  // sparse swarm, most of the time): only the noise is left to draw.
+  const bool clear = edges.empty() && robots.empty();
   IrReadings out{};
   for (std::size_t i = 0; i < kIrCount; ++i) {
-    const thymio::IrMount& m = kIrMounts[i];
-    const double sx = p.x + c * m.x - s * m.y, sy = p.y + s * m.x + c * m.y;
-    double d[3];
-    for (int k = 0; k < 3; ++k) {
-      const auto [rc, rs] = dirs[i][k];
-      d[k] = ray(sx, sy, c * rc - s * rs, s * rc + c * rs, edges, robots);
+    double v = 0;
+    if (!clear) {
+      const thymio::IrMount& m = kIrMounts[i];
+      const double sx = p.x + c * m.x - s * m.y, sy = p.y + s * m.x + c * m.y;
+      double d[3];
+      for (int k = 0; k < 3; ++k) {
+        const auto [rc, rs] = dirs[i][k];
+        d[k] = ray(sx, sy, c * rc - s * rs, s * rc + c * rs, edges, robots);
+      }
+      const double left = d[0], centre = d[1], right = d[2];
+      v = response(left) + response(centre) + response(right) - 2 * response(centre / std::cos(kAperture));
     }
-    const double left = d[0], centre = d[1], right = d[2];
-    double v = response(left) + response(centre) + response(right) - 2 * response(centre / std::cos(kAperture));
     v = std::clamp(v + noise.normal(0, kNoiseSd), 0.0, kM);
     out[i] = static_cast<float>(v);
   }
