@@ -36,8 +36,10 @@ kernel::Result<os::TaskId> LocalRadio::add_to(os::Node& node, std::size_t robot,
   if (robot >= robots_.size())
     return kernel::Error{"local radio: no robot " + std::to_string(robot) + " (" + std::to_string(robots_.size()) +
                          " robots)"};
-  // One message per other robot and step, plus room for a few steps' backlog.
-  const std::size_t capacity = 4 * robots_.size() + 16;
+  // Room for a few steps' messages from every other robot, up to kMaxQueue: a queue's slots are
+  // allocated up front (176 bytes each), and 4 per robot of a swarm of 10,000 would be 7 MB per
+  // robot, 70 GB in all.
+  const std::size_t capacity = std::min(4 * robots_.size() + 16, kMaxQueue);
   return node.create(std::move(name), std::make_unique<RadioTask>(*this, robot),
                      {.priority = 2, .queue_capacity = capacity});
 }
@@ -54,42 +56,80 @@ void LocalRadio::disconnect(std::size_t robot, os::TaskId task) {
   if (r.task != task) return;  // a newer radio task of the same robot took over
   r.node = nullptr;
   r.task = {};
-  r.pending.reset();
+  Slot& slot = slots_[robot];
+  std::lock_guard slot_lock(slot.mu);
+  slot.pending.reset();
 }
 
 void LocalRadio::transmit(std::size_t robot, std::shared_ptr<const os::Blob> blob) {
   const io::Bytes* bytes = os::blob_as<io::Bytes>(blob.get());
-  std::lock_guard lock(mu_);
+  Slot& slot = slots_.at(robot);
+  std::lock_guard lock(slot.mu);
   if (bytes == nullptr || bytes->data.size() > options_.max_message_bytes) {
-    ++counts_.too_long;
+    ++slot.too_long;
     return;
   }
-  Robot& r = robots_.at(robot);
-  if (r.pending) ++counts_.overwritten;
-  r.pending = std::move(blob);
+  if (slot.pending) ++slot.overwritten;
+  slot.pending = std::move(blob);
+}
+
+void LocalRadio::find_receivers(std::size_t sender) {
+  const double range2 = options_.range * options_.range;
+  const Pose& from = positions_[sender];
+  // The same test for every pair: a distance that is NaN is not "farther than range".
+  auto in_range = [&](std::size_t r) {
+    const double dx = positions_[r].x - from.x, dy = positions_[r].y - from.y;
+    return !(dx * dx + dy * dy > range2);
+  };
+  if (!std::isfinite(from.x) || !std::isfinite(from.y)) {
+    for (std::size_t r = 0; r < positions_.size(); ++r)
+      if (r != sender && in_range(r)) receivers_.push_back(r);
+    return;
+  }
+  const double range = options_.range;
+  grid_.for_each({from.x - range, from.y - range, from.x + range, from.y + range}, [&](std::size_t r) {
+    if (r != sender && std::isfinite(positions_[r].x) && std::isfinite(positions_[r].y) && in_range(r))
+      receivers_.push_back(r);
+  });
+  for (std::size_t r : strays_)
+    if (r != sender && in_range(r)) receivers_.push_back(r);
+  std::sort(receivers_.begin(), receivers_.end());
 }
 
 void LocalRadio::step(const StepRecord& record) {
   std::lock_guard lock(mu_);
   const std::size_t n = std::min(robots_.size(), record.robots.size());
-  const double range2 = options_.range * options_.range;
+  // What goes on air: each robot's pending message, taken at once so that a transmit() running
+  // meanwhile (ThreadExecutor) goes to the next step whole.
+  outgoing_.resize(n);
+  std::size_t senders = 0;
   for (std::size_t s = 0; s < n; ++s) {
-    Robot& sender = robots_[s];
-    if (!sender.pending) continue;
+    Slot& slot = slots_[s];
+    std::lock_guard slot_lock(slot.mu);
+    outgoing_[s] = std::move(slot.pending);
+    slot.pending.reset();
+    if (outgoing_[s]) ++senders;
+  }
+  if (senders == 0) return;
+  positions_.resize(n);
+  strays_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    positions_[i] = record.robots[i].state.pose;
+    if (!std::isfinite(positions_[i].x) || !std::isfinite(positions_[i].y)) strays_.push_back(i);
+  }
+  grid_.layout(SpatialGrid::bounds(positions_), options_.range, 4 * n + 64);
+  grid_.set_points(positions_);
+  for (std::size_t s = 0; s < n; ++s) {
+    if (!outgoing_[s]) continue;
     os::Message m;
     m.payload = os::Payload{static_cast<float>(s)};
-    m.payload.blob = std::move(sender.pending);
-    sender.pending.reset();
+    m.payload.blob = std::move(outgoing_[s]);
+    outgoing_[s].reset();
     ++counts_.transmitted;
-    const Pose& from = record.robots[s].state.pose;
-    for (std::size_t r = 0; r < n; ++r) {
-      if (r == s) continue;
-      const Pose& to = record.robots[r].state.pose;
-      const double dx = to.x - from.x, dy = to.y - from.y;
-      if (dx * dx + dy * dy > range2) {
-        ++counts_.out_of_range;
-        continue;
-      }
+    receivers_.clear();
+    find_receivers(s);
+    counts_.out_of_range += (n - 1) - receivers_.size();
+    for (std::size_t r : receivers_) {
       Robot& receiver = robots_[r];
       if (receiver.node == nullptr) {
         ++counts_.dropped;
@@ -108,7 +148,13 @@ void LocalRadio::step(const StepRecord& record) {
 
 RadioCounts LocalRadio::counts() const {
   std::lock_guard lock(mu_);
-  return counts_;
+  RadioCounts c = counts_;
+  for (const Slot& slot : slots_) {
+    std::lock_guard slot_lock(slot.mu);
+    c.overwritten += slot.overwritten;
+    c.too_long += slot.too_long;
+  }
+  return c;
 }
 
 std::uint64_t LocalRadio::received_by(std::size_t robot) const {

@@ -14,9 +14,14 @@
 // that is full refuses the message (counted as dropped). Walls do not block the radio (range only).
 //
 // The medium is a world-runner observer (attach()); positions come from the runner's StepRecord.
+// A step finds each sender's receivers on a spatial grid of the positions (spatial_grid.hpp), cells
+// as wide as the range: its cost grows with the messages and the robots in range of their senders,
+// not with the square of the swarm (out_of_range is counted, not enumerated).
 // Lifetime: the LocalRadio must outlive the runner it is attached to and every RadioTask made from
 // it (declare it before the ScenarioSession). Thread-safe: tasks and the runner may run on
-// different threads (ThreadExecutor).
+// different threads (ThreadExecutor). Transmitting touches only the robot's own slot (its own
+// mutex, pending message and counters, on its own cache line), so robots' nodes running in
+// parallel transmit without contending; step(), connecting and counts() take the medium's lock.
 #pragma once
 
 #include <cstddef>
@@ -29,6 +34,7 @@
 #include "symb/kernel/result.hpp"
 #include "symb/os/ids.hpp"
 #include "symb/os/task.hpp"
+#include "symb/sim/spatial_grid.hpp"
 #include "symb/sim/world_runner.hpp"
 
 namespace symb::os {
@@ -78,13 +84,17 @@ class LocalRadio {
 
   // Observes `runner`'s steps: from now on every step delivers what was transmitted before it.
   void attach(WorldRunner& runner);
-  // Creates robot `robot`'s RadioTask on `node` under `name` (queue large enough for every other
-  // robot's message of one step). Does not hook it.
+  // Creates robot `robot`'s RadioTask on `node` under `name`, its queue large enough for every
+  // other robot's message of a few steps, up to kMaxQueue messages (a robot hears at most about
+  // 100 Thymios at once in the default range; beyond the queue, messages are dropped and counted).
+  // Does not hook it.
   kernel::Result<os::TaskId> add_to(os::Node& node, std::size_t robot, std::string name = "radio");
 
   // The medium's step: delivers the pending messages using the robots' positions in `record`.
   // attach() calls it from the runner; tests may call it directly.
   void step(const StepRecord& record);
+
+  static constexpr std::size_t kMaxQueue = 128;
 
   std::size_t robot_count() const { return robots_.size(); }
   const LocalRadioOptions& options() const { return options_; }
@@ -94,22 +104,39 @@ class LocalRadio {
 
  private:
   friend class RadioTask;
-  LocalRadio(std::size_t robots, LocalRadioOptions options) : options_(options), robots_(robots) {}
+  LocalRadio(std::size_t robots, LocalRadioOptions options) : options_(options), robots_(robots), slots_(robots) {}
   void connect(std::size_t robot, os::Node* node, os::TaskId task);
   void disconnect(std::size_t robot, os::TaskId task);
   void transmit(std::size_t robot, std::shared_ptr<const os::Blob> bytes);
+  // Appends to receivers_ the robots in range of `sender`, in index order.
+  void find_receivers(std::size_t sender);
 
-  struct Robot {
+  struct Robot {               // guarded by mu_
     os::Node* node = nullptr;  // while its radio task runs
     os::TaskId task;
-    std::shared_ptr<const os::Blob> pending;  // to go on air at the next step
     std::uint64_t received = 0;
+  };
+  // What transmit() touches, guarded by its own mutex: one robot's node never waits for another's.
+  struct alignas(64) Slot {
+    mutable std::mutex mu;
+    std::shared_ptr<const os::Blob> pending;  // to go on air at the next step
+    std::uint64_t overwritten = 0;
+    std::uint64_t too_long = 0;
   };
 
   const LocalRadioOptions options_;
-  mutable std::mutex mu_;
+  mutable std::mutex mu_;  // before any Slot::mu when both are held
   std::vector<Robot> robots_;
-  RadioCounts counts_;
+  std::vector<Slot> slots_;
+  RadioCounts counts_;  // transmitted, delivered, out_of_range, dropped (the rest is in slots_)
+  // Scratch of step(), under mu_: positions and their grid; the robots without a finite position,
+  // which every sender tests one by one (a NaN distance is not out of range); messages taken;
+  // the receivers of one sender.
+  std::vector<Pose> positions_;
+  SpatialGrid grid_;
+  std::vector<std::size_t> strays_;
+  std::vector<std::shared_ptr<const os::Blob>> outgoing_;
+  std::vector<std::size_t> receivers_;
 };
 
 }  // namespace symb::sim
