@@ -15,6 +15,10 @@
 #include "symb/robot/thymio_ir.hpp"
 #include "symb/sim/world_spec.hpp"
 
+namespace symb::kernel {
+class ParallelFor;
+}
+
 namespace symb::sim {
 
 // Thymio2's 7 horizontal IR proximity sensors: 0 far left, 1 left, 2 centre, 3 right, 4 far
@@ -55,6 +59,11 @@ class World {
   virtual void set_wheels(std::size_t robot, double left, double right) = 0;
   virtual IrReadings ir(std::size_t robot) const = 0;
   virtual RobotState state(std::size_t robot) const = 0;
+
+  // Threads for the per-robot work of a step (IR sensing), or null for the caller's thread. A
+  // backend that uses them gives the same results, bit for bit, as without. The object must
+  // outlive the world or be unset first. Default: ignored (everything on the caller's thread).
+  virtual void set_parallel(kernel::ParallelFor* /*parallel*/) {}
 };
 
 }  // namespace symb::sim

@@ -60,7 +60,12 @@ struct RadioSpec {
   std::size_t max_message_bytes = 64 * 1024;  // longer messages are refused
 };
 
+// The physics behind a 2D world (see sim/world_factory.hpp). Enki is the reference; Box2D is for
+// swarms of thousands (its step costs about the same per robot at any size).
+enum class Engine2d : std::uint8_t { kEnki, kBox2d };
+
 struct WorldSpec {
+  Engine2d engine = Engine2d::kEnki;
   double width = 0;                // cm
   double height = 0;               // cm
   double wall_height = 10.0;       // cm; Thymio2's IR sensors see objects at least as high as they are
