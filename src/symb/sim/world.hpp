@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <string>
 
+#include "symb/kernel/parallel_for.hpp"
 #include "symb/robot/thymio_ir.hpp"
 #include "symb/sim/world_spec.hpp"
 
@@ -55,6 +56,8 @@ class World {
   virtual void set_wheels(std::size_t robot, double left, double right) = 0;
   virtual IrReadings ir(std::size_t robot) const = 0;
   virtual RobotState state(std::size_t robot) const = 0;
+  // Threads for per-robot work inside step() (null: serial); must outlive the world's use of it.
+  virtual void set_parallel(kernel::ParallelFor* /*parallel*/) {}
 };
 
 }  // namespace symb::sim

@@ -19,6 +19,7 @@
 #include "symb/apps/run/spike_recorder.hpp"
 #include "symb/apps/text_file.hpp"
 #include "symb/io/stdio_stream.hpp"
+#include "symb/kernel/lockstep_executor.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/syslog.hpp"
@@ -42,7 +43,8 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
   std::ostringstream s;
   s << "scenario: " << sc.name << " (" << sc.file << ")\n"
     << "seed: " << r.seed << "\n"
-    << "executor: " << (r.realtime ? "threads, wall clock" : "virtual time") << "\n"
+    << "executor: "
+    << (r.realtime ? "threads, wall clock" : "virtual time, " + std::to_string(r.threads) + " worker thread(s)") << "\n"
     << "control period: " << fixed(seconds(sc.control_period) * 1000, 1) << " ms\n"
     << "simulated: " << fixed(r.simulated_seconds, 2) << " s in " << r.steps << " steps\n";
   if (r.interrupted)
@@ -97,19 +99,36 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   std::ofstream csv;
   std::ofstream probes_csv;
 
+  // 2D in virtual time: the lockstep executor, whatever the number of threads (with one it is the
+  // virtual-time executor's run; with more, the same run on more cores). 3D organisms keep one
+  // virtual-time executor: their modules meet over the organism bus at any instant, not only at
+  // world steps, so their nodes cannot run apart between steps.
+  const bool is_organism = scenario.world_kind == sim::WorldKind::kMujoco;
+  if (options.threads > 1 && (is_organism || options.realtime))
+    return Error{std::string("--threads: ") +
+                 (is_organism ? "a 3D organism runs on one thread (its modules meet over the organism bus at any "
+                                "instant, not only at world steps)"
+                              : "threads are for virtual time; --realtime runs every task on its own thread")};
   std::unique_ptr<kernel::Executor> executor;
   kernel::VirtualTimeExecutor* virtual_time = nullptr;
+  kernel::LockstepExecutor* lockstep = nullptr;
   if (options.realtime) {
     executor = std::make_unique<kernel::ThreadExecutor>(kernel::ThreadExecutor::Options{});
-  } else {
+  } else if (is_organism) {
     auto v = std::make_unique<kernel::VirtualTimeExecutor>();
     virtual_time = v.get();
     executor = std::move(v);
+  } else {
+    result.threads = options.threads == 0 ? kDefaultThreads : options.threads;
+    auto l = std::make_unique<kernel::LockstepExecutor>(
+        kernel::LockstepExecutor::Options{.threads = result.threads, .quantum = scenario.control_period});
+    lockstep = l.get();
+    executor = std::move(l);
   }
 
   sim::SessionOptions session_options;
   session_options.seed = options.seed;
-  if (scenario.world_kind == sim::WorldKind::kMujoco) {
+  if (is_organism) {
     auto organism = sim::mujoco::OrganismSession::create(scenario, *executor, session_options);
     if (!organism) return Error{organism.error()};
     return run_organism(**organism, virtual_time, scenario, options, std::move(result));
@@ -189,6 +208,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   result.planned_seconds = seconds(scenario.duration);
   session->start();
   const bool stopped = run_slices({.virtual_time = virtual_time,
+                                   .lockstep = lockstep,
                                    .duration = scenario.duration,
                                    .speed = options.speed,
                                    .wall_start = wall_start,
