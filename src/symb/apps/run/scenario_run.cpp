@@ -61,6 +61,43 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
   return s.str();
 }
 
+// Probe samples of a lockstep run, put back in one order that does not depend on the threads:
+// each robot's sink keeps its samples in a buffer of its own (only its lane's thread, or the
+// main lane's between windows, touches it), and flush(), called on the main lane at each world
+// step and after the run, hands them on sorted by time, robot index at one instant, then each
+// robot's own order.
+class OrderedProbes {
+ public:
+  OrderedProbes(std::size_t robots, os::ProbeSink out) : buffers_(robots), out_(std::move(out)) {}
+
+  os::ProbeSink sink(std::size_t robot) {
+    return [this, robot](const os::ProbeSample& s) {
+      buffers_[robot].push_back(Sample{s.time, std::string(s.node), std::string(s.task), std::string(s.channel),
+                                       std::vector<float>(s.values.begin(), s.values.end())});
+    };
+  }
+
+  void flush() {
+    order_.clear();
+    for (std::size_t r = 0; r < buffers_.size(); ++r)
+      for (const Sample& s : buffers_[r]) order_.push_back(&s);
+    if (order_.empty()) return;
+    std::stable_sort(order_.begin(), order_.end(), [](const Sample* a, const Sample* b) { return a->time < b->time; });
+    for (const Sample* s : order_) out_(os::ProbeSample{s->time, s->node, s->task, s->channel, s->values});
+    for (auto& b : buffers_) b.clear();
+  }
+
+ private:
+  struct Sample {
+    kernel::Time time;
+    std::string node, task, channel;
+    std::vector<float> values;
+  };
+  std::vector<std::vector<Sample>> buffers_;
+  std::vector<const Sample*> order_;
+  os::ProbeSink out_;
+};
+
 }  // namespace
 
 kernel::Result<RunResult> run_scenario(const RunOptions& options) {
@@ -154,14 +191,19 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   // Spiking networks' spikes and layouts go to their own recorder (AEDAT, raster, network picture).
   ProbeRecorder probes(write_files ? &probes_csv : nullptr);
   SpikeRecorder spikes;
+  const os::ProbeSink sink = [&probes, &spikes](const os::ProbeSample& s) {
+    if (SpikeRecorder::takes(s.channel))
+      spikes.record(s);
+    else
+      probes.record(s);
+  };
+  // Lockstep: the robots probe from several threads at once; their samples are put in order at
+  // each step. Threads (--realtime) have no order to keep: straight to the recorders.
+  OrderedProbes ordered(session->robot_count(), sink);
   if (write_files) {
-    const os::ProbeSink sink = [&probes, &spikes](const os::ProbeSample& s) {
-      if (SpikeRecorder::takes(s.channel))
-        spikes.record(s);
-      else
-        probes.record(s);
-    };
-    for (std::size_t i = 0; i < session->robot_count(); ++i) session->robot(i).node().set_probe_sink(sink);
+    for (std::size_t i = 0; i < session->robot_count(); ++i)
+      session->robot(i).node().set_probe_sink(lockstep ? ordered.sink(i) : sink);
+    if (lockstep) session->runner().add_observer([&ordered](const sim::StepRecord&) { ordered.flush(); });
   }
   struct ProbeSinkGuard {  // the sinks point at `probes`, which goes before the session
     sim::ScenarioSession& s;
@@ -217,6 +259,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
                                    .failed = [&session] { return !session->cycle_error().empty(); }});
   running = false;
   session->stop();
+  ordered.flush();
   result.wall_seconds = wall_seconds();
   tcp_shell.reset();
 
