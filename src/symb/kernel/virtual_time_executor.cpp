@@ -169,6 +169,13 @@ std::uint64_t VirtualTimeExecutor::run_until(Time until) {
   return handled;
 }
 
+std::uint64_t VirtualTimeExecutor::run_before(Time until) {
+  if (until <= clock_.now()) return run_until_idle(clock_.now() - Duration{1});  // only injected work
+  const std::uint64_t handled = run_until_idle(until - Duration{1});             // integer nanoseconds: < until
+  if (!stop_requested_ && until != kTimeNever) clock_.advance_to(until);
+  return handled;
+}
+
 std::uint64_t VirtualTimeExecutor::run_until_idle(Time limit) {
   assert(!running_ && "run_until and run_until_idle are not reentrant");
   running_ = true;

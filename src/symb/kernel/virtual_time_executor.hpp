@@ -29,7 +29,17 @@ class VirtualTimeExecutor final : public Executor {
   bool concurrent() const override { return false; }
   ActivitySlot& attach(Activity& activity, const ActivityOptions& options) override;
   void inject(std::function<void()> fn) override;
-  bool on_own_context() const override { return runner_.load(std::memory_order_relaxed) == std::this_thread::get_id(); }
+  // Also true on the thread of a host executor's run (set_host): see there.
+  bool on_own_context() const override {
+    const std::thread::id self = std::this_thread::get_id();
+    return runner_.load(std::memory_order_relaxed) == self ||
+           (host_ != nullptr && host_->runner_.load(std::memory_order_relaxed) == self);
+  }
+  // Lets the thread inside `host`'s run_*() act as this executor's own context. For an executor
+  // that runs this one only at moments when `host` is not running (a lane of a lockstep executor,
+  // whose main lane is the host): then the host's handlers may make this executor's nodes' calls
+  // directly, as their own handlers would, instead of injecting them. Null: no host.
+  void set_host(const VirtualTimeExecutor* host) { host_ = host; }
   // Runs the injected work now (run_*() also does, between events). Returns how much ran.
   std::size_t run_injected();
   // Waits up to `timeout` of real time for injected work, then runs it: lets a caller pace a
@@ -42,6 +52,13 @@ class VirtualTimeExecutor final : public Executor {
   std::uint64_t run_for(Duration d) { return run_until(clock_.now() + d); }
   // Handles events until none is left or `limit` is reached.
   std::uint64_t run_until_idle(Time limit = kTimeNever);
+  // Handles every event strictly earlier than `until`, then sets the clock to `until`: one window
+  // [now, until) of a lockstep run, whose instant `until` belongs to the next window.
+  std::uint64_t run_before(Time until);
+  // The time of the next queued event (possibly one that will turn out stale), or kTimeNever.
+  Time next_event_time() const { return events_.empty() ? kTimeNever : events_.front().time; }
+  // True when injected work waits (cheap: one atomic load).
+  bool has_injected() const { return inbox_pending_.load(std::memory_order_acquire); }
   // Makes the running run_*() return after the current handler.
   void stop() { stop_requested_ = true; }
   Time now() const { return clock_.now(); }
@@ -93,6 +110,7 @@ class VirtualTimeExecutor final : public Executor {
   // The thread inside run_*(), read by on_own_context() from any thread; empty outside a run.
   std::atomic<std::thread::id> runner_{};
   bool stop_requested_ = false;
+  const VirtualTimeExecutor* host_ = nullptr;
 };
 
 }  // namespace symb::kernel

@@ -29,6 +29,7 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
     for (const RobotSpec& r : scenario.robots) s->world_->add_robot(r.name, r.kind, r.start);
     WorldRunner::Options ro;
     ro.period = scenario.control_period;
+    s->world_->set_parallel(executor.parallel());
     s->runner_ = std::make_unique<WorldRunner>(executor, *s->world_, ro);
   } catch (const std::exception& e) {
     return kernel::Error{scenario.file + ": " + e.what()};
@@ -46,7 +47,7 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
     ro.log_capacity = options.log_capacity;
     ro.read_program = read;
     auto built =
-        RobotSystem::build(executor, scenario.robots[i],
+        RobotSystem::build(executor.lane(i), scenario.robots[i],
                            RobotDevices{s->runner_->ir_sensor(i), s->runner_->wheels(i), s->runner_->pose_sensor(i),
                                         s->runner_->ground_sensor(i), s->radio_.get(), i, std::nullopt},
                            std::move(ro));

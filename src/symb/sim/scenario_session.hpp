@@ -1,6 +1,10 @@
 // ScenarioSession: a scenario made real, in-process: the Enki world with the scenario's walls and
 // robots, the world runner stepping it at the control period, the simulated drivers, and one
-// RobotSystem (node, task graph) per robot, all on one executor. It is what `symb run` runs and
+// RobotSystem (node, task graph) per robot. Robot i's node runs on executor.lane(i) (its own lane
+// under a kernel::LockstepExecutor, the executor itself otherwise); the world runner, the radio
+// and the events run on the executor itself, and the world gets executor.parallel(). Robots meet
+// only through the world and the radio, which is what lets a lockstep executor run their lanes
+// in parallel between world steps. It is what `symb run` runs and
 // what tests drive step by step; recording and output files are the caller's business (observe
 // the runner).
 //

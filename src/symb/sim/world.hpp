@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <string>
 
+#include "symb/kernel/parallel_for.hpp"
 #include "symb/robot/thymio_ir.hpp"
 #include "symb/sim/world_spec.hpp"
 

@@ -29,6 +29,8 @@ constexpr OptionSpec kOptions[] = {
     {"--seed", "S", "seed, unsigned 64-bit (default: the scenario's)"},
     {"--duration", "D", "simulated time: 60s, 10min, ... (default: the scenario's)"},
     {"--realtime", "", "run on OS threads against the wall clock (not deterministic)"},
+    {"--threads", "N",
+     "2D, virtual time: worker threads for the robots' nodes, 1-64; the run is the same for any N (default 1)"},
     {"--speed", "X", "virtual time at X times the wall clock (default: as fast as possible)"},
     {"--shell", "WHERE", "open a robot's command shell while it runs: stdio, or tcp:PORT / tcp:HOST:PORT"},
     {"--shell-robot", "NAME", "the robot whose shell it is (default: the first)"},
@@ -134,6 +136,10 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
       options.duration = std::get<kernel::Duration>(v);
     } else if (o.name == "--realtime") {
       options.realtime = true;
+    } else if (o.name == "--threads") {
+      auto v = parse_count("--threads", o.value, 1, 64);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.threads = static_cast<unsigned>(std::get<std::uint64_t>(v));
     } else if (o.name == "--speed") {
       auto v = parse_speed("--speed", o.value);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
@@ -165,6 +171,8 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
       quiet = true;
     }
   }
+  if (options.realtime && options.threads > 1)
+    return usage_error(ctx, kCommand, UsageError{"--threads is for virtual time; --realtime runs a thread per task"});
   if (options.realtime && speed_given)
     return usage_error(ctx, kCommand, UsageError{"--speed is for virtual time; --realtime runs at the wall clock"});
   const bool has_shell = options.shell.kind != ShellRequest::Kind::kNone;

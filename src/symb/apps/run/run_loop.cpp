@@ -26,22 +26,28 @@ bool run_slices(const RunLoop& loop) {
     return stopped;
   };
   kernel::VirtualTimeExecutor* virtual_time = loop.virtual_time;
-  if (virtual_time) {
+  kernel::LockstepExecutor* lockstep = loop.lockstep;
+  const auto virtual_now = [&] { return lockstep ? lockstep->now() : virtual_time->now(); };
+  const auto run_until = [&](kernel::Time t) { lockstep ? lockstep->run_until(t) : virtual_time->run_until(t); };
+  const auto wait_injected = [&](kernel::Duration timeout) {
+    lockstep ? lockstep->wait_injected(timeout) : virtual_time->wait_injected(timeout);
+  };
+  if (virtual_time || lockstep) {
     // Slices: a progress report per slice; with a speed, the wall clock paces each slice and
     // shell commands (injected work) are served while waiting.
     const kernel::Duration slice = loop.speed > 0 ? std::chrono::milliseconds(20) : std::chrono::milliseconds(1000);
-    const kernel::Time start = virtual_time->clock().now();
+    const kernel::Time start = virtual_now();
     const kernel::Time end = start + loop.duration;
     auto last_report = std::chrono::steady_clock::now();
     for (kernel::Time t = start; t < end && !stop();) {
       t = std::min(end, t + slice);
-      virtual_time->run_until(t);
+      run_until(t);
       if (failed()) break;
       if (loop.speed > 0) {
         const auto due = loop.wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                std::chrono::duration<double>(loop_seconds(t - start) / loop.speed));
         for (auto now = std::chrono::steady_clock::now(); now < due && !stop(); now = std::chrono::steady_clock::now())
-          virtual_time->wait_injected(std::min<kernel::Duration>(due - now, std::chrono::milliseconds(20)));
+          wait_injected(std::min<kernel::Duration>(due - now, std::chrono::milliseconds(20)));
       }
       if (std::chrono::steady_clock::now() - last_report > std::chrono::milliseconds(100) || t == end) {
         report(loop_seconds(t - start));

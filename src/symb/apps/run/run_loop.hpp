@@ -8,14 +8,17 @@
 #include <functional>
 
 #include "symb/apps/run/scenario_run.hpp"
+#include "symb/kernel/lockstep_executor.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 
 namespace symb::apps::run {
 
 struct RunLoop {
-  // Null: the session runs on OS threads against the wall clock, and the loop only waits.
+  // Both null: the session runs on OS threads against the wall clock, and the loop only waits.
+  // Otherwise one of them runs the session in virtual time (a 2D run is lockstep, a 3D one not).
   kernel::VirtualTimeExecutor* virtual_time = nullptr;
+  kernel::LockstepExecutor* lockstep = nullptr;
   kernel::Duration duration{};
   double speed = 0;  // virtual time only: 0 as fast as possible, else simulated / wall seconds
   std::chrono::steady_clock::time_point wall_start;

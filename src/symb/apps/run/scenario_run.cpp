@@ -19,6 +19,7 @@
 #include "symb/apps/run/spike_recorder.hpp"
 #include "symb/apps/text_file.hpp"
 #include "symb/io/stdio_stream.hpp"
+#include "symb/kernel/lockstep_executor.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/syslog.hpp"
@@ -42,7 +43,8 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
   std::ostringstream s;
   s << "scenario: " << sc.name << " (" << sc.file << ")\n"
     << "seed: " << r.seed << "\n"
-    << "executor: " << (r.realtime ? "threads, wall clock" : "virtual time") << "\n"
+    << "executor: "
+    << (r.realtime ? "threads, wall clock" : "virtual time, " + std::to_string(r.threads) + " worker thread(s)") << "\n"
     << "control period: " << fixed(seconds(sc.control_period) * 1000, 1) << " ms\n"
     << "simulated: " << fixed(r.simulated_seconds, 2) << " s in " << r.steps << " steps\n";
   if (r.interrupted)
@@ -58,6 +60,43 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
       << fixed(x.end.y, 1) << "\n";
   return s.str();
 }
+
+// Probe samples of a lockstep run, put back in one order that does not depend on the threads:
+// each robot's sink keeps its samples in a buffer of its own (only its lane's thread, or the
+// main lane's between windows, touches it), and flush(), called on the main lane at each world
+// step and after the run, hands them on sorted by time, robot index at one instant, then each
+// robot's own order.
+class OrderedProbes {
+ public:
+  OrderedProbes(std::size_t robots, os::ProbeSink out) : buffers_(robots), out_(std::move(out)) {}
+
+  os::ProbeSink sink(std::size_t robot) {
+    return [this, robot](const os::ProbeSample& s) {
+      buffers_[robot].push_back(Sample{s.time, std::string(s.node), std::string(s.task), std::string(s.channel),
+                                       std::vector<float>(s.values.begin(), s.values.end())});
+    };
+  }
+
+  void flush() {
+    order_.clear();
+    for (std::size_t r = 0; r < buffers_.size(); ++r)
+      for (const Sample& s : buffers_[r]) order_.push_back(&s);
+    if (order_.empty()) return;
+    std::stable_sort(order_.begin(), order_.end(), [](const Sample* a, const Sample* b) { return a->time < b->time; });
+    for (const Sample* s : order_) out_(os::ProbeSample{s->time, s->node, s->task, s->channel, s->values});
+    for (auto& b : buffers_) b.clear();
+  }
+
+ private:
+  struct Sample {
+    kernel::Time time;
+    std::string node, task, channel;
+    std::vector<float> values;
+  };
+  std::vector<std::vector<Sample>> buffers_;
+  std::vector<const Sample*> order_;
+  os::ProbeSink out_;
+};
 
 }  // namespace
 
@@ -97,19 +136,36 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   std::ofstream csv;
   std::ofstream probes_csv;
 
+  // 2D in virtual time: the lockstep executor, whatever the number of threads (with one it is the
+  // virtual-time executor's run; with more, the same run on more cores). 3D organisms keep one
+  // virtual-time executor: their modules meet over the organism bus at any instant, not only at
+  // world steps, so their nodes cannot run apart between steps.
+  const bool is_organism = scenario.world_kind == sim::WorldKind::kMujoco;
+  if (options.threads > 1 && (is_organism || options.realtime))
+    return Error{std::string("--threads: ") +
+                 (is_organism ? "a 3D organism runs on one thread (its modules meet over the organism bus at any "
+                                "instant, not only at world steps)"
+                              : "threads are for virtual time; --realtime runs every task on its own thread")};
   std::unique_ptr<kernel::Executor> executor;
   kernel::VirtualTimeExecutor* virtual_time = nullptr;
+  kernel::LockstepExecutor* lockstep = nullptr;
   if (options.realtime) {
     executor = std::make_unique<kernel::ThreadExecutor>(kernel::ThreadExecutor::Options{});
-  } else {
+  } else if (is_organism) {
     auto v = std::make_unique<kernel::VirtualTimeExecutor>();
     virtual_time = v.get();
     executor = std::move(v);
+  } else {
+    result.threads = options.threads == 0 ? kDefaultThreads : options.threads;
+    auto l = std::make_unique<kernel::LockstepExecutor>(
+        kernel::LockstepExecutor::Options{.threads = result.threads, .quantum = scenario.control_period});
+    lockstep = l.get();
+    executor = std::move(l);
   }
 
   sim::SessionOptions session_options;
   session_options.seed = options.seed;
-  if (scenario.world_kind == sim::WorldKind::kMujoco) {
+  if (is_organism) {
     auto organism = sim::mujoco::OrganismSession::create(scenario, *executor, session_options);
     if (!organism) return Error{organism.error()};
     return run_organism(**organism, virtual_time, scenario, options, std::move(result));
@@ -135,14 +191,19 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   // Spiking networks' spikes and layouts go to their own recorder (AEDAT, raster, network picture).
   ProbeRecorder probes(write_files ? &probes_csv : nullptr);
   SpikeRecorder spikes;
+  const os::ProbeSink sink = [&probes, &spikes](const os::ProbeSample& s) {
+    if (SpikeRecorder::takes(s.channel))
+      spikes.record(s);
+    else
+      probes.record(s);
+  };
+  // Lockstep: the robots probe from several threads at once; their samples are put in order at
+  // each step. Threads (--realtime) have no order to keep: straight to the recorders.
+  OrderedProbes ordered(session->robot_count(), sink);
   if (write_files) {
-    const os::ProbeSink sink = [&probes, &spikes](const os::ProbeSample& s) {
-      if (SpikeRecorder::takes(s.channel))
-        spikes.record(s);
-      else
-        probes.record(s);
-    };
-    for (std::size_t i = 0; i < session->robot_count(); ++i) session->robot(i).node().set_probe_sink(sink);
+    for (std::size_t i = 0; i < session->robot_count(); ++i)
+      session->robot(i).node().set_probe_sink(lockstep ? ordered.sink(i) : sink);
+    if (lockstep) session->runner().add_observer([&ordered](const sim::StepRecord&) { ordered.flush(); });
   }
   struct ProbeSinkGuard {  // the sinks point at `probes`, which goes before the session
     sim::ScenarioSession& s;
@@ -189,6 +250,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   result.planned_seconds = seconds(scenario.duration);
   session->start();
   const bool stopped = run_slices({.virtual_time = virtual_time,
+                                   .lockstep = lockstep,
                                    .duration = scenario.duration,
                                    .speed = options.speed,
                                    .wall_start = wall_start,
@@ -197,6 +259,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
                                    .failed = [&session] { return !session->cycle_error().empty(); }});
   running = false;
   session->stop();
+  ordered.flush();
   result.wall_seconds = wall_seconds();
   tcp_shell.reset();
 

@@ -50,6 +50,9 @@ struct RunOptions {
   std::optional<std::filesystem::path> out_dir;    // none: write no files (unless out_under)
   std::optional<std::filesystem::path> out_under;  // without out_dir: write into out_under/<scenario name>
   bool realtime = false;
+  // Virtual time, 2D only: worker threads running the robots' nodes between world steps
+  // (kernel::LockstepExecutor; the run is the same for any number). 0: kDefaultThreads.
+  unsigned threads = 0;
   // Virtual time only: 0 runs as fast as possible; s > 0 keeps simulated time at s times the wall
   // clock (a shell needs this: otherwise the run is over before anyone could type).
   double speed = 0;
@@ -67,10 +70,14 @@ struct RunOptions {
   std::function<bool()> stop_requested;
 };
 
+// Worker threads of a 2D run when none are asked for.
+inline constexpr unsigned kDefaultThreads = 1;
+
 struct RunResult {
   std::string scenario;
   std::uint64_t seed = 0;
   bool realtime = false;
+  unsigned threads = 1;  // the lockstep executor's worker threads (2D virtual time)
   double simulated_seconds = 0;
   double planned_seconds = 0;  // the duration asked for
   bool interrupted = false;    // stopped by stop_requested at simulated_seconds

@@ -1,0 +1,118 @@
+#include "symb/kernel/lockstep_executor.hpp"
+
+#include <algorithm>
+#include <cassert>
+
+namespace symb::kernel {
+
+LockstepExecutor::LockstepExecutor(Options options)
+    : options_(options), pool_(WorkerPool::Options{options.threads, options.pin}) {}
+
+LockstepExecutor::~LockstepExecutor() { lanes_.clear(); }
+
+Executor& LockstepExecutor::lane(std::size_t index) {
+  assert(!running_ || main_.on_own_context());
+  while (lanes_.size() <= index) {
+    auto lane = std::make_unique<VirtualTimeExecutor>();
+    lane->set_host(&main_);
+    lane->run_until(main_.now());  // a lane made later starts at the common instant
+    lanes_.push_back(std::move(lane));
+  }
+  return *lanes_[index];
+}
+
+void LockstepExecutor::stop() {
+  stop_requested_.store(true, std::memory_order_relaxed);
+  if (main_.on_own_context()) main_.stop();
+}
+
+std::size_t LockstepExecutor::run_injected() {
+  std::size_t n = main_.run_injected();
+  for (auto& lane : lanes_)
+    if (lane->has_injected()) n += lane->run_injected();
+  return n;
+}
+
+std::size_t LockstepExecutor::wait_injected(std::chrono::nanoseconds timeout) {
+  return main_.wait_injected(timeout) + run_injected();
+}
+
+std::size_t LockstepExecutor::pending_events() const {
+  std::size_t n = main_.pending_events();
+  for (const auto& lane : lanes_) n += lane->pending_events();
+  return n;
+}
+
+namespace {
+
+// An event queued at or before t, or injected work (kTimeNever also means "no event").
+bool due_by(const VirtualTimeExecutor& e, Time t) {
+  return (e.pending_events() > 0 && e.next_event_time() <= t) || e.has_injected();
+}
+
+}  // namespace
+
+bool LockstepExecutor::lanes_pending_by(Time t) const {
+  return std::any_of(lanes_.begin(), lanes_.end(), [t](const auto& lane) { return due_by(*lane, t); });
+}
+
+std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
+  if (lanes_.empty()) return 0;
+  std::atomic<std::uint64_t> handled{0};
+  pool_.run(lanes_.size(), [&](std::size_t begin, std::size_t stop) {
+    std::uint64_t n = 0;
+    for (std::size_t i = begin; i < stop; ++i) {
+      VirtualTimeExecutor& lane = *lanes_[i];
+      if (idle)
+        n += lane.run_until_idle(end);
+      else if (inclusive)
+        n += lane.run_until(end);
+      else
+        n += lane.run_before(end);
+    }
+    handled.fetch_add(n, std::memory_order_relaxed);
+  });
+  return handled.load(std::memory_order_relaxed);
+}
+
+std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {
+  assert(!running_ && "run_until and run_until_idle are not reentrant");
+  running_ = true;
+  stop_requested_.store(false, std::memory_order_relaxed);
+  const auto stopped = [&] { return stop_requested_.load(std::memory_order_relaxed); };
+  std::uint64_t handled = 0;
+  for (;;) {
+    // (A) The sync instant t: the main lane's events at t, the lanes idle.
+    const Time t = main_.now();
+    handled += main_.run_until_idle(t);
+    if (stopped()) break;
+    Time end = main_.next_event_time();
+    if (options_.quantum.count() > 0 && t < kTimeNever - options_.quantum) end = std::min(end, t + options_.quantum);
+    if (end <= limit && end != kTimeNever) {
+      // (B) The window [t, end) on every lane; then the main lane's clock follows (work injected
+      // into it from another thread meanwhile runs first, at t).
+      handled += run_lanes(end, false, false);
+      handled += main_.run_before(end);
+      continue;
+    }
+    // The last window reaches `limit` itself, both ends included.
+    if (until_idle) {
+      handled += run_lanes(limit, true, true);
+      Time latest = t;
+      for (const auto& lane : lanes_) latest = std::max(latest, lane->now());
+      for (auto& lane : lanes_) handled += lane->run_until(latest);  // no event of theirs is that early
+      handled += main_.run_until(latest);
+    } else {
+      handled += run_lanes(limit, true, false);
+      handled += main_.run_until(limit);
+    }
+    if (stopped()) break;
+    // What the main lane did at the end (injected work) may have left work at or before it.
+    if (due_by(main_, limit) || lanes_pending_by(until_idle ? main_.now() : limit)) continue;
+    break;
+  }
+  running_ = false;
+  return handled;
+}
+
+}  // namespace symb::kernel

@@ -1,0 +1,101 @@
+// LockstepExecutor: the deterministic parallel executor. Virtual time, like the
+// VirtualTimeExecutor, but a swarm's nodes run on both cores: each node runs on a lane of its own
+// (lane(i), a VirtualTimeExecutor), and everything attached to the LockstepExecutor itself (the
+// world runner, the radio, scenario events, observers) runs on its main lane. Lanes meet only
+// through the main lane: a world step reads the wheels and publishes sensor readings into the
+// lanes, the radio posts into them, an event runs a shell line on one of their nodes.
+//
+// A run goes from sync instant to sync instant. At a sync instant t every lane is idle:
+//   (A) serially, on the calling thread, the main lane handles its events at t (the world steps,
+//       publishes, the radio delivers; their posts into the lanes are made directly, the calling
+//       thread standing in as each lane's own context: see VirtualTimeExecutor::set_host);
+//   (B) in parallel on the worker pool, every lane handles its events in [t, t'), where t' is the
+//       main lane's next event (at most t + quantum), and its clock is set to t'.
+// So a cross-lane effect is always applied while the lanes are idle, in the main lane's own
+// deterministic order, and a lane's events never depend on how the lanes were spread over the
+// threads: a run is the same, bit for bit, with 1, 2 or 4 threads. With one thread it is also
+// the VirtualTimeExecutor's run of the same nodes, as long as no lane event at an instant t has a
+// higher priority than a main-lane event at t (a world step at t comes first here whatever the
+// priorities; the world runner's 100 is above every task's).
+//
+// Threads: run_*(), lane(), stop(), run_injected() and wait_injected() are for the thread that
+// runs the executor (lane() outside phase B); inject() on the executor or on any lane may come
+// from any thread, and is run at the next sync instant (a lane's at its next window).
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/kernel/worker_pool.hpp"
+
+namespace symb::kernel {
+
+class LockstepExecutor final : public Executor {
+ public:
+  struct Options {
+    unsigned threads = 1;  // worker threads, the caller's included
+    // The longest window (B) when the main lane's next event is farther (0: no limit): how long,
+    // in virtual time, work injected into the main lane may wait.
+    Duration quantum{0};
+    bool pin = false;  // WorkerPool::Options::pin
+  };
+  LockstepExecutor() : LockstepExecutor(Options{}) {}
+  explicit LockstepExecutor(Options options);
+  // Lanes go first (their activities are detached and released), then the main lane.
+  ~LockstepExecutor() override;
+  LockstepExecutor(const LockstepExecutor&) = delete;
+  LockstepExecutor& operator=(const LockstepExecutor&) = delete;
+
+  const Clock& clock() const override { return main_.clock(); }
+  bool concurrent() const override { return false; }
+  ActivitySlot& attach(Activity& activity, const ActivityOptions& options) override {
+    return main_.attach(activity, options);
+  }
+  void inject(std::function<void()> fn) override { main_.inject(std::move(fn)); }
+  bool on_own_context() const override { return main_.on_own_context(); }
+  // Lane `index`, made on first use with its clock at now().
+  Executor& lane(std::size_t index) override;
+  ParallelFor* parallel() override { return &pool_; }
+
+  // Handles every event (main lane and lanes) up to and including `until`, then sets every clock
+  // to `until`. Returns the number of events handled. stop() from a main-lane handler returns
+  // early, at the sync instant where it was called.
+  std::uint64_t run_until(Time until) { return run(until, false); }
+  std::uint64_t run_for(Duration d) { return run_until(now() + d); }
+  // Handles events until none is left (main lane and lanes) or `limit` is reached; the clocks
+  // then stand at the latest event handled.
+  std::uint64_t run_until_idle(Time limit = kTimeNever) { return run(limit, true); }
+  // Makes the running run_*() return at the next sync instant (at once from a main-lane handler).
+  void stop();
+  // Runs the work injected into the main lane and the lanes now. Not during a run.
+  std::size_t run_injected();
+  // Waits up to `timeout` of real time for work injected into the main lane, then runs what was
+  // injected anywhere (a lane's is not waited for: it runs at the latest in the next run).
+  std::size_t wait_injected(std::chrono::nanoseconds timeout);
+
+  Time now() const { return main_.now(); }
+  unsigned threads() const { return pool_.threads(); }
+  std::size_t lane_count() const { return lanes_.size(); }
+  // Events queued on the main lane and every lane.
+  std::size_t pending_events() const;
+
+ private:
+  std::uint64_t run(Time limit, bool until_idle);
+  // Phase (B) over every lane: events before `end` (or up to and including it when `inclusive`;
+  // until idle when `idle`).
+  std::uint64_t run_lanes(Time end, bool inclusive, bool idle);
+  bool lanes_pending_by(Time t) const;
+
+  const Options options_;
+  WorkerPool pool_;
+  VirtualTimeExecutor main_;
+  std::vector<std::unique_ptr<VirtualTimeExecutor>> lanes_;
+  std::atomic<bool> stop_requested_{false};
+  bool running_ = false;
+};
+
+}  // namespace symb::kernel
