@@ -17,7 +17,7 @@ constexpr double kCaption = 28;    // px below it
 }  // namespace
 
 void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<const RobotPath> robots,
-                    std::string_view caption) {
+                    std::string_view caption, std::span<const PathPoint> backdrop) {
   const double longer = std::max({world.width, world.height, 1.0});
   const double scale = kLongSide / longer;
   const double w = world.width * scale, h = world.height * scale;
@@ -61,7 +61,16 @@ void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<co
                   px(wall.x1), py(wall.y1), px(wall.x2), py(wall.y2), std::max(1.0, wall.thickness * scale));
     out << buf;
   }
-  out << "</g>\n<g fill=\"none\" stroke-linejoin=\"round\" stroke-linecap=\"round\">\n";
+  out << "</g>\n";
+  if (!backdrop.empty()) {
+    out << "<g id=\"backdrop\" fill=\"#aaa\" stroke=\"none\">\n";
+    for (const PathPoint& p : backdrop) {
+      std::snprintf(buf, sizeof buf, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2\"/>\n", px(p.x), py(p.y));
+      out << buf;
+    }
+    out << "</g>\n";
+  }
+  out << "<g fill=\"none\" stroke-linejoin=\"round\" stroke-linecap=\"round\">\n";
   for (std::size_t i = 0; i < robots.size(); ++i) {
     const RobotPath& r = robots[i];
     if (r.points.empty()) continue;

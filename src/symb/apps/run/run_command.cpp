@@ -38,6 +38,10 @@ constexpr OptionSpec kOptions[] = {
     {"--genome", "FILE", "replay a champion: the controller task gets this genome's weights (symb evolve)"},
     {"--controller", "NAME", "the task --genome replaces the weights of (default controller)"},
     {"--csv-every", "N", "record every N-th step in steps.csv (3D: poses.csv, joints.csv; default 1)"},
+    {"--record", "FORMAT",
+     "2D steps as csv (steps.csv), hdf5 (steps.h5), both or none; default auto: csv up to 100 robots, hdf5 above"},
+    {"--record-every", "N", "record every N-th step (steps.csv, steps.h5; the same as --csv-every)"},
+    {"--record-robots", "LIST", "2D: record only these robots' rows: names and ranges, e.g. t0..t99,t500"},
     {"--print-hash", "", "print 'trajectory-hash: <16 hex digits>' on stdout"},
     {"--quiet", "", "no progress line and no summary"},
     {"--help", "", "this help"},
@@ -60,6 +64,8 @@ void print_help(std::ostream& out) {
       << "MuJoCo's simulate), summary.txt, syslog.txt and the probes (docs/run.md).\n"
       << "A shell needs --realtime or --speed (a virtual-time run is over before anyone could type);\n"
       << "with --shell and neither, --speed 1 is implied.\n"
+      << "More than 100 robots: steps.h5 instead of steps.csv (--record), and density.svg, trails.svg,\n"
+      << "robot_stats.csv and robot_stats.svg instead of trajectory.svg.\n"
       << "Ctrl-C stops the run early: the files are written for what was run (summary.txt says\n"
       << "where it stopped) and the exit status is 130.\n\n"
       << "Example: symb run scenarios/maze.yaml --out out/maze\n";
@@ -121,6 +127,7 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
   options.scenario_path = std::string(parsed.positional.front());
 
   bool print_hash = false, quiet = false, speed_given = false;
+  std::optional<std::uint32_t> every_given;  // --csv-every and --record-every, which must agree
   std::optional<std::string> token, shell_robot, genome_controller;
   for (const ParsedOption& o : opts) {
     if (o.name == "--out") {
@@ -161,10 +168,23 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
       if (!os::is_valid_name(o.value))
         return usage_error(ctx, kCommand, UsageError{"--controller: " + quote_arg(o.value) + " cannot name a task"});
       genome_controller = o.value;
-    } else if (o.name == "--csv-every") {
-      auto v = parse_count("--csv-every", o.value, 1, 1'000'000);
+    } else if (o.name == "--csv-every" || o.name == "--record-every") {
+      auto v = parse_count(o.name, o.value, 1, 1'000'000);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
       options.csv_every = static_cast<std::uint32_t>(std::get<std::uint64_t>(v));
+      if (every_given && *every_given != options.csv_every)
+        return usage_error(
+            ctx, kCommand,
+            UsageError{std::string(o.name) + " " + o.value + ": every " + std::to_string(*every_given) +
+                       "-th step was asked for already (--csv-every and --record-every are one setting)"});
+      every_given = options.csv_every;
+    } else if (o.name == "--record") {
+      auto f = parse_record_format(o.value);
+      if (!f) return usage_error(ctx, kCommand, UsageError{f.error()});
+      options.record.format = *f;
+    } else if (o.name == "--record-robots") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--record-robots: empty list"});
+      options.record.robots = o.value;
     } else if (o.name == "--print-hash") {
       print_hash = true;
     } else if (o.name == "--quiet") {

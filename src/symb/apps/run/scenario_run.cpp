@@ -52,7 +52,14 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
       << " s (a stop was requested: Ctrl-C or SIGTERM)\n";
   s << "wall clock: " << fixed(r.wall_seconds, 3) << " s\n"
     << "real-time factor: " << fixed(r.real_time_factor, 1) << "\n";
-  s << "trajectory hash: " << hex64(r.trajectory_hash) << "\n\n"
+  s << "trajectory hash: " << hex64(r.trajectory_hash) << "\n";
+  const RecordFigures& rec = r.recording;
+  if (!rec.format.empty() && rec.format != "none")
+    s << "recording: " << rec.format << ", " << rec.recorded_steps << " steps x " << rec.recorded_robots << " robots, "
+      << fixed(static_cast<double>(rec.bytes) / 1e6, 2) << " MB; " << fixed(rec.step_seconds, 3) << " s in the steps ("
+      << fixed(r.steps > 0 ? 1000 * rec.step_seconds / static_cast<double>(r.steps) : 0.0, 3) << " ms per step), "
+      << fixed(rec.finish_seconds, 3) << " s at the end\n";
+  s << "\n"
     << "robot,distance_m,contacts,contact_steps,moving_s,time_in_maze_s,end_x_cm,end_y_cm\n";
   for (const RobotSummary& x : r.robots)
     s << x.name << "," << fixed(x.distance / 100, 3) << "," << x.contact_events << "," << x.contact_steps << ","
@@ -133,7 +140,6 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   else if (options.out_under)
     result.out_dir = *options.out_under / scenario.name;
   const bool write_files = !result.out_dir.empty();
-  std::ofstream csv;
   std::ofstream probes_csv;
 
   // 2D in virtual time: the lockstep executor, whatever the number of threads (with one it is the
@@ -168,6 +174,10 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (is_organism) {
     auto organism = sim::mujoco::OrganismSession::create(scenario, *executor, session_options);
     if (!organism) return Error{organism.error()};
+    if (options.record.format != RecordFormat::kAuto && options.record.format != RecordFormat::kCsv)
+      return Error{"--record: a 3D run records CSV (poses.csv, joints.csv), not " +
+                   std::string(record_format_name(options.record.format))};
+    if (!options.record.robots.empty()) return Error{"--record-robots: a 3D run records every module"};
     return run_organism(**organism, virtual_time, scenario, options, std::move(result));
   }
   auto created = sim::ScenarioSession::create(scenario, *executor, session_options);
@@ -178,14 +188,14 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     std::error_code ec;
     fs::create_directories(result.out_dir, ec);
     if (ec) return Error{"cannot create " + result.out_dir.string() + ": " + ec.message()};
-    csv.open(result.out_dir / "steps.csv", std::ios::binary);
-    if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
     probes_csv.open(result.out_dir / "probes.csv", std::ios::binary);
     if (!probes_csv) return Error{"cannot write " + (result.out_dir / "probes.csv").string()};
   }
 
-  RunRecorder recorder(session->world(), write_files ? &csv : nullptr, options.csv_every,
-                       seconds(scenario.control_period));
+  auto recording = RunRecording::open(session->world(), scenario, result.seed, options.record, options.csv_every,
+                                      write_files ? result.out_dir : fs::path{});
+  if (!recording) return Error{recording.error()};
+  RunRecorder& recorder = (*recording)->recorder();
   session->runner().add_observer([&recorder](const sim::StepRecord& r) { recorder.on_step(r); });
   // Controllers' internal state, only when there is a folder to put it in.
   // Spiking networks' spikes and layouts go to their own recorder (AEDAT, raster, network picture).
@@ -271,25 +281,27 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   result.robots = recorder.summaries();
 
   if (write_files) {
-    csv.close();
-    if (!csv) return Error{"cannot write " + (result.out_dir / "steps.csv").string()};
     probes_csv.close();
     if (!probes_csv) return Error{"cannot write " + (result.out_dir / "probes.csv").string()};
-    std::ostringstream svg;
-    write_maze_svg(svg, scenario.world, recorder.paths(),
-                   scenario.name + ", seed " + std::to_string(result.seed) + ", " + fixed(result.simulated_seconds, 1) +
-                       " s simulated");
+    auto recorded = (*recording)
+                        ->finish(scenario.world,
+                                 scenario.name + ", seed " + std::to_string(result.seed) + ", " +
+                                     fixed(result.simulated_seconds, 1) + " s simulated",
+                                 result.simulated_seconds, result.interrupted);
+    if (!recorded) return Error{recorded.error()};
+    result.recording = (*recording)->figures();
     std::ostringstream logs;
     for (std::size_t i = 0; i < session->robot_count(); ++i) {
       os::Node& node = session->robot(i).node();
       for (const os::LogEntry& e : node.log().since(0)) logs << node.name() << " " << os::format_log_entry(e) << "\n";
     }
-    const std::pair<const char*, std::string> files[] = {
-        {"trajectory.svg", svg.str()}, {"summary.txt", summary_text(scenario, result)}, {"syslog.txt", logs.str()}};
+    const std::pair<const char*, std::string> files[] = {{"summary.txt", summary_text(scenario, result)},
+                                                         {"syslog.txt", logs.str()}};
     for (const auto& [name, text] : files)
       if (auto st = write_file(result.out_dir / name, text); !st) return Error{st.error()};
-    result.files = {result.out_dir / "trajectory.svg", result.out_dir / "steps.csv", result.out_dir / "summary.txt",
-                    result.out_dir / "syslog.txt", result.out_dir / "probes.csv"};
+    result.files = std::move(recorded).value();
+    result.files.insert(result.files.end(),
+                        {result.out_dir / "summary.txt", result.out_dir / "syslog.txt", result.out_dir / "probes.csv"});
     auto spike_files = spikes.write(result.out_dir);
     if (!spike_files) return Error{spike_files.error()};
     result.files.insert(result.files.end(), spike_files->begin(), spike_files->end());

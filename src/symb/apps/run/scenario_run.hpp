@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "symb/apps/run/run_recorder.hpp"
+#include "symb/apps/run/run_recording.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/sim/world_spec.hpp"
@@ -62,6 +63,9 @@ struct RunOptions {
   std::optional<std::string> controller_weights;
   std::string genome_controller = "controller";
   std::uint32_t csv_every = 1;  // record every n-th step in steps.csv (the picture uses every step)
+  // 2D: which format the steps are recorded in (steps.csv, steps.h5), and which robots' rows
+  // (record_options.hpp); `csv_every` picks the steps for either.
+  RecordOptions record;
   std::function<void(const RunProgress&)> on_progress;
   std::function<void(const std::string&)> on_notice;  // "shell: ..." for the person
   // Polled between slices of the run (at most 20 ms of wall clock apart while pacing, one
@@ -92,6 +96,8 @@ struct RunResult {
   // A 3D run's organism in one line ("1 latched, 0 unlatched, 0 refused; final topology a+b c");
   // empty for a 2D run. Its robots are then modules: distance and end pose, no contacts.
   std::string organism;
+  // A 2D run's recording: format, bytes, wall clock spent (run_recording.hpp).
+  RecordFigures recording;
 };
 
 kernel::Result<RunResult> run_scenario(const RunOptions& options);
