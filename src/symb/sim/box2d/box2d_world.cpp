@@ -215,9 +215,11 @@ std::size_t Box2DWorld::add_robot(const std::string& name, RobotKind kind, const
   engine_->bodies.push_back(body);
 
   const std::uint64_t index = robots_.size();
-  Robot r{
-      name, {}, {}, kernel::RandomStream(seed_, kMotorStream | index), kernel::RandomStream(seed_, kIrStream | index)};
+  Robot r;
+  r.name = name;
   r.state.pose = pose;
+  r.motor = kernel::RandomStream(seed_, kMotorStream | index);
+  r.ir_noise = kernel::RandomStream(seed_, kIrStream | index);
   robots_.push_back(std::move(r));
   poses_.push_back(pose);
   return robots_.size() - 1;
@@ -231,8 +233,10 @@ void Box2DWorld::step(double dt) {
   for (std::size_t i = 0; i < robots_.size(); ++i) {
     Robot& r = robots_[i];
     b2Body* body = engine_->bodies[i];
-    const double left = r.state.left_speed * ((1 - kMotorNoise) + r.motor.uniform(0, 2 * kMotorNoise));
-    const double right = r.state.right_speed * ((1 - kMotorNoise) + r.motor.uniform(0, 2 * kMotorNoise));
+    const double left = r.acting_left * ((1 - kMotorNoise) + r.motor.uniform(0, 2 * kMotorNoise));
+    const double right = r.acting_right * ((1 - kMotorNoise) + r.motor.uniform(0, 2 * kMotorNoise));
+    r.acting_left = r.state.left_speed;
+    r.acting_right = r.state.right_speed;
     const double forward = (left + right) / 2, turn = (right - left) / kAxle;
     const double heading = body->GetAngle() + turn * dt / 2;
     body->SetLinearVelocity(b2Vec2(static_cast<float>(forward * std::cos(heading) * kUnitsPerCm),

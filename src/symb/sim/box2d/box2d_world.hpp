@@ -9,8 +9,10 @@
 //
 // Motion: before each step every robot's velocity is set from its wheels, as Enki's
 // DifferentialWheeled does (forward speed along the heading at mid-step, turn rate from the wheel
-// difference over the axle); Box2D then resolves the contacts. Nothing keeps momentum from one step
-// to the next: a robot a neighbour pushed stops when the push ends, as in Enki.
+// difference over the axle, the wheel speeds set before the PREVIOUS step: Enki's one step of
+// actuation delay); Box2D then resolves the contacts. Nothing keeps momentum from one step to the
+// next: a robot a neighbour pushed stops when the push ends, as in Enki. Contacts do not turn a
+// robot (its wheels' grip does not let them); only its wheels do.
 //
 // Determinism: Box2D keeps no process-wide state, so worlds built alike step alike, on any
 // thread. Each robot draws its motor noise and its IR noise from its own streams (seeded from the
@@ -75,6 +77,10 @@ class Box2DWorld final : public World {
   struct Robot {
     std::string name;
     RobotState state;
+    // The wheel speeds this step moves with: those set before the previous step. Enki moves a
+    // robot with the speed its wheels gave it at the end of the previous step, so a command acts
+    // one step later than set; a reactive controller in a maze turns measurably later for it.
+    double acting_left = 0, acting_right = 0;
     IrReadings ir{};             // after the last step (all 0 before the first)
     kernel::RandomStream motor;  // wheel noise
     kernel::RandomStream ir_noise;
