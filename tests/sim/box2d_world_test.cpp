@@ -110,7 +110,7 @@ TEST(Box2DWorld, TurningOnTheSpotKeepsThePosition) {
   EXPECT_NEAR(s.pose.x, 100, 0.01);
   EXPECT_NEAR(s.pose.y, 50, 0.01);
   EXPECT_NEAR(s.pose.theta, 0.27 * 10 / 9.4, 0.01);  // 9 steps of turning: the first step waits
-  run(world, 1000);  // 30 s: several turns; the heading stays in (-pi, pi]
+  run(world, 1000);                                  // 30 s: several turns; the heading stays in (-pi, pi]
   EXPECT_GT(world.state(r).pose.theta, -std::numbers::pi);
   EXPECT_LE(world.state(r).pose.theta, std::numbers::pi);
   EXPECT_NEAR(world.state(r).pose.x, 100, 0.05);
