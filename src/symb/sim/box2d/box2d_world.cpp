@@ -43,6 +43,15 @@ constexpr int kHullPoints = kArcPoints + 2;
 constexpr std::uint64_t kMotorStream = std::uint64_t{0x4d4f54} << 32;  // "MOT"
 constexpr std::uint64_t kIrStream = std::uint64_t{0x4952} << 32;       // "IR"
 
+// Guards Box2D's process-wide state: the contact function table it fills on first use
+// (b2Contact::s_initialized) and the statistics counters its distance and time-of-impact
+// routines bump on every call (b2_gjkCalls, b2_toiCalls, ...). Nothing of a run's result reads
+// them, but two worlds stepping on two threads would race on them. See the header.
+std::mutex& box2d_mutex() {
+  static std::mutex mu;
+  return mu;
+}
+
 // Into (-pi, pi].
 double box2d_angle(double a) {
   a = std::remainder(a, 2 * std::numbers::pi);
@@ -157,6 +166,7 @@ Box2DWorld::Box2DWorld(WorldSpec spec, std::uint64_t seed) : spec_(std::move(spe
     const double angle = length > 0 ? std::atan2(dy, dx) : 0.0;
     rects.push_back({(s.x1 + s.x2) / 2, (s.y1 + s.y2) / 2, (length + s.thickness) / 2, s.thickness / 2, angle});
   }
+  std::lock_guard lock(box2d_mutex());
   engine_ = std::make_unique<Engine>(rects);
   b2BodyDef def;  // static
   engine_->walls = engine_->world.CreateBody(&def);
@@ -169,7 +179,10 @@ Box2DWorld::Box2DWorld(WorldSpec spec, std::uint64_t seed) : spec_(std::move(spe
   }
 }
 
-Box2DWorld::~Box2DWorld() = default;
+Box2DWorld::~Box2DWorld() {
+  std::lock_guard lock(box2d_mutex());
+  engine_.reset();
+}
 
 const Box2DWorld::Robot& Box2DWorld::robot_at(std::size_t robot, const char* what) const {
   if (robot >= robots_.size())
@@ -190,6 +203,7 @@ std::size_t Box2DWorld::add_robot(const std::string& name, RobotKind kind, const
     throw std::length_error("box2d world: robot '" + name + "': the world holds at most " + std::to_string(kMaxBodies) +
                             " robots");
   const Pose pose{start.x, start.y, box2d_angle(start.theta)};
+  std::lock_guard lock(box2d_mutex());
   b2BodyDef def;
   def.type = b2_dynamicBody;
   def.position.Set(static_cast<float>(pose.x * kUnitsPerCm), static_cast<float>(pose.y * kUnitsPerCm));
@@ -230,6 +244,14 @@ const std::string& Box2DWorld::robot_name(std::size_t robot) const { return robo
 void Box2DWorld::step(double dt) {
   if (!(dt > 0 && dt <= 1))
     throw std::invalid_argument("box2d world: step dt must be in (0, 1] s, got " + std::to_string(dt));
+  move(dt);
+  read_ir();  // outside the lock: IrModel is this world's own
+  ++steps_;
+  time_ += dt;
+}
+
+void Box2DWorld::move(double dt) {
+  std::lock_guard lock(box2d_mutex());
   for (std::size_t i = 0; i < robots_.size(); ++i) {
     Robot& r = robots_[i];
     b2Body* body = engine_->bodies[i];
@@ -259,9 +281,6 @@ void Box2DWorld::step(double dt) {
     st.in_contact = touching(*body);
     if (st.in_contact) ++st.contact_steps;
   }
-  read_ir();
-  ++steps_;
-  time_ += dt;
 }
 
 void Box2DWorld::read_ir() {

@@ -14,10 +14,14 @@
 // next: a robot a neighbour pushed stops when the push ends, as in Enki. Contacts do not turn a
 // robot (its wheels' grip does not let them); only its wheels do.
 //
-// Determinism: Box2D keeps no process-wide state, so worlds built alike step alike, on any
-// thread. Each robot draws its motor noise and its IR noise from its own streams (seeded from the
-// world's seed and the robot's index), so the IR readings of different robots are independent
-// jobs: with set_parallel() they run on several threads and give the same bits as one.
+// Determinism: nothing of a run depends on anything outside its world, so worlds built alike
+// step alike, on any thread. Box2D does keep process-wide state (a table it fills on first use,
+// statistics counters every collision query bumps); none of it feeds back into a result, but
+// worlds on different threads would race on it, so every Box2D call of every world holds one
+// process-wide mutex (it stands for those globals, as EnkiWorld's does for Enki's). Each robot
+// draws its motor noise and its IR noise from its own streams (seeded from the world's seed and
+// the robot's index), so the IR readings of different robots are independent jobs: with
+// set_parallel() they run on several threads, outside that mutex, and give the same bits as one.
 //
 // Thread safety: one world is not thread-safe (World's rule); different worlds may be used from
 // different threads at once.
@@ -88,6 +92,7 @@ class Box2DWorld final : public World {
   struct Engine;  // Box2D's world and bodies
 
   const Robot& robot_at(std::size_t robot, const char* what) const;
+  void move(double dt);  // the wheels' velocities, Box2D's step, poses and contacts
   void read_ir();
 
   WorldSpec spec_;
