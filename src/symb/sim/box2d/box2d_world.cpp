@@ -21,7 +21,7 @@ namespace {
 // units) around every polygon, where contacts happen. In decimetres a Thymio is 1.1 units wide,
 // the skin is 1 mm (and is taken off the shapes below, so the outlines are exact), and a body's
 // broad-phase box has 1 cm to spare, so it leaves the tree only every few steps. In centimetres
-// every moving body would be reinserted in every step (twice the cost at 10,000 robots); in
+// every moving body would be reinserted in every step (about twice the cost at 10,000 robots); in
 // metres the skin would be 1 cm.
 constexpr double kUnitsPerCm = 0.1;
 constexpr double kSkin = b2_polygonRadius;  // units
@@ -30,7 +30,7 @@ constexpr double kSkin = b2_polygonRadius;  // units
 // world.hpp), motor noise, and hull: an arc of radius 8 cm in front, from -asin(5.5/8) to
 // +asin(5.5/8), closed by the two back corners at (-3, +-5.5). Box2D takes at most 8 vertices,
 // so the arc keeps 5 of Enki's 11 points (both ends, the nose, halfway between): its chords cut
-// at most 0.15 cm inside the arc (Enki's 0.09 cm).
+// at most 0.15 cm inside the arc (Enki's 0.02 cm).
 constexpr double kAxle = 9.4;           // cm between the wheels
 constexpr double kMotorNoise = 0.027;   // each wheel's speed times 1 +- this, uniform
 constexpr double kHullRadius = 8.0;     // cm

@@ -73,8 +73,8 @@ class Box2DWorld final : public World {
   // IR readings after each step run through `parallel` (null: on the caller's thread).
   void set_parallel(kernel::ParallelFor* parallel) override { parallel_ = parallel; }
 
-  // Robots one world holds at most (Box2D's proxy ids are 32-bit; this keeps a world's memory
-  // bounded: about 1 KB per robot).
+  // Robots one world holds at most: far beyond a scenario's kMaxRobots, a bound on a world's
+  // memory for callers that build worlds themselves.
   static constexpr std::size_t kMaxBodies = 1 << 20;
 
  private:
