@@ -73,13 +73,18 @@ TEST(Box2DWorld, DrivingStraightReachesTheCommandedSpeed) {
   Box2DWorld world(arena(), 1);
   const std::size_t r = world.add_robot("a", RobotKind::kThymio2, {20, 50, 0});
   world.set_wheels(r, 10, 10);
-  run(world, 100);  // 3 s at 10 cm/s; the motor noise (+-2.7% per step) averages out
+  // As in Enki, a command acts from the step after the next one.
+  world.step(kStep);
+  EXPECT_EQ(world.state(r).pose.x, 20);
+  world.step(kStep);
+  EXPECT_NEAR(world.state(r).pose.x, 20.3, 0.01);
+  run(world, 99);  // 3 s at 10 cm/s; the motor noise (+-2.7% per step) averages out
   const RobotState s = world.state(r);
-  EXPECT_NEAR(s.pose.x, 50, 0.5);
-  EXPECT_NEAR(s.pose.y, 50, 0.5);
-  EXPECT_NEAR(s.distance, 30, 0.5);
-  EXPECT_NEAR(world.time(), 3.0, 1e-9);
-  EXPECT_EQ(world.steps(), 100u);
+  EXPECT_NEAR(s.pose.x, 50, 0.3);
+  EXPECT_NEAR(s.pose.y, 50, 0.3);
+  EXPECT_NEAR(s.distance, 30, 0.3);
+  EXPECT_NEAR(world.time(), 3.03, 1e-9);
+  EXPECT_EQ(world.steps(), 101u);
   EXPECT_EQ(s.contact_steps, 0u);
   EXPECT_FALSE(s.in_contact);
 }
@@ -104,8 +109,8 @@ TEST(Box2DWorld, TurningOnTheSpotKeepsThePosition) {
   const RobotState s = world.state(r);
   EXPECT_NEAR(s.pose.x, 100, 0.01);
   EXPECT_NEAR(s.pose.y, 50, 0.01);
-  EXPECT_NEAR(s.pose.theta, 0.3 * 10 / 9.4, 0.01);
-  run(world, 1000);  // 30 s: several turns; the heading stays in (-pi, pi]
+  EXPECT_NEAR(s.pose.theta, 0.27 * 10 / 9.4, 0.01);  // 9 steps of turning: the first step waits
+  run(world, 1000);                                  // 30 s: several turns; the heading stays in (-pi, pi]
   EXPECT_GT(world.state(r).pose.theta, -std::numbers::pi);
   EXPECT_LE(world.state(r).pose.theta, std::numbers::pi);
   EXPECT_NEAR(world.state(r).pose.x, 100, 0.05);
@@ -125,11 +130,12 @@ TEST(Box2DWorld, AWallStopsTheRobotAndCountsContactSteps) {
   EXPECT_GT(s.contact_steps, 120u);
   EXPECT_LT(s.contact_steps, 135u);
   EXPECT_NEAR(s.distance, 21, 0.5);  // pushing does not add distance
-  // Backing away ends the contact with the first step back.
+  // Backing away ends the contact: one more step pushing (the command acts a step later), then
+  // the first step back leaves the face.
   world.set_wheels(r, -10, -10);
   run(world, 10);
   EXPECT_FALSE(world.state(r).in_contact);
-  EXPECT_EQ(world.state(r).contact_steps, s.contact_steps);
+  EXPECT_EQ(world.state(r).contact_steps, s.contact_steps + 1);
 }
 
 TEST(Box2DWorld, TheArenaSidesStopRobotsToo) {

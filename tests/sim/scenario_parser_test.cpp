@@ -420,8 +420,8 @@ TEST(ScenarioCount, ExplicitStartList) {
 
 TEST(ScenarioCount, Errors) {
   expect_error(swarm(1, 200), "t.yaml:11:12: ", "no room for 200 robots here: only ");
-  expect_error(swarm(1, 0), "t.yaml:10:12: ", "count must be an integer in 1..1000");
-  expect_error(swarm(1, 1001), "t.yaml:10:12: ", "count must be an integer in 1..1000");
+  expect_error(swarm(1, 0), "t.yaml:10:12: ", "count must be an integer in 1..20000");
+  expect_error(swarm(1, 20001), "t.yaml:10:12: ", "count must be an integer in 1..20000");
   expect_error(kHead + "  - {name: r, count: 3, start: {x: 20, y: 20}}\n",
                "t.yaml:7:32: ", "3 robots cannot all start at one pose");
   expect_error(kHead + "  - {name: r, count: 3, start: [{x: 20, y: 20}]}\n",
@@ -462,7 +462,7 @@ TEST(ScenarioErrors, Values) {
   expect_error(w + "inf, height: 100}\n", "t.yaml:3:18: ", "arena width (cm) must be a finite number, got 'inf'");
   expect_error(w + "nan, height: 100}\n", "t.yaml:3:18: ", "must be a finite number");
   expect_error(w + "1e999, height: 100}\n", "t.yaml:3:18: ", "must be a finite number");
-  expect_error(w + "0, height: 100}\n", "t.yaml:3:18: ", "arena width (cm) must be in 16..5000, got 0");
+  expect_error(w + "0, height: 100}\n", "t.yaml:3:18: ", "arena width (cm) must be in 16..10000, got 0");
   expect_error(w + "1O0, height: 100}\n", "t.yaml:3:18: ", "must be a finite number, got '1O0'");
   expect_error(w + "100}\n", "t.yaml:3:10: ", "arena needs 'height'");
   expect_error(w + "100, heigth: 100}\n", "t.yaml:3:23: ", "unknown key 'heigth' in arena (did you mean 'height'?)");
@@ -546,9 +546,9 @@ TEST(ScenarioErrors, HostileInput) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().rfind("t.yaml:1:", 0), 0u) << r.error();
   // Aliases are followed, but cannot multiply work past the limits.
-  std::string alias = kHead + "  - &r {name: r, count: 1000, start: random}\n";
+  std::string alias = kHead + "  - &r {name: r, count: 20000, start: random}\n";
   for (int i = 0; i < 5; ++i) alias += "  - *r\n";
-  expect_error(alias, "t.yaml:", "more than 1000 robots");
+  expect_error(alias, "t.yaml:", "more than 20000 robots");
 }
 
 TEST(ScenarioErrors, CopiesCannotMultiplyTheWork) {

@@ -78,8 +78,8 @@ inline constexpr double kStartClearance = 8.0;
 
 // Bounds that keep a hostile file from costing more than a moment to read.
 inline constexpr std::size_t kMaxScenarioBytes = 1 << 20;
-inline constexpr int kMaxNesting = 64;           // mappings and sequences inside each other
-inline constexpr std::size_t kMaxRobots = 1000;  // after `count` expansion
+inline constexpr int kMaxNesting = 64;            // mappings and sequences inside each other
+inline constexpr std::size_t kMaxRobots = 20000;  // after `count` expansion
 inline constexpr std::size_t kMaxWalls = 2000;
 inline constexpr std::size_t kMaxZones = 100;
 inline constexpr std::size_t kMaxEvents = 10000;

@@ -14,7 +14,9 @@
 #include <sstream>
 #include <system_error>
 #include <tuple>
+#include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
@@ -35,7 +37,7 @@ using kernel::Error;
 constexpr std::int64_t kMaxPriority = 1000;  // as the shell allows
 constexpr std::int64_t kMaxQueue = 65536;
 constexpr std::int64_t kMaxPort = 65535;
-constexpr double kMaxArena = 5000.0;  // cm
+constexpr double kMaxArena = 10000.0;  // cm: 20,000 robots at 4,000 cm2 each need 90 m square
 constexpr double kMinArena = 2 * kStartClearance;
 constexpr double kMinWallLength = 0.1;  // cm
 constexpr double kMaxThickness = 50.0;
@@ -46,7 +48,8 @@ constexpr std::size_t kMaxParamsPerTask = 64;
 constexpr std::size_t kMaxTotalTasks = 100000;
 constexpr std::size_t kMaxTotalHooks = 100000;
 constexpr std::size_t kMaxTotalParams = 200000;
-// Random starts are picked from a grid of at most about this many points.
+// Random starts are picked from a grid of at most about this many points, or four per random
+// robot when there are more than a quarter of that.
 constexpr double kMaxPlacementCandidates = 10000;
 constexpr std::uint64_t kPlacementStream = 0x5ce7a810;
 constexpr double kCm = 0.01;  // m: the file's unit in the world's
@@ -64,6 +67,44 @@ using yaml::Failure;
 using yaml::Map;
 using yaml::shown;
 using yaml::Source;
+
+// Robot starts already placed, bucketed in square cells as wide as two starts must be apart, so
+// checking a new start looks at the 3 x 3 cells around it instead of at every robot: placing
+// 10,000 robots costs as much per robot as placing 10.
+class StartGrid {
+ public:
+  static constexpr double kApart = 2 * kStartClearance;
+
+  void add(const Pose& p) {
+    cells_[key(p.x, p.y, 0, 0)].push_back(poses_.size());
+    poses_.push_back(p);
+  }
+  // The earliest placed start q within kApart of (x, y) for which too_near(q) holds, or null.
+  template <class TooNear>
+  const Pose* first_near(double x, double y, TooNear too_near) const {
+    std::size_t first = poses_.size();
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const auto it = cells_.find(key(x, y, dx, dy));
+        if (it == cells_.end()) continue;
+        for (const std::size_t i : it->second) {
+          const Pose& q = poses_[i];
+          if (i < first && too_near(q)) first = i;
+        }
+      }
+    return first < poses_.size() ? &poses_[first] : nullptr;
+  }
+
+ private:
+  // Starts lie within the arena (at most kMaxArena across), so a cell index fits 32 bits.
+  static std::uint64_t key(double x, double y, int dx, int dy) {
+    const auto cx = static_cast<std::uint32_t>(static_cast<std::int64_t>(std::floor(x / kApart)) + dx);
+    const auto cy = static_cast<std::uint32_t>(static_cast<std::int64_t>(std::floor(y / kApart)) + dy);
+    return (std::uint64_t{cy} << 32) | cx;
+  }
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
+  std::vector<Pose> poses_;
+};
 
 bool is_scenario_name(std::string_view n) {
   if (n.empty() || n.size() > 63) return false;
@@ -171,7 +212,8 @@ struct Parser {
   }
 
   void world(const YAML::Node& n) {
-    Map m(src, n, "world", {"kind", "arena", "wall_height", "walls", "zones", "radio", "docked", "bus", "battery"});
+    Map m(src, n, "world",
+          {"kind", "engine", "arena", "wall_height", "walls", "zones", "radio", "docked", "bus", "battery"});
     if (auto k = m.get("kind"); k.IsDefined()) {
       const std::string kind = rd.text(k, "world kind");
       if (kind == "mujoco")
@@ -179,6 +221,18 @@ struct Parser {
       else if (kind != "enki")
         src.fail(k, "unknown world kind '" + shown(kind) +
                         "' (enki: the 2D arena, the default; mujoco: the 3D world of modules)");
+    }
+    if (auto e = m.get("engine"); e.IsDefined()) {
+      if (in_3d())
+        src.fail(e,
+                 "'engine' chooses the physics of a 2D world (enki or box2d); a 3D world (kind: mujoco) runs on "
+                 "MuJoCo");
+      const std::string engine = rd.text(e, "world engine");
+      if (engine == "box2d")
+        sc.world.engine = Engine2d::kBox2d;
+      else if (engine != "enki")
+        src.fail(e, "unknown world engine '" + shown(engine) +
+                        "' (enki: the reference 2D simulator, the default; box2d: for swarms of thousands)");
     }
     if (in_3d()) {
       for (const std::string_view key : k2dWorldKeys)
@@ -359,12 +413,15 @@ struct Parser {
       return;
     }
     // Explicit starts first, in file order; random ones then fill the free space around them.
-    std::vector<Pose> placed;
-    for (const auto& e : entries)
+    StartGrid placed;
+    std::size_t random_total = 0;
+    for (const auto& e : entries) {
       for (std::size_t i = 0; i < e.starts.size(); ++i) {
         check_start(e.starts[i], e.start_where[i], placed);
-        placed.push_back(e.starts[i]);
+        placed.add(e.starts[i]);
       }
+      if (e.random) random_total += e.count;
+    }
     std::vector<std::vector<Pose>> random_starts(entries.size());
     std::vector<std::pair<double, double>> free;
     kernel::RandomStream rng(sc.seed, kPlacementStream);
@@ -373,7 +430,7 @@ struct Parser {
     for (std::size_t k = 0; k < entries.size(); ++k) {
       if (!entries[k].random) continue;
       if (!have_free) {
-        free = free_cells(rng);
+        free = free_cells(rng, std::max(kMaxPlacementCandidates, 4.0 * static_cast<double>(random_total)));
         have_free = true;
       }
       for (std::size_t i = 0; i < entries[k].count; ++i) {
@@ -382,11 +439,12 @@ struct Parser {
           const double x = free[next].first, y = free[next].second;
           ++next;
           constexpr double kApart2 = 4 * kStartClearance * kStartClearance;
-          found = std::all_of(placed.begin(), placed.end(),
-                              [&](const Pose& p) { return (p.x - x) * (p.x - x) + (p.y - y) * (p.y - y) >= kApart2; });
+          found = placed.first_near(x, y, [&](const Pose& q) {
+            return (q.x - x) * (q.x - x) + (q.y - y) * (q.y - y) < kApart2;
+          }) == nullptr;
           if (found) {
             const Pose p{x, y, rng.uniform(-std::numbers::pi, std::numbers::pi)};
-            placed.push_back(p);
+            placed.add(p);
             random_starts[k].push_back(p);
           }
         }
@@ -502,7 +560,7 @@ struct Parser {
     return p;
   }
 
-  void check_start(const Pose& p, const SourceLocation& where, const std::vector<Pose>& placed) {
+  void check_start(const Pose& p, const SourceLocation& where, const StartGrid& placed) {
     const WorldSpec& w = sc.world;
     const std::string at = "(" + Reader::fmt(p.x) + ", " + Reader::fmt(p.y) + ")";
     if (p.x < 0 || p.y < 0 || p.x > w.width || p.y > w.height)
@@ -519,15 +577,15 @@ struct Parser {
                             " the wall at line " + std::to_string(wall.where.line) +
                             "; a robot needs 8 cm around its start");
     }
-    for (const auto& q : placed)
-      if (std::hypot(p.x - q.x, p.y - q.y) < 2 * kStartClearance)
-        src.fail(where, "start " + at + " is " + Reader::fmt(std::hypot(p.x - q.x, p.y - q.y)) +
-                            " cm from another robot's start (" + Reader::fmt(q.x) + ", " + Reader::fmt(q.y) +
-                            "); starts must be at least 16 cm apart");
+    if (const Pose* q = placed.first_near(
+            p.x, p.y, [&](const Pose& o) { return std::hypot(p.x - o.x, p.y - o.y) < 2 * kStartClearance; }))
+      src.fail(where, "start " + at + " is " + Reader::fmt(std::hypot(p.x - q->x, p.y - q->y)) +
+                          " cm from another robot's start (" + Reader::fmt(q->x) + ", " + Reader::fmt(q->y) +
+                          "); starts must be at least 16 cm apart");
   }
 
   // Grid points with 8 cm clear of every wall, in an order shuffled by the seed.
-  std::vector<std::pair<double, double>> free_cells(kernel::RandomStream& rng) {
+  std::vector<std::pair<double, double>> free_cells(kernel::RandomStream& rng, double candidates) {
     const WorldSpec& w = sc.world;
     // Each wall as the box outside which no point can be too close, and the squared distance a
     // point must keep from its centre line. Copies of one wall (aliases make them cheaply) count
@@ -550,7 +608,7 @@ struct Parser {
                       std::max(s.y1, s.y2) + r};
       if (std::find(walls.begin(), walls.end(), k) == walls.end()) walls.push_back(k);
     }
-    const double step = std::max(2.0, std::sqrt(w.width * w.height / kMaxPlacementCandidates));
+    const double step = std::max(2.0, std::sqrt(w.width * w.height / candidates));
     std::vector<std::pair<double, double>> out;
     for (double y = kStartClearance; y <= w.height - kStartClearance; y += step)
       for (double x = kStartClearance; x <= w.width - kStartClearance; x += step) {

@@ -2,7 +2,7 @@
 
 #include <exception>
 
-#include "symb/sim/enki_world.hpp"
+#include "symb/sim/world_factory.hpp"
 
 namespace symb::sim {
 
@@ -23,9 +23,7 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
   }
   if (scenario.robots.empty()) return kernel::Error{scenario.file + ": the scenario has no robots"};
   try {
-    EnkiWorld::Options wo;
-    wo.max_robots = std::max<std::size_t>(scenario.robots.size(), 1);
-    s->world_ = std::make_unique<EnkiWorld>(scenario.world, s->seed_, wo);
+    s->world_ = make_world(scenario.world, s->seed_, scenario.robots.size());
     for (const RobotSpec& r : scenario.robots) s->world_->add_robot(r.name, r.kind, r.start);
     WorldRunner::Options ro;
     ro.period = scenario.control_period;

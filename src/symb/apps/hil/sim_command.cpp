@@ -15,9 +15,9 @@
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/apps/text_file.hpp"
 #include "symb/io/serial_port.hpp"
-#include "symb/sim/enki_world.hpp"
 #include "symb/sim/hil_simulator.hpp"
 #include "symb/sim/scenario.hpp"
+#include "symb/sim/world_factory.hpp"
 
 namespace symb::apps::hil {
 
@@ -153,11 +153,9 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   so.seed = run_seed;
   so.on_event = [&ctx](const std::string& text) { ctx.err << "sim: " << text << "\n" << std::flush; };
 
-  std::unique_ptr<sim::EnkiWorld> world;
+  std::unique_ptr<sim::World> world;
   try {
-    sim::EnkiWorld::Options wo;
-    wo.max_robots = std::max<std::size_t>(sc.robots.size(), 1);
-    world = std::make_unique<sim::EnkiWorld>(sc.world, run_seed, wo);
+    world = sim::make_world(sc.world, run_seed, sc.robots.size());
     for (const sim::RobotSpec& r : sc.robots) world->add_robot(r.name, r.kind, r.start);
   } catch (const std::exception& e) {
     ctx.err << kSimCommand << ": " << sc.file << ": " << e.what() << "\n";

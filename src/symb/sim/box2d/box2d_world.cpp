@@ -21,7 +21,7 @@ namespace {
 // units) around every polygon, where contacts happen. In decimetres a Thymio is 1.1 units wide,
 // the skin is 1 mm (and is taken off the shapes below, so the outlines are exact), and a body's
 // broad-phase box has 1 cm to spare, so it leaves the tree only every few steps. In centimetres
-// every moving body would be reinserted in every step (twice the cost at 10,000 robots); in
+// every moving body would be reinserted in every step (about twice the cost at 10,000 robots); in
 // metres the skin would be 1 cm.
 constexpr double kUnitsPerCm = 0.1;
 constexpr double kSkin = b2_polygonRadius;  // units
@@ -30,7 +30,7 @@ constexpr double kSkin = b2_polygonRadius;  // units
 // world.hpp), motor noise, and hull: an arc of radius 8 cm in front, from -asin(5.5/8) to
 // +asin(5.5/8), closed by the two back corners at (-3, +-5.5). Box2D takes at most 8 vertices,
 // so the arc keeps 5 of Enki's 11 points (both ends, the nose, halfway between): its chords cut
-// at most 0.15 cm inside the arc (Enki's 0.09 cm).
+// at most 0.15 cm inside the arc (Enki's 0.02 cm).
 constexpr double kAxle = 9.4;           // cm between the wheels
 constexpr double kMotorNoise = 0.027;   // each wheel's speed times 1 +- this, uniform
 constexpr double kHullRadius = 8.0;     // cm
@@ -42,6 +42,15 @@ constexpr int kHullPoints = kArcPoints + 2;
 // Stream ids: each robot's own motor and IR noise (the robot's index in the low 32 bits).
 constexpr std::uint64_t kMotorStream = std::uint64_t{0x4d4f54} << 32;  // "MOT"
 constexpr std::uint64_t kIrStream = std::uint64_t{0x4952} << 32;       // "IR"
+
+// Guards Box2D's process-wide state: the contact function table it fills on first use
+// (b2Contact::s_initialized) and the statistics counters its distance and time-of-impact
+// routines bump on every call (b2_gjkCalls, b2_toiCalls, ...). Nothing of a run's result reads
+// them, but two worlds stepping on two threads would race on them. See the header.
+std::mutex& box2d_mutex() {
+  static std::mutex mu;
+  return mu;
+}
 
 // Into (-pi, pi].
 double box2d_angle(double a) {
@@ -157,6 +166,7 @@ Box2DWorld::Box2DWorld(WorldSpec spec, std::uint64_t seed) : spec_(std::move(spe
     const double angle = length > 0 ? std::atan2(dy, dx) : 0.0;
     rects.push_back({(s.x1 + s.x2) / 2, (s.y1 + s.y2) / 2, (length + s.thickness) / 2, s.thickness / 2, angle});
   }
+  std::lock_guard lock(box2d_mutex());
   engine_ = std::make_unique<Engine>(rects);
   b2BodyDef def;  // static
   engine_->walls = engine_->world.CreateBody(&def);
@@ -169,7 +179,10 @@ Box2DWorld::Box2DWorld(WorldSpec spec, std::uint64_t seed) : spec_(std::move(spe
   }
 }
 
-Box2DWorld::~Box2DWorld() = default;
+Box2DWorld::~Box2DWorld() {
+  std::lock_guard lock(box2d_mutex());
+  engine_.reset();
+}
 
 const Box2DWorld::Robot& Box2DWorld::robot_at(std::size_t robot, const char* what) const {
   if (robot >= robots_.size())
@@ -190,6 +203,7 @@ std::size_t Box2DWorld::add_robot(const std::string& name, RobotKind kind, const
     throw std::length_error("box2d world: robot '" + name + "': the world holds at most " + std::to_string(kMaxBodies) +
                             " robots");
   const Pose pose{start.x, start.y, box2d_angle(start.theta)};
+  std::lock_guard lock(box2d_mutex());
   b2BodyDef def;
   def.type = b2_dynamicBody;
   def.position.Set(static_cast<float>(pose.x * kUnitsPerCm), static_cast<float>(pose.y * kUnitsPerCm));
@@ -215,9 +229,11 @@ std::size_t Box2DWorld::add_robot(const std::string& name, RobotKind kind, const
   engine_->bodies.push_back(body);
 
   const std::uint64_t index = robots_.size();
-  Robot r{
-      name, {}, {}, kernel::RandomStream(seed_, kMotorStream | index), kernel::RandomStream(seed_, kIrStream | index)};
+  Robot r;
+  r.name = name;
   r.state.pose = pose;
+  r.motor = kernel::RandomStream(seed_, kMotorStream | index);
+  r.ir_noise = kernel::RandomStream(seed_, kIrStream | index);
   robots_.push_back(std::move(r));
   poses_.push_back(pose);
   return robots_.size() - 1;
@@ -228,11 +244,21 @@ const std::string& Box2DWorld::robot_name(std::size_t robot) const { return robo
 void Box2DWorld::step(double dt) {
   if (!(dt > 0 && dt <= 1))
     throw std::invalid_argument("box2d world: step dt must be in (0, 1] s, got " + std::to_string(dt));
+  move(dt);
+  read_ir();  // outside the lock: IrModel is this world's own
+  ++steps_;
+  time_ += dt;
+}
+
+void Box2DWorld::move(double dt) {
+  std::lock_guard lock(box2d_mutex());
   for (std::size_t i = 0; i < robots_.size(); ++i) {
     Robot& r = robots_[i];
     b2Body* body = engine_->bodies[i];
-    const double left = r.state.left_speed * ((1 - kMotorNoise) + r.motor.uniform(0, 2 * kMotorNoise));
-    const double right = r.state.right_speed * ((1 - kMotorNoise) + r.motor.uniform(0, 2 * kMotorNoise));
+    const double left = r.acting_left * ((1 - kMotorNoise) + r.motor.uniform(0, 2 * kMotorNoise));
+    const double right = r.acting_right * ((1 - kMotorNoise) + r.motor.uniform(0, 2 * kMotorNoise));
+    r.acting_left = r.state.left_speed;
+    r.acting_right = r.state.right_speed;
     const double forward = (left + right) / 2, turn = (right - left) / kAxle;
     const double heading = body->GetAngle() + turn * dt / 2;
     body->SetLinearVelocity(b2Vec2(static_cast<float>(forward * std::cos(heading) * kUnitsPerCm),
@@ -255,9 +281,6 @@ void Box2DWorld::step(double dt) {
     st.in_contact = touching(*body);
     if (st.in_contact) ++st.contact_steps;
   }
-  read_ir();
-  ++steps_;
-  time_ += dt;
 }
 
 void Box2DWorld::read_ir() {

@@ -9,13 +9,19 @@
 //
 // Motion: before each step every robot's velocity is set from its wheels, as Enki's
 // DifferentialWheeled does (forward speed along the heading at mid-step, turn rate from the wheel
-// difference over the axle); Box2D then resolves the contacts. Nothing keeps momentum from one step
-// to the next: a robot a neighbour pushed stops when the push ends, as in Enki.
+// difference over the axle, the wheel speeds set before the PREVIOUS step: Enki's one step of
+// actuation delay); Box2D then resolves the contacts. Nothing keeps momentum from one step to the
+// next: a robot a neighbour pushed stops when the push ends, as in Enki. Contacts do not turn a
+// robot (its wheels' grip does not let them); only its wheels do.
 //
-// Determinism: Box2D keeps no process-wide state, so worlds built alike step alike, on any
-// thread. Each robot draws its motor noise and its IR noise from its own streams (seeded from the
-// world's seed and the robot's index), so the IR readings of different robots are independent
-// jobs: with set_parallel() they run on several threads and give the same bits as one.
+// Determinism: nothing of a run depends on anything outside its world, so worlds built alike
+// step alike, on any thread. Box2D does keep process-wide state (a table it fills on first use,
+// statistics counters every collision query bumps); none of it feeds back into a result, but
+// worlds on different threads would race on it, so every Box2D call of every world holds one
+// process-wide mutex (it stands for those globals, as EnkiWorld's does for Enki's). Each robot
+// draws its motor noise and its IR noise from its own streams (seeded from the world's seed and
+// the robot's index), so the IR readings of different robots are independent jobs: with
+// set_parallel() they run on several threads, outside that mutex, and give the same bits as one.
 //
 // Thread safety: one world is not thread-safe (World's rule); different worlds may be used from
 // different threads at once.
@@ -67,14 +73,18 @@ class Box2DWorld final : public World {
   // IR readings after each step run through `parallel` (null: on the caller's thread).
   void set_parallel(kernel::ParallelFor* parallel) override { parallel_ = parallel; }
 
-  // Robots one world holds at most (Box2D's proxy ids are 32-bit; this keeps a world's memory
-  // bounded: about 1 KB per robot).
+  // Robots one world holds at most: far beyond a scenario's kMaxRobots, a bound on a world's
+  // memory for callers that build worlds themselves.
   static constexpr std::size_t kMaxBodies = 1 << 20;
 
  private:
   struct Robot {
     std::string name;
     RobotState state;
+    // The wheel speeds this step moves with: those set before the previous step. Enki moves a
+    // robot with the speed its wheels gave it at the end of the previous step, so a command acts
+    // one step later than set; a reactive controller in a maze turns measurably later for it.
+    double acting_left = 0, acting_right = 0;
     IrReadings ir{};             // after the last step (all 0 before the first)
     kernel::RandomStream motor;  // wheel noise
     kernel::RandomStream ir_noise;
@@ -82,6 +92,7 @@ class Box2DWorld final : public World {
   struct Engine;  // Box2D's world and bodies
 
   const Robot& robot_at(std::size_t robot, const char* what) const;
+  void move(double dt);  // the wheels' velocities, Box2D's step, poses and contacts
   void read_ir();
 
   WorldSpec spec_;
