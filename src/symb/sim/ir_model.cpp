@@ -125,10 +125,10 @@ void IrModel::set_robots(std::span<const Pose> robots) {
 }
 
 double IrModel::ray(double px, double py, double ux, double uy, std::span<const Segment> edges,
-                    std::span<const Pose> robots) {
+                    std::span<const Point> robots) {
   double best = kRange + 1;  // beyond range: no response
   for (const Segment& e : edges) best = std::min(best, hit_segment(px, py, ux, uy, e.x1, e.y1, e.x2, e.y2, best));
-  for (const Pose& robot : robots) {
+  for (const Point& robot : robots) {
     const double dx = robot.x - px, dy = robot.y - py;
     const double along = dx * ux + dy * uy;
     const double across2 = dx * dx + dy * dy - along * along;
@@ -155,13 +155,13 @@ IrReadings IrModel::read(std::size_t self, kernel::RandomStream& noise) const {
     const Segment& e = edges_[i];
     if (distance2_to_segment(p.x, p.y, e.x1, e.y1, e.x2, e.y2) <= kReach * kReach) near_edges.push(e);
   });
-  NearList<Pose, 32> near_robots;
+  NearList<Point, 32> near_robots;
   robot_grid_.for_each(around(p, kRobotReach), [&](std::size_t j) {
     const double dx = robots_[j].x - p.x, dy = robots_[j].y - p.y;
-    if (j != self && dx * dx + dy * dy <= kRobotReach * kRobotReach) near_robots.push(robots_[j]);
+    if (j != self && dx * dx + dy * dy <= kRobotReach * kRobotReach) near_robots.push({robots_[j].x, robots_[j].y});
   });
   const std::span<const Segment> edges = near_edges.items();
-  const std::span<const Pose> robots = near_robots.items();
+  const std::span<const Point> robots = near_robots.items();
   // One sine and cosine per reading: the 21 ray directions are the robot's heading turned by the
   // fixed angles in ray_directions().
   const double c = std::cos(p.theta), s = std::sin(p.theta);

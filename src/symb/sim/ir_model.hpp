@@ -13,8 +13,10 @@
 // first keeps the wall edges and robots near enough to be seen by any of its 21 rays, found on two
 // spatial grids (spatial_grid.hpp): the walls' edges, built once, and the robots' positions, built
 // by set_robots() (about 10 ns a robot). So a reading costs about the same in a maze of 1,000
-// walls as in an empty box, and in a swarm of 10,000 robots as among 10. Leaving out what cannot be
-// hit changes no reading: each ray keeps the nearest hit, and nothing left out is within its reach.
+// walls as in an empty box, and grows with what is near the robot, not with the swarm (at 4,000
+// cm^2 a robot: about 0.5 us among 1,000 robots, 0.7 us among 10,000, where the cache misses).
+// Leaving out what cannot be hit changes no reading: each ray keeps the nearest hit, and nothing
+// left out is within its reach.
 //
 // Use: set_robots(poses) once after the bodies move, then read(i, noise) for each robot. read() is
 // const and keeps no scratch in the model, so several threads may read different robots at once
@@ -50,12 +52,16 @@ class IrModel {
   static constexpr double kRobotRadius = 5.5;                // cm, as seen by another robot's sensors
 
  private:
+  // Without member initialisers: a read's stack buffers of them are not zeroed first.
   struct Segment {
     double x1, y1, x2, y2;
   };
+  struct Point {
+    double x, y;
+  };
   // Distance to the nearest obstacle along (ux, uy) from (px, py); above kRange when none.
   static double ray(double px, double py, double ux, double uy, std::span<const Segment> edges,
-                    std::span<const Pose> robots);
+                    std::span<const Point> robots);
 
   std::vector<Segment> edges_;  // of every wall, 4 per wall
   SpatialGrid edge_grid_;       // edges_ by their bounding boxes

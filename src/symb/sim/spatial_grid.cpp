@@ -44,35 +44,39 @@ void SpatialGrid::layout(const GridBox& area, double cell, std::size_t max_cells
   boxes_ = false;
 }
 
-void SpatialGrid::set_points(std::span<const Pose> points) {
-  if (points.size() > kMaxItems) throw std::length_error("spatial grid: more than 2^32 - 1 items");
-  const std::size_t cells = columns_ * rows_;
-  boxes_ = false;
-  item_count_ = points.size();
-  cell_of_.resize(points.size());
+// Counting sort, in three passes: count each cell's entries into starts_ (start()), turn the
+// counts into running sums, the end of each cell (end_counts()), then place the entries from the
+// last item down, each one at --starts_[cell], so that every cell ends up in increasing index
+// order and starts_[c] at its beginning.
+void SpatialGrid::start(std::size_t items, bool boxes) {
+  if (items > kMaxItems) throw std::length_error("spatial grid: more than 2^32 - 1 items");
+  boxes_ = boxes;
+  item_count_ = items;
+  cell_of_.resize(items);
   std::fill(starts_.begin(), starts_.end(), 0);
-  // Counting sort: per-cell counts, their running sum (the end of each cell), then items placed
-  // from the last down, so that each cell ends up in increasing index order.
+}
+
+void SpatialGrid::end_counts(std::size_t entries) {
+  const std::size_t cells = columns_ * rows_;
+  for (std::size_t c = 1; c < cells; ++c) starts_[c] += starts_[c - 1];
+  starts_[cells] = static_cast<std::uint32_t>(entries);
+  items_.resize(entries);
+}
+
+void SpatialGrid::set_points(std::span<const Pose> points) {
+  start(points.size(), false);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto c = static_cast<std::uint32_t>(row(points[i].y) * columns_ + column(points[i].x));
     cell_of_[i] = c;
     ++starts_[c];
   }
-  for (std::size_t c = 1; c < cells; ++c) starts_[c] += starts_[c - 1];
-  starts_[cells] = static_cast<std::uint32_t>(points.size());
-  items_.resize(points.size());
+  end_counts(points.size());
   for (std::size_t i = points.size(); i-- > 0;) items_[--starts_[cell_of_[i]]] = static_cast<std::uint32_t>(i);
 }
 
 void SpatialGrid::set_boxes(std::span<const GridBox> boxes) {
-  if (boxes.size() > kMaxItems) throw std::length_error("spatial grid: more than 2^32 - 1 items");
-  const std::size_t cells = columns_ * rows_;
-  boxes_ = true;
-  item_count_ = boxes.size();
-  cell_of_.resize(boxes.size());
+  start(boxes.size(), true);
   first_row_.resize(boxes.size());
-  std::fill(starts_.begin(), starts_.end(), 0);
-  std::size_t entries = 0;
   auto each_cell = [&](std::size_t i, auto&& f) {
     const GridBox& b = boxes[i];
     const std::size_t c0 = column(b.min_x), c1 = std::max(c0, column(b.max_x));
@@ -80,6 +84,7 @@ void SpatialGrid::set_boxes(std::span<const GridBox> boxes) {
     for (std::size_t r = r0; r <= r1; ++r)
       for (std::size_t c = c0; c <= c1; ++c) f(r * columns_ + c);
   };
+  std::size_t entries = 0;
   for (std::size_t i = 0; i < boxes.size(); ++i) {
     cell_of_[i] = static_cast<std::uint32_t>(column(boxes[i].min_x));
     first_row_[i] = static_cast<std::uint32_t>(row(boxes[i].min_y));
@@ -89,9 +94,7 @@ void SpatialGrid::set_boxes(std::span<const GridBox> boxes) {
     });
     if (entries > kMaxItems) throw std::length_error("spatial grid: more than 2^32 - 1 box entries");
   }
-  for (std::size_t c = 1; c < cells; ++c) starts_[c] += starts_[c - 1];
-  starts_[cells] = static_cast<std::uint32_t>(entries);
-  items_.resize(entries);
+  end_counts(entries);
   for (std::size_t i = boxes.size(); i-- > 0;)
     each_cell(i, [&](std::size_t c) { items_[--starts_[c]] = static_cast<std::uint32_t>(i); });
 }

@@ -64,6 +64,9 @@ class SpatialGrid {
     return static_cast<std::size_t>(f);
   }
 
+  void start(std::size_t items, bool boxes);
+  void end_counts(std::size_t entries);
+
   GridBox area_;
   double cell_ = 1, inverse_cell_ = 1;
   std::size_t columns_ = 1, rows_ = 1;
