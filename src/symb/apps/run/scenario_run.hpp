@@ -1,6 +1,8 @@
-// Running a scenario in-process (`symb run`): the scenario session on the deterministic
-// virtual-time executor (or OS threads with realtime), a progress report, an optional command
-// shell on one robot, and what a person wants to look at afterwards, in an output folder:
+// Running a scenario in-process (`symb run`): the scenario session in deterministic virtual time
+// (a 2D one on the lockstep executor, its robots' nodes on `threads` worker threads, the same run
+// for any number; a 3D one on the virtual-time executor) or on OS threads with realtime, a
+// progress report, an optional command shell on one robot, and what a person wants to look at
+// afterwards, in an output folder:
 //   trajectory.svg  walls and every robot's path, contacts marked
 //   steps.csv       one row per robot and recorded step: time, pose, 7 IR values, wheel speeds,
 //                   contact
