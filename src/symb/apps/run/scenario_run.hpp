@@ -80,6 +80,9 @@ struct RunResult {
   std::uint64_t seed = 0;
   bool realtime = false;
   unsigned threads = 1;  // the lockstep executor's worker threads (2D virtual time)
+  // 2D virtual time: the share of the run's wall clock spent with the robots' nodes running, the
+  // part more threads can shorten (the world's step, radio and recording run on one thread).
+  double nodes_share = 0;
   double simulated_seconds = 0;
   double planned_seconds = 0;  // the duration asked for
   bool interrupted = false;    // stopped by stop_requested at simulated_seconds
