@@ -1,6 +1,7 @@
-// `symb run --threads N`: a 2D run on the lockstep executor writes the same files, byte for byte
-// (trajectories, steps.csv, probes.csv, syslog.txt), with 1, 2 and 4 worker threads, for the radio
-// swarm whose robots all probe (scenarios/medea_swarm.yaml); a 3D organism refuses threads.
+// `symb run --threads N`: a 2D run on the lockstep executor (kernel::LockstepExecutor) writes
+// the same files, byte for byte (trajectories, steps.csv, probes.csv, syslog.txt), with 1, 2 and
+// 4 worker threads, for the radio swarm whose robots all probe (scenarios/medea_swarm.yaml); a 3D
+// organism refuses threads.
 #include <unistd.h>
 
 #include <filesystem>

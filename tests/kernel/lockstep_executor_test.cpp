@@ -179,6 +179,9 @@ TEST(LockstepExecutor, TheBarrierOrdersCrossLaneWork) {
   EXPECT_EQ(log, (std::vector<std::string>{"world@30 sees 0", "robot@30", "world@60 sees 30", "robot@60",
                                            "world@90 sees 60", "robot@90"}));
   EXPECT_EQ(ex.lane(0).clock().now(), Time{90ms});
+  // Windows [0, 30), [30, 60), [60, 90), then the last one closing at 90 itself.
+  EXPECT_EQ(ex.stats().windows, 4u);
+  EXPECT_LE(ex.stats().lanes_wall, ex.stats().run_wall);
 }
 
 TEST(LockstepExecutor, SuspendResumeDetachAndPriorityInsideALane) {

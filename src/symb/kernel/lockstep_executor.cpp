@@ -58,6 +58,8 @@ bool LockstepExecutor::lanes_pending_by(Time t) const {
 
 std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
   if (lanes_.empty()) return 0;
+  const auto started = std::chrono::steady_clock::now();
+  ++stats_.windows;
   std::atomic<std::uint64_t> handled{0};
   pool_.run(lanes_.size(), [&](std::size_t begin, std::size_t stop) {
     std::uint64_t n = 0;
@@ -72,12 +74,14 @@ std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
     }
     handled.fetch_add(n, std::memory_order_relaxed);
   });
+  stats_.lanes_wall += std::chrono::steady_clock::now() - started;
   return handled.load(std::memory_order_relaxed);
 }
 
 std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {
   assert(!running_ && "run_until and run_until_idle are not reentrant");
   running_ = true;
+  const auto started = std::chrono::steady_clock::now();
   stop_requested_.store(false, std::memory_order_relaxed);
   const auto stopped = [&] { return stop_requested_.load(std::memory_order_relaxed); };
   std::uint64_t handled = 0;
@@ -112,6 +116,7 @@ std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {
     break;
   }
   running_ = false;
+  stats_.run_wall += std::chrono::steady_clock::now() - started;
   return handled;
 }
 

@@ -83,6 +83,16 @@ class LockstepExecutor final : public Executor {
   // Events queued on the main lane and every lane.
   std::size_t pending_events() const;
 
+  // Where a run's wall-clock time went, for benchmarks: the share spent with the lanes running
+  // (phase B) is what more threads can shorten; the rest (the world's step, the radio, the
+  // observers) runs on one thread. Counted over every run_*() so far.
+  struct Stats {
+    std::uint64_t windows = 0;               // phases (B) run
+    std::chrono::nanoseconds lanes_wall{0};  // wall clock inside phase (B)
+    std::chrono::nanoseconds run_wall{0};    // wall clock inside run_*()
+  };
+  const Stats& stats() const { return stats_; }
+
  private:
   std::uint64_t run(Time limit, bool until_idle);
   // Phase (B) over every lane: events before `end` (or up to and including it when `inclusive`;
@@ -96,6 +106,7 @@ class LockstepExecutor final : public Executor {
   std::vector<std::unique_ptr<VirtualTimeExecutor>> lanes_;
   std::atomic<bool> stop_requested_{false};
   bool running_ = false;
+  Stats stats_;
 };
 
 }  // namespace symb::kernel

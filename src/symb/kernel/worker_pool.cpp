@@ -53,7 +53,8 @@ void WorkerPool::run(std::size_t n, const std::function<void(std::size_t, std::s
     chunk_ = std::max<std::size_t>(1, n / (4 * std::size_t{threads_}));
     next_.store(0, std::memory_order_relaxed);
     error_ = nullptr;
-    busy_ = static_cast<unsigned>(workers_.size());
+    busy_ = 0;
+    open_ = true;
     ++generation_;
   }
   start_cv_.notify_all();
@@ -61,6 +62,7 @@ void WorkerPool::run(std::size_t n, const std::function<void(std::size_t, std::s
   std::exception_ptr error;
   {
     std::unique_lock lock(mu_);
+    open_ = false;  // every chunk is taken: a worker waking from now on has nothing to do
     done_cv_.wait(lock, [&] { return busy_ == 0; });
     fn_ = nullptr;
     error = std::exchange(error_, nullptr);
@@ -89,6 +91,8 @@ void WorkerPool::worker_loop() {
     start_cv_.wait(lock, [&] { return quit_ || generation_ != seen; });
     if (quit_) return;
     seen = generation_;
+    if (!open_) continue;  // woken too late for this run
+    ++busy_;
     lock.unlock();
     take_chunks();
     lock.lock();

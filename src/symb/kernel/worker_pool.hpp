@@ -3,7 +3,10 @@
 // other threads sleep on a condition variable between runs (this box's cores are shared: no
 // spinning). A run cuts [0, n) into chunks a few times smaller than n / threads and hands them
 // out through an atomic counter, so a slow chunk does not hold the others back; since jobs are
-// independent (ParallelFor's contract), which thread takes which chunk changes no result.
+// independent (ParallelFor's contract), which thread takes which chunk changes no result. A worker
+// that the OS has not woken by the time the caller has taken every chunk sits the run out: the
+// caller waits only for chunks under way, never for a thread to be scheduled (on a loaded box
+// that wait would be a whole time slice per run).
 #pragma once
 
 #include <atomic>
@@ -51,7 +54,8 @@ class WorkerPool final : public ParallelFor {
   std::condition_variable done_cv_;
   std::uint64_t generation_ = 0;  // bumped per run; workers wait for a new one
   bool quit_ = false;
-  unsigned busy_ = 0;  // workers still inside the current run
+  bool open_ = false;  // workers may still join the current run
+  unsigned busy_ = 0;  // workers that joined the current run and have not left it
   // The current run, written under mu_ before the generation is bumped.
   const std::function<void(std::size_t, std::size_t)>* fn_ = nullptr;
   std::size_t n_ = 0;

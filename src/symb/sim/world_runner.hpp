@@ -15,7 +15,12 @@
 // the sensor's notification is injected work, which the executor runs right after the runner's
 // tick and before any later event, and handlers take no virtual time. The runner has a high
 // priority so that, at an instant shared with periodic tasks, the world moves first. Under the
-// ThreadExecutor everything happens in real time and the same chain takes as long as it takes.
+// LockstepExecutor the runner is on the main lane and each robot's node on its own lane: the
+// notification is posted into the robot's idle lane at the step's instant t, the lane runs the
+// chain in its window [t, t + period) (in parallel with the other lanes), and step k + 1 at
+// t + period reads the wheels after every window has closed: the same instants, so the same run.
+// Under the ThreadExecutor everything happens in real time and the same chain takes as long as
+// it takes.
 //
 // Robots are those in the world when the runner is made; add every robot first. The runner owns
 // one mutex for the world: it holds it while it steps, and with_world() takes it for anyone else

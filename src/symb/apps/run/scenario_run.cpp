@@ -52,6 +52,8 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
       << " s (a stop was requested: Ctrl-C or SIGTERM)\n";
   s << "wall clock: " << fixed(r.wall_seconds, 3) << " s\n"
     << "real-time factor: " << fixed(r.real_time_factor, 1) << "\n";
+  if (!r.realtime && r.organism.empty())
+    s << "robots' nodes: " << fixed(100 * r.nodes_share, 0) << "% of the wall clock (the part --threads spreads)\n";
   s << "trajectory hash: " << hex64(r.trajectory_hash) << "\n";
   const RecordFigures& rec = r.recording;
   if (!rec.format.empty() && rec.format != "none")
@@ -274,6 +276,9 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   tcp_shell.reset();
 
   result.interrupted = stopped;
+  if (lockstep && lockstep->stats().run_wall.count() > 0)
+    result.nodes_share = static_cast<double>(lockstep->stats().lanes_wall.count()) /
+                         static_cast<double>(lockstep->stats().run_wall.count());
   result.steps = recorder.steps();
   result.simulated_seconds = session->world().time();
   result.real_time_factor = result.wall_seconds > 0 ? result.simulated_seconds / result.wall_seconds : 0;

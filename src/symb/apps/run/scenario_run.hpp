@@ -1,6 +1,8 @@
-// Running a scenario in-process (`symb run`): the scenario session on the deterministic
-// virtual-time executor (or OS threads with realtime), a progress report, an optional command
-// shell on one robot, and what a person wants to look at afterwards, in an output folder:
+// Running a scenario in-process (`symb run`): the scenario session in deterministic virtual time
+// (a 2D one on the lockstep executor, its robots' nodes on `threads` worker threads, the same run
+// for any number; a 3D one on the virtual-time executor) or on OS threads with realtime, a
+// progress report, an optional command shell on one robot, and what a person wants to look at
+// afterwards, in an output folder:
 //   trajectory.svg  walls and every robot's path, contacts marked
 //   steps.csv       one row per robot and recorded step: time, pose, 7 IR values, wheel speeds,
 //                   contact
@@ -82,6 +84,9 @@ struct RunResult {
   std::uint64_t seed = 0;
   bool realtime = false;
   unsigned threads = 1;  // the lockstep executor's worker threads (2D virtual time)
+  // 2D virtual time: the share of the run's wall clock spent with the robots' nodes running, the
+  // part more threads can shorten (the world's step, radio and recording run on one thread).
+  double nodes_share = 0;
   double simulated_seconds = 0;
   double planned_seconds = 0;  // the duration asked for
   bool interrupted = false;    // stopped by stop_requested at simulated_seconds
