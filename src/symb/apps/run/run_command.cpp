@@ -169,8 +169,8 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
       if (every_given && *every_given != options.csv_every)
         return usage_error(
             ctx, kCommand,
-            UsageError{std::string(o.name) + " " + o.value + ": every " + std::to_string(*every_given) +
-                       "-th step was asked for already (--csv-every and --record-every are one setting)"});
+            UsageError{std::string(o.name) + " " + o.value + ": the step interval was given already as " +
+                       std::to_string(*every_given) + " (--csv-every and --record-every are one setting)"});
       every_given = options.csv_every;
     } else if (o.name == "--record") {
       auto f = parse_record_format(o.value);
