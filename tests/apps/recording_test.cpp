@@ -196,7 +196,7 @@ TEST(Recording, Hdf5HoldsExactlyThePosesOfTheRun) {
   const auto ir = f.read<float>("ir", H5T_NATIVE_FLOAT);
   const auto wheels = f.read<double>("wheels", H5T_NATIVE_DOUBLE);
   const auto contact = f.read<std::uint8_t>("contact", H5T_NATIVE_UINT8);
-  std::size_t moved = 0, contacts = 0;
+  std::size_t moved = 0;
   for (std::size_t t = 0; t < run.steps.size(); ++t) {
     const sim::StepRecord& r = run.steps[t];
     ASSERT_EQ(step[t], r.step);
@@ -215,7 +215,6 @@ TEST(Recording, Hdf5HoldsExactlyThePosesOfTheRun) {
         ASSERT_EQ(ir[7 * k + j], static_cast<float>(std::nearbyint(static_cast<double>(r.robots[i].ir[j]) * 10) / 10))
             << "step " << t << " robot " << i;
       moved += t > 0 && pose[3 * k] != run.steps[0].robots[i].state.pose.x ? 1 : 0;
-      contacts += contact[k];
     }
   }
   EXPECT_GT(moved, 100u) << "the robots should move";
