@@ -38,8 +38,7 @@ constexpr OptionSpec kOptions[] = {
     {"--genome", "FILE", "replay a champion: the controller task gets this genome's weights (symb evolve)"},
     {"--controller", "NAME", "the task --genome replaces the weights of (default controller)"},
     {"--csv-every", "N", "record every N-th step in steps.csv (3D: poses.csv, joints.csv; default 1)"},
-    {"--record", "FORMAT",
-     "2D steps as csv (steps.csv), hdf5 (steps.h5), both or none; default auto: csv up to 100 robots, hdf5 above"},
+    {"--record", "FORMAT", "2D steps: csv, hdf5 (steps.h5), both or none (default: csv to 100 robots, hdf5 above)"},
     {"--record-every", "N", "record every N-th step (steps.csv, steps.h5; the same as --csv-every)"},
     {"--record-robots", "LIST", "2D: record only these robots' rows: names and ranges, e.g. t0..t99,t500"},
     {"--print-hash", "", "print 'trajectory-hash: <16 hex digits>' on stdout"},
@@ -175,8 +174,8 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
       if (every_given && *every_given != options.csv_every)
         return usage_error(
             ctx, kCommand,
-            UsageError{std::string(o.name) + " " + o.value + ": every " + std::to_string(*every_given) +
-                       "-th step was asked for already (--csv-every and --record-every are one setting)"});
+            UsageError{std::string(o.name) + " " + o.value + ": the step interval was given already as " +
+                       std::to_string(*every_given) + " (--csv-every and --record-every are one setting)"});
       every_given = options.csv_every;
     } else if (o.name == "--record") {
       auto f = parse_record_format(o.value);

@@ -56,7 +56,7 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
     s << "robots' nodes: " << fixed(100 * r.nodes_share, 0) << "% of the wall clock (the part --threads spreads)\n";
   s << "trajectory hash: " << hex64(r.trajectory_hash) << "\n";
   const RecordFigures& rec = r.recording;
-  if (!rec.format.empty() && rec.format != "none")
+  if (!rec.format.empty())
     s << "recording: " << rec.format << ", " << rec.recorded_steps << " steps x " << rec.recorded_robots << " robots, "
       << fixed(static_cast<double>(rec.bytes) / 1e6, 2) << " MB; " << fixed(rec.step_seconds, 3) << " s in the steps ("
       << fixed(r.steps > 0 ? 1000 * rec.step_seconds / static_cast<double>(r.steps) : 0.0, 3) << " ms per step), "

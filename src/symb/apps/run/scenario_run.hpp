@@ -12,6 +12,7 @@
 //   probes/*.svg    a line chart per probed series (robot, task, channel), for the first 48
 //   spikes/         spiking networks: an AEDAT 2.0 file, a raster and the grown network's picture
 //                   per network task (spike_recorder.hpp)
+// More than 100 robots: steps.h5 and density, trails and per-robot pictures instead (run_recording.hpp).
 // A 3D scenario writes its own set (organism_run.hpp, organism_recorder.hpp; docs/run.md).
 #pragma once
 

@@ -4,7 +4,8 @@
 //   /step      T        uint64   the world's step count (1 for the first step)
 //   /time_s    T        float64  simulated time of the step
 //   /pose      T x R x 3 float64 x_cm, y_cm, heading_rad (exactly the run's values)
-//   /ir        T x R x 7 float32 the seven IR readings published to the robot
+//   /ir        T x R x 7 float32 the seven IR readings published to the robot, rounded to 0.1 as
+//                                in steps.csv (noisy float digits do not deflate)
 //   /wheels    T x R x 2 float64 left_cm_s, right_cm_s (the speeds used during the step)
 //   /contact   T x R    uint8    1 while touching a wall or a robot
 //   /robots    R        string   the recorded robots' names (UTF-8)
