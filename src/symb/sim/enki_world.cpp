@@ -148,28 +148,18 @@ EnkiWorld::EnkiWorld(WorldSpec spec, std::uint64_t seed, Options options)
   // The world does not own the objects: they live in (and die with) the arena.
   enki_->world.takeObjectOwnership = false;
 
-  std::vector<IrModel::Rect> ir_walls;
-  auto add_wall = [&](double cx, double cy, double length, double width, double angle) {
+  // Every inner wall a static Enki rectangle; the sides are Enki's square walls (the header says
+  // why), so they are in the IR model's walls only.
+  std::vector<IrModel::Rect> ir_walls = IrModel::walls_of(spec_);
+  for (std::size_t i = 4; i < ir_walls.size(); ++i) {
+    const IrModel::Rect& r = ir_walls[i];
     auto* o = arena_->make<Enki::PhysicalObject>();
-    o->setRectangular(length, width, spec_.wall_height, -1);
-    o->pos = Enki::Point(cx, cy);
-    o->angle = angle;
+    o->setRectangular(2 * r.half_length, 2 * r.half_width, spec_.wall_height, -1);
+    o->pos = Enki::Point(r.cx, r.cy);
+    o->angle = r.angle;
     o->setColor(Enki::Color::gray);
     enki_->world.addObject(o);
-    ir_walls.push_back({cx, cy, length / 2, width / 2, angle});
     ++wall_count_;
-  };
-  // The sides, for the IR model only: 10 cm thick, just outside the arena, closing the corners.
-  const double w = spec_.width, h = spec_.height, t = 10;
-  ir_walls.push_back({w / 2, -t / 2, w / 2 + t, t / 2, 0});
-  ir_walls.push_back({w / 2, h + t / 2, w / 2 + t, t / 2, 0});
-  ir_walls.push_back({-t / 2, h / 2, t / 2, h / 2 + t, 0});
-  ir_walls.push_back({w + t / 2, h / 2, t / 2, h / 2 + t, 0});
-  for (const WallSpec& s : spec_.walls) {
-    const double dx = s.x2 - s.x1, dy = s.y2 - s.y1;
-    const double length = std::hypot(dx, dy);
-    const double angle = length > 0 ? std::atan2(dy, dx) : 0.0;
-    add_wall((s.x1 + s.x2) / 2, (s.y1 + s.y2) / 2, length + s.thickness, s.thickness, angle);
   }
   ir_model_ = std::make_unique<IrModel>(std::move(ir_walls));
 }

@@ -189,4 +189,21 @@ IrReadings IrModel::read(std::size_t self, kernel::RandomStream& noise) const {
   return out;
 }
 
+std::vector<IrModel::Rect> IrModel::walls_of(const WorldSpec& spec) {
+  std::vector<Rect> rects;
+  rects.reserve(4 + spec.walls.size());
+  const double w = spec.width, h = spec.height, t = 10;
+  rects.push_back({w / 2, -t / 2, w / 2 + t, t / 2, 0});
+  rects.push_back({w / 2, h + t / 2, w / 2 + t, t / 2, 0});
+  rects.push_back({-t / 2, h / 2, t / 2, h / 2 + t, 0});
+  rects.push_back({w + t / 2, h / 2, t / 2, h / 2 + t, 0});
+  for (const WallSpec& s : spec.walls) {
+    const double dx = s.x2 - s.x1, dy = s.y2 - s.y1;
+    const double length = std::hypot(dx, dy);
+    const double angle = length > 0 ? std::atan2(dy, dx) : 0.0;
+    rects.push_back({(s.x1 + s.x2) / 2, (s.y1 + s.y2) / 2, (length + s.thickness) / 2, s.thickness / 2, angle});
+  }
+  return rects;
+}
+
 }  // namespace symb::sim

@@ -41,6 +41,11 @@ class IrModel {
   };
   // Walls as rectangles centred on (cx, cy), `angle` along their length.
   explicit IrModel(std::vector<Rect> walls);
+  // A 2D world's walls as every backend builds them: first the arena's four sides (10 cm thick,
+  // just outside the arena, closing the corners), then each inner wall of the spec, in order, its
+  // segment's length plus its thickness long (capped ends, so walls meeting at a corner leave no
+  // gap) and `thickness` wide.
+  static std::vector<Rect> walls_of(const WorldSpec& spec);
 
   // The robots the following reads see: robot i at robots[i] (copied). Their grid is rebuilt.
   void set_robots(std::span<const Pose> robots);

@@ -125,26 +125,11 @@ bool touching(const b2Body& body) {
 struct Box2DWorld::Engine {
   explicit Engine(std::vector<IrModel::Rect> ir_walls) : world(b2Vec2(0, 0)), ir_model(std::move(ir_walls)) {}
 
-  // IrModel::read keeps scratch space in the model, so concurrent readers each borrow a copy.
-  std::unique_ptr<IrModel> borrow_model() {
-    std::lock_guard lock(spare_mutex);
-    if (spare.empty()) return std::make_unique<IrModel>(ir_model);
-    auto m = std::move(spare.back());
-    spare.pop_back();
-    return m;
-  }
-  void give_back(std::unique_ptr<IrModel> m) {
-    std::lock_guard lock(spare_mutex);
-    spare.push_back(std::move(m));
-  }
-
   b2World world;
   const b2PolygonShape robot_shape = thymio_shape();
   b2Body* walls = nullptr;
   std::vector<b2Body*> bodies;  // by robot index
   IrModel ir_model;
-  std::mutex spare_mutex;
-  std::vector<std::unique_ptr<IrModel>> spare;
 };
 
 // The same rules as Enki's: a spec one backend takes, the other takes too.
@@ -152,20 +137,8 @@ kernel::Status Box2DWorld::check_spec(const WorldSpec& spec) { return EnkiWorld:
 
 Box2DWorld::Box2DWorld(WorldSpec spec, std::uint64_t seed) : spec_(std::move(spec)), seed_(seed) {
   if (auto st = check_spec(spec_); !st) throw std::invalid_argument(st.error());
-  // Walls as rectangles, for Box2D and the IR model alike. The sides: 10 cm thick, just outside
-  // the arena, closing the corners.
-  std::vector<IrModel::Rect> rects;
-  const double w = spec_.width, h = spec_.height, t = 10;
-  rects.push_back({w / 2, -t / 2, w / 2 + t, t / 2, 0});
-  rects.push_back({w / 2, h + t / 2, w / 2 + t, t / 2, 0});
-  rects.push_back({-t / 2, h / 2, t / 2, h / 2 + t, 0});
-  rects.push_back({w + t / 2, h / 2, t / 2, h / 2 + t, 0});
-  for (const WallSpec& s : spec_.walls) {
-    const double dx = s.x2 - s.x1, dy = s.y2 - s.y1;
-    const double length = std::hypot(dx, dy);
-    const double angle = length > 0 ? std::atan2(dy, dx) : 0.0;
-    rects.push_back({(s.x1 + s.x2) / 2, (s.y1 + s.y2) / 2, (length + s.thickness) / 2, s.thickness / 2, angle});
-  }
+  // Walls as rectangles, for Box2D and the IR model alike, the sides included.
+  const std::vector<IrModel::Rect> rects = IrModel::walls_of(spec_);
   std::lock_guard lock(box2d_mutex());
   engine_ = std::make_unique<Engine>(rects);
   b2BodyDef def;  // static
@@ -284,18 +257,15 @@ void Box2DWorld::move(double dt) {
 }
 
 void Box2DWorld::read_ir() {
-  auto read = [this](const IrModel& model, std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) robots_[i].ir = model.read(i, poses_, robots_[i].ir_noise);
+  engine_->ir_model.set_robots(poses_);
+  auto read = [this](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) robots_[i].ir = engine_->ir_model.read(i, robots_[i].ir_noise);
   };
-  if (parallel_ == nullptr || parallel_->threads() <= 1) {
-    read(engine_->ir_model, 0, robots_.size());
+  if (parallel_ == nullptr) {
+    read(0, robots_.size());
     return;
   }
-  parallel_->run(robots_.size(), [&](std::size_t begin, std::size_t end) {
-    auto model = engine_->borrow_model();
-    read(*model, begin, end);
-    engine_->give_back(std::move(model));
-  });
+  parallel_->run(robots_.size(), read);
 }
 
 void Box2DWorld::set_wheels(std::size_t robot, double left, double right) {
