@@ -5,13 +5,19 @@
 // with a one-message queue on a VirtualTimeExecutor, minus that queue's storage. Per hook: 1000
 // senders hooked to one receiver (fan-in) and one sender hooked to 1000 receivers (fan-out).
 // Baseline, for scale: a std::function + std::vector<float> "task" and a raw pointer in a
-// std::vector "hook". Targets: <= 512 B per task, <= 64 B per hook. Wall time per benchmark is
-// the time to build and tear down the graph, for reference only.
+// std::vector "hook". Targets: <= 512 B per task, <= 64 B per hook. Per robot, the full stack as
+// `symb run` builds it for a 2D swarm: 1000 Thymios with the maze demo's MDL2e controller (the
+// scenario parsed, the world, the world runner and its drivers, each robot's RobotSystem: node,
+// task-type registry, SysLog, tasks, hooks), run for 0.3 s of virtual time; target <= 64 KiB
+// per robot (10,000 robots in well under 1 GiB). Wall time per benchmark is the time to build and
+// tear down the graph, for reference only.
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <memory>
 #include <new>
@@ -23,6 +29,8 @@
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
+#include "symb/sim/scenario.hpp"
+#include "symb/sim/scenario_session.hpp"
 
 #include "bench_report.hpp"
 // Private to the os layer; included only for sizeof() in the breakdown.
@@ -146,6 +154,8 @@ constexpr std::size_t kN = 1000;
 constexpr std::size_t kThreadTasks = 100;
 constexpr double kTaskTarget = 512;
 constexpr double kHookTarget = 64;
+constexpr std::size_t kRobots = 1000;
+constexpr double kRobotTarget = 64 * 1024;
 
 // Bytes that changed hands between open() and close().
 struct Window {
@@ -193,6 +203,7 @@ struct Measured {
 };
 Measured g_task, g_task_thread, g_hook_fan_in, g_hook_fan_out;
 Measured g_plain_task, g_plain_hook_fan_in, g_plain_hook_fan_out;
+Measured g_robot_parse, g_robot_build, g_robot_run, g_robot;
 
 void record(benchmark::State& state, Measured& out, const Window& w, std::size_t n, std::size_t excluded) {
   out.requested_per = static_cast<double>(w.requested - excluded) / static_cast<double>(n);
@@ -287,6 +298,54 @@ void BM_HookMemoryFanOut(benchmark::State& state) {
   }
 }
 
+// A swarm as `symb run` builds it: kRobots Thymios at random starts in a 20 x 20 m arena, each
+// with the maze demo's MDL2e controller between its IR and its wheels.
+std::string swarm_scenario() {
+  return "name: swarm\nseed: 7\nduration: 1s\ncontrol_period: 30ms\nworld:\n  arena: {width: 2000, height: 2000}\n"
+         "robots:\n  - name: t\n    count: " +
+         std::to_string(kRobots) +
+         "\n    start: random\n    tasks:\n      - name: controller\n        type: mdl2e\n"
+         "        params: {program: " SYMB_SCENARIO_DIR
+         "/mdl2e/obstacle_avoidance.mdl2e}\n    hooks:\n      - ir -> controller -> wheels\n";
+}
+
+// Three windows, so the report can say where the bytes go: the parsed scenario (kept by `symb run`
+// for the whole run), the session built (world, runner, robots), and what running adds (the tasks'
+// start, queues and logs in their steady state).
+void BM_RobotMemory(benchmark::State& state) {
+  const std::string text = swarm_scenario();
+  for (auto _ : state) {
+    Window parse = Window::open();
+    auto scenario = sim::parse_scenario(text, "swarm.yaml", {});
+    parse.close();
+    if (!scenario) {
+      state.SkipWithError(scenario.error().c_str());
+      return;
+    }
+    kernel::VirtualTimeExecutor exec;
+    Window build = Window::open();
+    auto session = sim::ScenarioSession::create(scenario.value(), exec, {});
+    build.close();
+    if (!session) {
+      state.SkipWithError(session.error().c_str());
+      return;
+    }
+    Window run = Window::open();
+    session.value()->start();
+    exec.run_for(std::chrono::milliseconds(300));
+    run.close();
+    record(state, g_robot_parse, parse, kRobots, 0);
+    record(state, g_robot_build, build, kRobots, 0);
+    record(state, g_robot_run, run, kRobots, 0);
+    g_robot.retained_per = g_robot_parse.retained_per + g_robot_build.retained_per + g_robot_run.retained_per;
+    g_robot.requested_per = g_robot_parse.requested_per + g_robot_build.requested_per + g_robot_run.requested_per;
+    g_robot.allocations_per =
+        g_robot_parse.allocations_per + g_robot_build.allocations_per + g_robot_run.allocations_per;
+    state.counters["retained_B_per_robot"] = g_robot.retained_per;
+    session.value()->stop();
+  }
+}
+
 // --- baseline --------------------------------------------------------------------------------------
 
 // The least a "task" can be: something to call and somewhere to put its input.
@@ -342,6 +401,7 @@ BENCHMARK(BM_PlainHookMemoryFanIn)->Iterations(20)->Unit(benchmark::kMicrosecond
 BENCHMARK(BM_HookMemoryFanOut)->Iterations(20)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PlainHookMemoryFanOut)->Iterations(20)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_TaskMemoryThreads)->Iterations(3)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RobotMemory)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // Blocks still held at the end of the window, by size; blocks that came and went (a table's
 // earlier, smaller storage) are summed on one line, as they count in "requested" only.
@@ -410,6 +470,10 @@ int main(int argc, char** argv) {
   std::printf("sizeof: TaskRecord %zu, Task %zu, Message %zu (Payload %zu), Hook %zu, TaskSlot %zu\n",
               sizeof(os::detail::TaskRecord), sizeof(EmptyTask), sizeof(os::Message), sizeof(os::Payload),
               sizeof(os::detail::Hook), sizeof(os::detail::TaskSlot));
+  line("robot, full stack, N=1000 (symb run of a swarm)", g_robot);
+  line("  of it: the parsed scenario", g_robot_parse);
+  line("  of it: the session built", g_robot_build);
+  line("  of it: running 0.3 s", g_robot_run);
   for (const auto& e : reporter.errors()) std::printf("ERROR %s\n", e.c_str());
 
   const double hook_worst = std::max(g_hook_fan_in.retained_per, g_hook_fan_out.retained_per);
@@ -419,5 +483,8 @@ int main(int argc, char** argv) {
       g_task.retained_per, g_plain_task.retained_per, kTaskTarget, verdict(g_task.retained_per, kTaskTarget),
       g_hook_fan_in.retained_per, g_hook_fan_out.retained_per, g_plain_hook_fan_in.retained_per,
       g_plain_hook_fan_out.retained_per, kHookTarget, verdict(hook_worst, kHookTarget));
+  std::printf(
+      "memory: robot %.0f B (2D Thymio with the maze controller, full stack, 1000 robots), target <= %.0f B: %s\n",
+      g_robot.retained_per, kRobotTarget, verdict(g_robot.retained_per, kRobotTarget));
   return 0;
 }

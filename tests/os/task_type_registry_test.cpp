@@ -1,6 +1,8 @@
 #include "symb/os/task_type_registry.hpp"
 
+#include <memory>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -127,6 +129,43 @@ TEST(TaskTypeRegistry, NodeCreatesByNameAndChangesParametersAtRuntime) {
   EXPECT_FALSE(node.create("nosuch", "x", {}));
   EXPECT_FALSE(node.create("gain", "g2", *parse_param_assignments("gain=oops")));
   EXPECT_FALSE(node.find("g2"));  // a failed create leaves nothing behind
+}
+
+// Two robots' registries over one shared registry: each finds the shared types and its own, never
+// the other robot's; a name cannot be added twice across the two levels; list and hints see both.
+TEST(TaskTypeRegistry, RegistriesOverASharedOneKeepTheirOwnTypesApart) {
+  auto shared_mut = std::make_shared<TaskTypeRegistry>();
+  ASSERT_TRUE(shared_mut->add(gain_type()));
+  const std::shared_ptr<const TaskTypeRegistry> shared = shared_mut;
+  TaskTypeRegistry a(shared), b(shared);
+  TaskType own_a = gain_type();
+  own_a.name = "only_a";
+  ASSERT_TRUE(a.add(own_a));
+  EXPECT_FALSE(a.add(gain_type()));  // already in the shared registry
+  EXPECT_TRUE(b.add(own_a));         // b may have its own type of that name: a's is not b's
+
+  EXPECT_EQ(a.find("gain"), shared->find("gain"));  // one copy, found through either handle
+  EXPECT_EQ(b.find("gain"), shared->find("gain"));
+  ASSERT_NE(a.find("only_a"), nullptr);
+  EXPECT_NE(b.find("only_a"), a.find("only_a"));
+  EXPECT_EQ(shared->find("only_a"), nullptr);  // nothing leaks into the shared registry
+  std::vector<std::string> names;
+  for (const TaskType* t : a.list()) names.push_back(t->name);
+  EXPECT_EQ(names, (std::vector<std::string>{"gain", "only_a"}));
+  EXPECT_NE(TaskTypeRegistry(shared).unknown_type_error("gian").find("did you mean 'gain'"), std::string::npos);
+
+  kernel::VirtualTimeExecutor ex;
+  Node na(ex, {"a", 1, 64, &a});
+  Node nb(ex, {"b", 2, 64, &b});
+  auto ga = na.create("gain", "g", *parse_param_assignments("gain=3"));
+  auto gb = nb.create("gain", "g", *parse_param_assignments("gain=5"));
+  ASSERT_TRUE(ga && gb);
+  EXPECT_EQ(na.parameters(*ga)->real("gain"), 3.0);  // each node's task is its own
+  EXPECT_EQ(nb.parameters(*gb)->real("gain"), 5.0);
+  EXPECT_TRUE(na.create("only_a", "x", {}));
+  TaskTypeRegistry c(shared);  // a third robot that did not add only_a cannot make one
+  Node nc(ex, {"c", 3, 64, &c});
+  EXPECT_FALSE(nc.create("only_a", "x", {}));
 }
 
 TEST(ParamTable, SchemaComesFromTheDeclaration) {

@@ -1,5 +1,7 @@
 #include "symb/os/task_type_registry.hpp"
 
+#include <algorithm>
+
 namespace symb::os {
 
 using kernel::Error;
@@ -12,7 +14,8 @@ const ParamSpec* TaskType::param(std::string_view param_name) const {
 
 kernel::Status TaskTypeRegistry::add(TaskType type) {
   if (!is_valid_name(type.name)) return Error{"task type name '" + type.name + "' is not a valid name"};
-  if (types_.contains(type.name)) return Error{"task type '" + type.name + "' is already registered"};
+  if (types_.contains(type.name) || (shared_ && shared_->find(type.name)))
+    return Error{"task type '" + type.name + "' is already registered"};
   if (!type.make) return Error{"task type '" + type.name + "' has no factory"};
   if (!type.live.empty() && type.live.size() != type.params.size())
     return Error{"task type '" + type.name + "': live parameters do not match its parameters"};
@@ -32,18 +35,20 @@ kernel::Status TaskTypeRegistry::add(TaskType type) {
 
 const TaskType* TaskTypeRegistry::find(std::string_view name) const {
   auto it = types_.find(name);
-  return it == types_.end() ? nullptr : &it->second;
+  if (it != types_.end()) return &it->second;
+  return shared_ ? shared_->find(name) : nullptr;
 }
 
 std::vector<const TaskType*> TaskTypeRegistry::list() const {
-  std::vector<const TaskType*> out;
+  std::vector<const TaskType*> out = shared_ ? shared_->list() : std::vector<const TaskType*>{};
   for (const auto& [n, t] : types_) out.push_back(&t);
+  std::sort(out.begin(), out.end(), [](const TaskType* a, const TaskType* b) { return a->name < b->name; });
   return out;
 }
 
 std::string TaskTypeRegistry::unknown_type_error(std::string_view name) const {
   std::vector<std::string_view> names;
-  for (const auto& [n, t] : types_) names.push_back(n);
+  for (const TaskType* t : list()) names.push_back(t->name);
   std::string msg = "unknown task type '" + std::string(name.substr(0, 63)) + "'";
   if (auto hint = closest_name(name, names); !hint.empty()) msg += " (did you mean '" + hint + "'?)";
   return msg;

@@ -2,6 +2,13 @@
 // shell, scenario files and genomes can all create any task at runtime by naming it (ARGoS-style
 // registration). A registry is an ordinary object handed to the nodes that use it; there is no
 // process-wide one.
+//
+// Shared types: a registry may be made over a read-only registry of types that capture nothing of
+// one robot (the control and evo layers' types, whose factories need only the session's program
+// reader), shared by every identical robot of a swarm; it adds its own (the robot's device tasks,
+// whose factories hold that robot's devices). Each node still looks types up through its own
+// registry, so what one robot adds is seen by that robot only. The type tables are the bulk of a
+// robot's memory otherwise (about 200 KB: schemas, docs and factories of some fifty types).
 #pragma once
 
 #include <functional>
@@ -80,19 +87,28 @@ struct NoParams {};
 
 class TaskTypeRegistry {
  public:
-  // Fails on a duplicate or invalid name, a missing factory, or a schema whose defaults do not
-  // satisfy their own type and range.
+  TaskTypeRegistry() = default;
+  // Over `shared` (may be null): its types are found as this registry's own; it must not change
+  // while this registry is in use (it is const for everyone who shares it).
+  explicit TaskTypeRegistry(std::shared_ptr<const TaskTypeRegistry> shared) : shared_(std::move(shared)) {}
+
+  // Fails on a duplicate (in this registry or the shared one) or invalid name, a missing factory,
+  // or a schema whose defaults do not satisfy their own type and range.
   kernel::Status add(TaskType type);
+  // This registry's own types first, then the shared ones.
   const TaskType* find(std::string_view name) const;
-  // All types, sorted by name.
+  // All types, own and shared, sorted by name.
   std::vector<const TaskType*> list() const;
   // Defaults overridden by `given`; errors name the parameter (with a hint for a misspelt one)
   // and the column the assignment started at.
   kernel::Result<ParamSet> resolve(const TaskType& type, std::span<const ParamAssignment> given) const;
   // An error for an unknown type name, with a "did you mean" hint.
   std::string unknown_type_error(std::string_view name) const;
+  // The shared registry, or null.
+  const std::shared_ptr<const TaskTypeRegistry>& shared() const { return shared_; }
 
  private:
+  std::shared_ptr<const TaskTypeRegistry> shared_;
   std::map<std::string, TaskType, std::less<>> types_;
 };
 

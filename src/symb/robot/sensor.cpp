@@ -15,7 +15,7 @@ using kernel::Error;
 // --- Sensor ----------------------------------------------------------------------------------------
 
 Sensor::Sensor(std::string name, std::vector<ChannelSpec> channels, Options options)
-    : io::Device(std::move(name)), channels_(std::move(channels)), mailbox_(options.mailbox) {
+    : io::Device(std::move(name)), channels_(std::move(channels)), mailbox_capacity_(options.mailbox) {
   if (auto st = validate_channels(channels_); !st)
     throw std::invalid_argument("sensor '" + this->name() + "': " + st.error());
   if (options.mailbox == 0)
@@ -83,7 +83,7 @@ PublishResult Sensor::publish(std::span<const float> values, std::shared_ptr<con
       return PublishResult::kUnheard;
     }
     ++stats_.queued_total;
-    if (mailbox_.push_overwrite(s)) ++stats_.overwritten;
+    if (mailbox_->push_overwrite(s)) ++stats_.overwritten;  // attach() made it
   }
   // A rejection wakes the task too, so that it can log it; one notification per drain.
   if (notify_ && !notified_) {
@@ -108,6 +108,7 @@ bool Sensor::has_listener() const { return listening_.load(std::memory_order_acq
 kernel::Status Sensor::attach(std::function<void()> notify) {
   std::lock_guard lock(mu_);
   if (notify_) return Error{"sensor '" + name() + "' already feeds a task"};
+  if (!mailbox_) mailbox_.emplace(mailbox_capacity_);
   notify_ = std::move(notify);
   notified_ = false;
   listening_.store(true, std::memory_order_release);
@@ -120,8 +121,10 @@ void Sensor::detach() {
   listening_.store(false, std::memory_order_release);
   // Whatever the task did not take is now unheard; keeping it would hand stale samples to the
   // next task as fresh ones.
-  stats_.overwritten += mailbox_.size();
-  mailbox_.clear();
+  if (mailbox_) {
+    stats_.overwritten += mailbox_->size();
+    mailbox_->clear();
+  }
   notified_ = false;
 }
 
@@ -129,7 +132,8 @@ SensorStats Sensor::take(std::vector<SensorSample>& out) {
   out.clear();
   std::lock_guard lock(mu_);
   notified_ = false;
-  while (!mailbox_.empty()) out.push_back(mailbox_.take());
+  if (mailbox_)
+    while (!mailbox_->empty()) out.push_back(mailbox_->take());
   stats_.taken += out.size();
   return stats_;
 }

@@ -143,7 +143,10 @@ class Sensor : public io::Device {
   std::atomic<bool> listening_{false};
 
   mutable std::mutex mu_;  // everything below
-  kernel::RingBuffer<SensorSample> mailbox_;
+  // Made at the first attach: a sensor no task listens to (a simulated robot's pose and ground
+  // drivers, in most scenarios) keeps only its latest sample.
+  std::optional<kernel::RingBuffer<SensorSample>> mailbox_;
+  std::size_t mailbox_capacity_;
   std::function<void()> notify_;
   bool notified_ = false;
   std::optional<SensorSample> latest_;

@@ -63,6 +63,38 @@ ProgramReader file_program_reader(std::string base_dir) {
   };
 }
 
+namespace {
+
+// What a 2D robot's device task types look up: the runner's devices by task name.
+robot::RobotDevices device_lookups(const RobotDevices& devices) {
+  robot::RobotDevices lookups;
+  lookups.sensor = [devices](std::string_view name) -> std::shared_ptr<robot::Sensor> {
+    if (name == kIrTaskName) return devices.ir;
+    if (name == kPoseTaskName) return devices.pose;
+    if (name == kGroundTaskName) return devices.ground;
+    return nullptr;
+  };
+  lookups.actuator = [wheels = devices.wheels](std::string_view name) -> std::shared_ptr<robot::Actuator> {
+    return name == kWheelsTaskName ? wheels : nullptr;
+  };
+  return lookups;
+}
+
+kernel::Status register_device_free_types(os::TaskTypeRegistry& registry, ProgramReader read_program) {
+  control::ControlResources resources;
+  resources.read_program = std::move(read_program);
+  if (auto st = control::register_control_task_types(registry, resources); !st) return st;
+  return evo::register_evo_task_types(registry, resources);
+}
+
+}  // namespace
+
+kernel::Result<std::shared_ptr<const os::TaskTypeRegistry>> shared_scenario_task_types(ProgramReader read_program) {
+  auto registry = std::make_shared<os::TaskTypeRegistry>();
+  if (auto st = register_device_free_types(*registry, std::move(read_program)); !st) return kernel::Error{st.error()};
+  return std::shared_ptr<const os::TaskTypeRegistry>(std::move(registry));
+}
+
 kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, RobotDevices devices,
                                             ProgramReader read_program) {
   control::ControlResources resources;
@@ -81,28 +113,24 @@ kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, Robo
     if (auto st = control::register_control_task_types(registry, resources); !st) return st;
     return evo::register_evo_task_types(registry, resources);
   }
-  robot::RobotDevices lookups;
-  lookups.sensor = [devices](std::string_view name) -> std::shared_ptr<robot::Sensor> {
-    if (name == kIrTaskName) return devices.ir;
-    if (name == kPoseTaskName) return devices.pose;
-    if (name == kGroundTaskName) return devices.ground;
-    return nullptr;
-  };
-  lookups.actuator = [wheels = devices.wheels](std::string_view name) -> std::shared_ptr<robot::Actuator> {
-    return name == kWheelsTaskName ? wheels : nullptr;
-  };
-  if (auto s = robot::register_robot_task_types(registry, std::move(lookups)); !s) return s;
-  if (auto st = control::register_control_task_types(registry, resources); !st) return st;
-  return evo::register_evo_task_types(registry, resources);
+  if (auto s = robot::register_robot_task_types(registry, device_lookups(devices)); !s) return s;
+  return register_device_free_types(registry, std::move(resources.read_program));
 }
 
 kernel::Result<std::unique_ptr<RobotSystem>> RobotSystem::build(kernel::Executor& executor, const RobotSpec& spec,
                                                                 RobotDevices devices, RobotSystemOptions options) {
   std::unique_ptr<RobotSystem> sys(new RobotSystem());
   sys->name_ = spec.name;
-  sys->types_ = std::make_unique<os::TaskTypeRegistry>();
-  if (auto s = register_scenario_task_types(*sys->types_, devices, options.read_program); !s)
-    return kernel::Error{"robot '" + spec.name + "': " + s.error()};
+  if (options.shared_types && !devices.module) {
+    // Its own registry over the shared types: its device tasks' types hold its own devices.
+    sys->types_ = std::make_unique<os::TaskTypeRegistry>(options.shared_types);
+    if (auto s = robot::register_robot_task_types(*sys->types_, device_lookups(devices)); !s)
+      return kernel::Error{"robot '" + spec.name + "': " + s.error()};
+  } else {
+    sys->types_ = std::make_unique<os::TaskTypeRegistry>();
+    if (auto s = register_scenario_task_types(*sys->types_, devices, options.read_program); !s)
+      return kernel::Error{"robot '" + spec.name + "': " + s.error()};
+  }
   sys->node_ = std::make_unique<os::Node>(
       executor, os::NodeConfig{spec.name, options.seed, options.log_capacity, sys->types_.get()});
   os::Node& node = *sys->node_;

@@ -75,6 +75,11 @@ struct RobotSystemOptions {
   // robot, an event's task): the optional ones (pose, ground, connector_<name>) are made only
   // when used, each being a task woken every period.
   std::vector<std::string> named_device_tasks;
+  // The types every identical robot shares (shared_scenario_task_types, made with the same
+  // read_program): the robot's own registry then holds only its device task types, over these.
+  // Null: the robot registers every type itself. Ignored for a 3D module (its controllers' types
+  // hold the module's devices).
+  std::shared_ptr<const os::TaskTypeRegistry> shared_types;
 };
 
 // The port layouts of device task `task` (kIrTaskName, kGroundTaskName, kHingeStateTaskName and
@@ -91,6 +96,12 @@ os::PortDeclaration device_task_ports(std::string_view task);
 // one_plus_one).
 kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, RobotDevices devices,
                                             ProgramReader read_program);
+
+// The control and evo layers' types of a 2D robot (those of register_scenario_task_types that hold
+// nothing of one robot), in a registry that every robot of a session may share read-only
+// (RobotSystemOptions::shared_types): one copy of their schemas and factories instead of one per
+// robot.
+kernel::Result<std::shared_ptr<const os::TaskTypeRegistry>> shared_scenario_task_types(ProgramReader read_program);
 
 class RobotSystem;
 // The robot named `name` among `robots`, or null; the first cycle of answers one of their nodes

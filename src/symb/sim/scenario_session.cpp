@@ -38,8 +38,12 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
     s->radio_ = std::move(radio).value();
     s->radio_->attach(*s->runner_);
   }
+  // One copy of the types that hold nothing of one robot, for every robot (robot_system.hpp).
+  auto shared_types = shared_scenario_task_types(read);
+  if (!shared_types) return kernel::Error{scenario.file + ": " + shared_types.error()};
   for (std::size_t i = 0; i < scenario.robots.size(); ++i) {
     RobotSystemOptions ro;
+    ro.shared_types = shared_types.value();
     ro.control_period = scenario.control_period;
     ro.seed = robot_node_seed(s->seed_, i);
     ro.log_capacity = options.log_capacity;
