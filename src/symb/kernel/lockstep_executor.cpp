@@ -81,6 +81,12 @@ std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
 std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {
   assert(!running_ && "run_until and run_until_idle are not reentrant");
   running_ = true;
+  // An exception from a handler (rethrown by the pool) leaves the executor usable for the caller
+  // to tear down.
+  struct NotRunning {
+    bool& running;
+    ~NotRunning() { running = false; }
+  } not_running{running_};
   const auto started = std::chrono::steady_clock::now();
   stop_requested_.store(false, std::memory_order_relaxed);
   const auto stopped = [&] { return stop_requested_.load(std::memory_order_relaxed); };
@@ -115,7 +121,6 @@ std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {
     if (due_by(main_, limit) || lanes_pending_by(until_idle ? main_.now() : limit)) continue;
     break;
   }
-  running_ = false;
   stats_.run_wall += std::chrono::steady_clock::now() - started;
   return handled;
 }
