@@ -33,6 +33,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -40,8 +41,6 @@
 #include <enki/robots/thymio2/Thymio2.h>
 
 #include "symb/apps/run/scenario_run.hpp"
-#include "symb/control/mdl2e/compiler.hpp"
-#include "symb/control/mdl2e/interpreter.hpp"
 #include "symb/kernel/random_stream.hpp"
 #include "symb/sim/enki_world.hpp"
 #include "symb/sim/maze_generator.hpp"
@@ -50,10 +49,13 @@
 #include "symb/sim/world.hpp"
 
 #include "bench_report.hpp"
+#include "raw_world_mdl2e.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
+using symb::bench::RawWorldMdl2e;
+using symb::bench::thread_cpu_seconds;
 using symb::sim::IrReadings;
 using symb::sim::kIrCount;
 using symb::sim::kIrMax;
@@ -68,14 +70,6 @@ constexpr std::uint64_t kSeed = 1;
 // on the reference box, short enough that three repetitions of everything take about a minute.
 double simulated_seconds(int robots) { return robots <= 1 ? 600 : robots <= 10 ? 120 : 20; }
 int steps_for(int robots) { return static_cast<int>(std::lround(simulated_seconds(robots) / kDt)); }
-
-// CPU time of the running thread: on a shared box wall time counts other processes' turns
-// against whichever side they interrupted. Every side here runs on the calling thread.
-double thread_cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
 
 struct BenchWorld {
   symb::sim::Maze maze;
@@ -170,88 +164,13 @@ const symb::sim::Scenario& bench_scenario(int robots) {
   return cache.emplace(robots, std::move(sc).value()).first->second;
 }
 
-// The maze demo's controller, compiled once per process as the mdl2e task type does per robot.
-std::shared_ptr<const symb::control::mdl2e::Program> maze_program() {
-  static const std::shared_ptr<const symb::control::mdl2e::Program> program = [] {
-    std::ifstream in(fs::path(SYMB_SCENARIO_DIR) / "mdl2e" / "obstacle_avoidance.mdl2e");
-    std::ostringstream text;
-    text << in.rdbuf();
-    auto compiled = symb::control::mdl2e::compile_source(text.str());
-    if (!compiled) throw std::runtime_error("obstacle_avoidance.mdl2e: " + compiled.error());
-    return std::make_shared<const symb::control::mdl2e::Program>(std::move(compiled).value());
-  }();
-  return program;
+template <class Raw>
+Raw make_raw(int robots) {
+  if constexpr (std::is_same_v<Raw, RawWorldMdl2e>)
+    return Raw(bench_scenario(robots));
+  else
+    return Raw(robots);
 }
-
-// A wheel speed as the controller task sends it: finite, within +-500 units, as a float.
-float wheel_units(double v) {
-  if (!std::isfinite(v)) return 0.0f;
-  return static_cast<float>(std::clamp(v, -double{symb::sim::kWheelUnitsMax}, double{symb::sim::kWheelUnitsMax}));
-}
-
-// The same world, sensor model and controller as `symb run`, with no framework: EnkiWorld stepped
-// in a loop and one MDL2e interpreter per robot, stepped as the mdl2e task steps it under the
-// type's default priorities (mdl2e_task.hpp): at each period's instant its tick comes before the
-// sensor task's new vector, so the interpreter steps on the previous vector, then again on the new
-// one; the wheels take both commands and the next world step uses the last. Same seed, same
-// steps: the robots end where `symb run`'s end, bit for bit (checked in main).
-class RawWorldMdl2e {
- public:
-  // The world as `symb run` reads it from the bench's scenario file (the headings come back from
-  // degrees with their own rounding).
-  explicit RawWorldMdl2e(int robots) : program_(maze_program()) {
-    const symb::sim::Scenario& sc = bench_scenario(robots);
-    symb::sim::EnkiWorld::Options wo;
-    wo.max_robots = std::max<std::size_t>(sc.robots.size(), 1);
-    world_ = std::make_unique<symb::sim::EnkiWorld>(sc.world, sc.seed, wo);
-    for (const symb::sim::RobotSpec& r : sc.robots) world_->add_robot(r.name, r.kind, r.start);
-    robots_.reserve(sc.robots.size());
-    for (std::size_t i = 0; i < sc.robots.size(); ++i)
-      robots_.push_back(Robot{symb::control::mdl2e::Interpreter(*program_), {}, {}});
-  }
-
-  void step() {
-    for (std::size_t i = 0; i < robots_.size(); ++i) world_->set_wheels(i, robots_[i].wheels[0], robots_[i].wheels[1]);
-    world_->step(kDt);
-    ++steps_;
-    const symb::kernel::Time now{std::chrono::microseconds(30'000 * steps_)};
-    for (std::size_t i = 0; i < robots_.size(); ++i) {
-      Robot& r = robots_[i];
-      if (steps_ > 1) command(r, now);  // the tick, on the previous vector
-      const IrReadings ir = world_->ir(i);
-      for (std::size_t k = 0; k < kIrCount; ++k) r.sensors[k] = std::clamp(ir[k], 0.0f, static_cast<float>(kIrMax));
-      command(r, now);  // the new vector
-    }
-  }
-
-  symb::sim::Pose pose(std::size_t robot) const { return world_->state(robot).pose; }
-
-  double checksum() const {
-    double s = 0;
-    for (std::size_t i = 0; i < robots_.size(); ++i) s += pose(i).x + pose(i).y;
-    return s;
-  }
-
- private:
-  struct Robot {
-    symb::control::mdl2e::Interpreter interpreter;
-    std::array<double, kIrCount> sensors;
-    std::array<double, 2> wheels;  // cm/s, for the next world step
-  };
-
-  // One interpreter step and its command as the wheels apply it: +-500 units as a float, in cm/s.
-  static void command(Robot& r, symb::kernel::Time now) {
-    const symb::control::mdl2e::Output out = r.interpreter.step(now, {r.sensors, 0});
-    const float left = out.running ? wheel_units(out.left) : 0.0f;
-    const float right = out.running ? wheel_units(out.right) : 0.0f;
-    r.wheels = {symb::sim::wheel_units_to_cm_per_s(left), symb::sim::wheel_units_to_cm_per_s(right)};
-  }
-
-  std::shared_ptr<const symb::control::mdl2e::Program> program_;
-  std::unique_ptr<symb::sim::EnkiWorld> world_;
-  std::vector<Robot> robots_;
-  std::int64_t steps_ = 0;
-};
 
 template <class Raw>
 void run_raw(benchmark::State& state) {
@@ -262,7 +181,7 @@ void run_raw(benchmark::State& state) {
   for (auto _ : state) {
     Enki::random.setSeed(static_cast<unsigned long>(kSeed));
     std::srand(static_cast<unsigned>(kSeed));
-    Raw raw(robots);
+    Raw raw = make_raw<Raw>(robots);
     for (int i = 0; i < kWarmupSteps; ++i) raw.step();
     const double t0 = thread_cpu_seconds();
     for (int i = 0; i < steps; ++i) raw.step();
@@ -351,7 +270,7 @@ bool same_trajectories(int robots, std::string& why) {
     why = result.error();
     return false;
   }
-  RawWorldMdl2e raw(robots);
+  RawWorldMdl2e raw(bench_scenario(robots));
   for (std::uint64_t i = 0; i < result.value().steps; ++i) raw.step();
   for (std::size_t i = 0; i < result.value().robots.size(); ++i) {
     const symb::sim::Pose a = raw.pose(i), b = result.value().robots[i].end;
