@@ -4,7 +4,7 @@
 //   raw Enki    sim::EnkiWorld stepped in a loop, one mdl2e::Interpreter per robot called directly
 //               (no node, task, hook or executor), one thread: the paper's engine as a person
 //               would drive it without the framework. Enki's collision loop is quadratic, so at
-//               10,000 robots it runs a handful of steps only (a second a step).
+//               1,000 and 10,000 robots it runs 100 and 3 steps only.
 //   raw Box2D   the same loop on sim::Box2DWorld (Box2D 2.4 and the IR on a spatial grid), one
 //               thread: the baseline of the framework's overhead.
 //   symb run    the whole stack: apps::run::run_scenario on the box2d engine, the lockstep
@@ -68,9 +68,10 @@ double wall_seconds() {
 
 // Simulated seconds per measured run: each side runs for one to a few seconds of wall clock.
 double simulated_seconds(int robots) { return robots <= 100 ? 60 : robots <= 1000 ? 20 : 4; }
-// Raw Enki at 10,000 robots takes about a second a step: a few steps tell its rate.
+// Raw Enki's step is quadratic: about 80 ms at 1,000 robots and seconds at 10,000, so its rate
+// there comes from a few steps.
 int raw_enki_steps(int robots) {
-  return robots >= 10000 ? 3 : static_cast<int>(std::lround(simulated_seconds(robots) / 0.03));
+  return robots >= 10000 ? 3 : robots >= 1000 ? 100 : static_cast<int>(std::lround(simulated_seconds(robots) / 0.03));
 }
 
 fs::path scenario_dir() { return fs::temp_directory_path() / ("symb_swarm_bench_" + std::to_string(::getpid())); }
@@ -95,8 +96,8 @@ fs::path write_scenario(int robots) {
       if (bx % 4 == 0)
         y << "    - [" << x << ", " << y0 << ", " << x << ", " << y0 + kBlock / 2 << "]\n";
       else
-        y << "    - [" << x - kBlock / 4 << ", " << y0 + kBlock / 4 << ", " << x + kBlock / 4 << ", "
-          << y0 + kBlock / 4 << "]\n";
+        y << "    - [" << x - kBlock / 4 << ", " << y0 + kBlock / 4 << ", " << x + kBlock / 4 << ", " << y0 + kBlock / 4
+          << "]\n";
     }
   y << "robots:\n  - name: t\n    count: " << robots << "\n    start: random\n"
     << "    tasks:\n      - name: controller\n        type: mdl2e\n"
@@ -119,7 +120,7 @@ void run_raw(benchmark::State& state, symb::sim::Engine2d engine) {
   const int robots = static_cast<int>(state.range(0));
   const symb::sim::Scenario& sc = scenario(robots);
   const int steps = engine == symb::sim::Engine2d::kEnki ? raw_enki_steps(robots)
-                                                             : static_cast<int>(simulated_seconds(robots) / 0.03);
+                                                         : static_cast<int>(simulated_seconds(robots) / 0.03);
   double sum = 0;
   for (auto _ : state) {
     RawWorldMdl2e raw(sc, engine);
@@ -197,7 +198,8 @@ int main(int argc, char** argv) {
   std::error_code ignored;
   fs::remove_all(scenario_dir(), ignored);
 
-  std::printf("\nlarge swarms, equal density (4,000 cm^2 a robot), MDL2e controllers, dt 30 ms, median of repetitions\n");
+  std::printf(
+      "\nlarge swarms, equal density (4,000 cm^2 a robot), MDL2e controllers, dt 30 ms, median of repetitions\n");
   std::printf("%7s %10s %10s %18s %14s %16s %16s\n", "robots", "raw Enki", "raw Box2D", "symb run (2 thr)",
               "vs raw Box2D", "CPU s / sim s", "heap / robot");
   std::map<int, double> rtf, cpu;

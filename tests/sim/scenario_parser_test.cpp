@@ -91,11 +91,13 @@ TEST(ShippedScenarios, AllParseAndNameTheirFile) {
     EXPECT_EQ(fs::path(sc->base_dir), fs::path(f).parent_path());
     EXPECT_FALSE(sc->description.empty());
     if (sc->world_kind == WorldKind::kMujoco) continue;  // no arena: organism_session_test runs them
-    EXPECT_GE(sc->world.width, 150);
-    EXPECT_LE(sc->world.width, 300);
-    EXPECT_GE(sc->world.height, 150);
-    EXPECT_LE(sc->world.height, 300);
     ASSERT_FALSE(sc->robots.empty());
+    // Thymio-sized rooms, or a large swarm's floor at the benchmarks' density (4,000 cm^2 a robot).
+    EXPECT_GE(sc->world.width, 150);
+    EXPECT_GE(sc->world.height, 150);
+    const bool room = sc->world.width <= 300 && sc->world.height <= 300;
+    const double per_robot = sc->world.width * sc->world.height / static_cast<double>(sc->robots.size());
+    EXPECT_TRUE(room || (sc->world.engine == Engine2d::kBox2d && per_robot <= 4000)) << per_robot;
     // The MDL2e demos (the other controllers' scenarios are checked by their own tests).
     if (sc->robots[0].tasks.empty() || sc->robots[0].tasks[0].type != "mdl2e") continue;
     ++mdl2e_scenarios;

@@ -88,6 +88,14 @@ class Executor {
   virtual Executor& lane(std::size_t /*index*/) { return *this; }
   // Threads for a world's per-robot work between its steps, or null (do it serially).
   virtual ParallelFor* parallel() { return nullptr; }
+  // Calls fn(i) for i in [0, n), each call free to act on lane(i)'s nodes as that lane's own
+  // context would (a simulated device publishing to its robot). Only from this executor's own
+  // context, while its lanes are idle, and fn(i) must touch no lane but lane(i): then an executor
+  // whose lanes run on several threads may spread the calls over them, and what each lane sees
+  // is the same as in order. Default: in order, on the calling thread.
+  virtual void for_each_lane(std::size_t n, const std::function<void(std::size_t)>& fn) {
+    for (std::size_t i = 0; i < n; ++i) fn(i);
+  }
 };
 
 }  // namespace symb::kernel

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <thread>
 
 namespace symb::kernel {
 
@@ -19,6 +20,24 @@ Executor& LockstepExecutor::lane(std::size_t index) {
     lanes_.push_back(std::move(lane));
   }
   return *lanes_[index];
+}
+
+void LockstepExecutor::for_each_lane(std::size_t n, const std::function<void(std::size_t)>& fn) {
+  assert(main_.on_own_context() || !running_);
+  const std::size_t with_lane = std::min(n, lanes_.size());
+  pool_.run(with_lane, [&](std::size_t begin, std::size_t end) {
+    const std::thread::id self = std::this_thread::get_id();
+    for (std::size_t i = begin; i < end; ++i) {
+      VirtualTimeExecutor& lane = *lanes_[i];
+      lane.set_guest(self);
+      struct Leave {
+        VirtualTimeExecutor& lane;
+        ~Leave() { lane.set_guest(std::thread::id{}); }
+      } leave{lane};
+      fn(i);
+    }
+  });
+  for (std::size_t i = with_lane; i < n; ++i) fn(i);
 }
 
 void LockstepExecutor::stop() {

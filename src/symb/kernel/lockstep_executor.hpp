@@ -60,6 +60,9 @@ class LockstepExecutor final : public Executor {
   // Lane `index`, made on first use with its clock at now().
   Executor& lane(std::size_t index) override;
   ParallelFor* parallel() override { return &pool_; }
+  // On the worker pool: each call's thread is lane i's guest (VirtualTimeExecutor::set_guest) for
+  // the call. Calls for indices without a lane run after the others, on the calling thread.
+  void for_each_lane(std::size_t n, const std::function<void(std::size_t)>& fn) override;
 
   // Handles every event (main lane and lanes) up to and including `until`, then sets every clock
   // to `until`. Returns the number of events handled. stop() from a main-lane handler returns

@@ -33,13 +33,18 @@ class VirtualTimeExecutor final : public Executor {
   bool on_own_context() const override {
     const std::thread::id self = std::this_thread::get_id();
     return runner_.load(std::memory_order_relaxed) == self ||
-           (host_ != nullptr && host_->runner_.load(std::memory_order_relaxed) == self);
+           (host_ != nullptr && host_->runner_.load(std::memory_order_relaxed) == self) ||
+           guest_.load(std::memory_order_relaxed) == self;
   }
   // Lets the thread inside `host`'s run_*() act as this executor's own context. For an executor
   // that runs this one only at moments when `host` is not running (a lane of a lockstep executor,
   // whose main lane is the host): then the host's handlers may make this executor's nodes' calls
   // directly, as their own handlers would, instead of injecting them. Null: no host.
   void set_host(const VirtualTimeExecutor* host) { host_ = host; }
+  // Lets `guest` act as this executor's own context until it is reset (an empty id): for a
+  // worker of a lockstep executor's for_each_lane(), which calls into this lane alone while every
+  // lane is idle.
+  void set_guest(std::thread::id guest) { guest_.store(guest, std::memory_order_relaxed); }
   // Runs the injected work now (run_*() also does, between events). Returns how much ran.
   std::size_t run_injected();
   // Waits up to `timeout` of real time for injected work, then runs it: lets a caller pace a
@@ -111,6 +116,7 @@ class VirtualTimeExecutor final : public Executor {
   std::atomic<std::thread::id> runner_{};
   bool stop_requested_ = false;
   const VirtualTimeExecutor* host_ = nullptr;
+  std::atomic<std::thread::id> guest_{};
 };
 
 }  // namespace symb::kernel

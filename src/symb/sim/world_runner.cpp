@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "symb/kernel/parallel_for.hpp"
+
 namespace symb::sim {
 
 WorldRunner::WorldRunner(kernel::Executor& executor, World& world, Options options)
@@ -56,20 +58,29 @@ kernel::Status WorldRunner::step_once(kernel::Time now) {
     world_.step(dt_);
     record_.step = world_.steps();
     record_.time = now;
-    for (std::size_t i = 0; i < record_.robots.size(); ++i) {
-      record_.robots[i].state = world_.state(i);
-      record_.robots[i].ir = world_.ir(i);
-      record_.robots[i].ground = ground_readings(world_.spec(), record_.robots[i].state.pose);
-    }
+    // Each robot's record from the world's const reads alone: independent jobs.
+    const auto fill = [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        RobotStep& r = record_.robots[i];
+        r.state = world_.state(i);
+        r.ir = world_.ir(i);
+        r.ground = ground_readings(world_.spec(), r.state.pose);
+      }
+    };
+    if (kernel::ParallelFor* parallel = executor().parallel())
+      parallel->run(record_.robots.size(), fill);
+    else
+      fill(0, record_.robots.size());
   }
   // Outside the world lock: under the thread executor this runs the sensor tasks' injected work
-  // right here, and a handler further down the chain may well look at the world.
-  for (std::size_t i = 0; i < ir_.size(); ++i) {
+  // right here, and a handler further down the chain may well look at the world. Robot i's
+  // devices feed a node on lane i, so the publishing may be spread over the lanes' threads.
+  executor().for_each_lane(ir_.size(), [&](std::size_t i) {
     const RobotStep& r = record_.robots[i];
     ir_[i]->publish_readings(r.ir, now);
     if (pose_[i]->has_listener()) pose_[i]->publish_pose(r.state.pose, now);
     if (ground_[i]->has_listener()) ground_[i]->publish_readings(r.ground, now);
-  }
+  });
   // One writer (this handler): a plain store, not a locked read-modify-write per step.
   steps_.store(steps_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   if (!has_observers_.load(std::memory_order_acquire)) return {};

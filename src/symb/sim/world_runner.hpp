@@ -19,6 +19,9 @@
 // notification is posted into the robot's idle lane at the step's instant t, the lane runs the
 // chain in its window [t, t + period) (in parallel with the other lanes), and step k + 1 at
 // t + period reads the wheels after every window has closed: the same instants, so the same run.
+// Robot i's devices must feed a node on executor.lane(i) (ScenarioSession builds them so): the
+// runner fills the step's records on the executor's threads (parallel()) and publishes robot i's
+// readings through for_each_lane(), which may hand lane i to another thread for the call.
 // Under the ThreadExecutor everything happens in real time and the same chain takes as long as
 // it takes.
 //

@@ -29,7 +29,7 @@ constexpr OptionSpec kOptions[] = {
     {"--seed", "S", "seed, unsigned 64-bit (default: the scenario's)"},
     {"--duration", "D", "simulated time: 60s, 10min, ... (default: the scenario's)"},
     {"--realtime", "", "run on OS threads against the wall clock (not deterministic)"},
-    {"--threads", "N", "2D: threads running the robots' nodes, 1-64 (default 1); the same run for any N"},
+    {"--threads", "N", "2D: threads running the robots' nodes, 1-64 (default: 1, one per core from 500 robots); the same run for any N"},
     {"--speed", "X", "virtual time at X times the wall clock (default: as fast as possible)"},
     {"--shell", "WHERE", "open a robot's command shell while it runs: stdio, or tcp:PORT / tcp:HOST:PORT"},
     {"--shell-robot", "NAME", "the robot whose shell it is (default: the first)"},

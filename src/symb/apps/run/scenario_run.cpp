@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <thread>
 
 #include "symb/apps/cli_args.hpp"
 #include "symb/apps/run/maze_svg.hpp"
@@ -109,6 +110,11 @@ class OrderedProbes {
 
 }  // namespace
 
+unsigned default_threads(std::size_t robots) {
+  if (robots < kParallelRobots) return 1;
+  return std::clamp(std::thread::hardware_concurrency(), 1u, 64u);
+}
+
 kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   auto loaded = sim::load_scenario(options.scenario_path);
   if (!loaded) return Error{loaded.error()};
@@ -164,7 +170,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     virtual_time = v.get();
     executor = std::move(v);
   } else {
-    result.threads = options.threads == 0 ? kDefaultThreads : options.threads;
+    result.threads = options.threads == 0 ? default_threads(scenario.robots.size()) : options.threads;
     auto l = std::make_unique<kernel::LockstepExecutor>(
         kernel::LockstepExecutor::Options{.threads = result.threads, .quantum = scenario.control_period});
     lockstep = l.get();

@@ -16,6 +16,7 @@
 // A 3D scenario writes its own set (organism_run.hpp, organism_recorder.hpp; docs/run.md).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -55,7 +56,7 @@ struct RunOptions {
   std::optional<std::filesystem::path> out_under;  // without out_dir: write into out_under/<scenario name>
   bool realtime = false;
   // Virtual time, 2D only: worker threads running the robots' nodes between world steps
-  // (kernel::LockstepExecutor; the run is the same for any number). 0: kDefaultThreads.
+  // (kernel::LockstepExecutor; the run is the same for any number). 0: default_threads().
   unsigned threads = 0;
   // Virtual time only: 0 runs as fast as possible; s > 0 keeps simulated time at s times the wall
   // clock (a shell needs this: otherwise the run is over before anyone could type).
@@ -77,8 +78,12 @@ struct RunOptions {
   std::function<bool()> stop_requested;
 };
 
-// Worker threads of a 2D run when none are asked for.
-inline constexpr unsigned kDefaultThreads = 1;
+// Worker threads of a 2D run when none are asked for: one per core from kParallelRobots robots
+// on, one below. The result is the same either way; measured on the 2-core reference box, a
+// second thread makes 1,000 robots 1.4 times faster and 100 robots 1.4 times slower (waking it
+// four times a step costs more than the few microseconds of work it takes over).
+inline constexpr std::size_t kParallelRobots = 500;
+unsigned default_threads(std::size_t robots);
 
 struct RunResult {
   std::string scenario;
