@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -51,6 +52,16 @@ inline std::shared_ptr<const control::mdl2e::Program> maze_program() {
     return std::make_shared<const control::mdl2e::Program>(std::move(compiled).value());
   }();
   return program;
+}
+
+// The scenario in `file`, parsed as `symb run` parses it, once per process and file.
+inline const sim::Scenario& parsed_scenario(const std::filesystem::path& file) {
+  static std::map<std::string, sim::Scenario> cache;
+  auto it = cache.find(file.string());
+  if (it != cache.end()) return it->second;
+  auto sc = sim::load_scenario(file.string());
+  if (!sc) throw std::runtime_error(sc.error());
+  return cache.emplace(file.string(), std::move(sc).value()).first->second;
 }
 
 class RawWorldMdl2e {

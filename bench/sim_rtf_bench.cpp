@@ -155,14 +155,7 @@ class RawEnki {
 fs::path write_scenario(int robots);
 
 // The bench's scenario file for `robots`, parsed as `symb run` parses it.
-const symb::sim::Scenario& bench_scenario(int robots) {
-  static std::map<int, symb::sim::Scenario> cache;
-  auto it = cache.find(robots);
-  if (it != cache.end()) return it->second;
-  auto sc = symb::sim::load_scenario(write_scenario(robots).string());
-  if (!sc) throw std::runtime_error(sc.error());
-  return cache.emplace(robots, std::move(sc).value()).first->second;
-}
+const symb::sim::Scenario& bench_scenario(int robots) { return symb::bench::parsed_scenario(write_scenario(robots)); }
 
 template <class Raw>
 Raw make_raw(int robots) {

@@ -107,14 +107,7 @@ fs::path write_scenario(int robots) {
   return file;
 }
 
-const symb::sim::Scenario& scenario(int robots) {
-  static std::map<int, symb::sim::Scenario> cache;
-  auto it = cache.find(robots);
-  if (it != cache.end()) return it->second;
-  auto sc = symb::sim::load_scenario(write_scenario(robots).string());
-  if (!sc) throw std::runtime_error(sc.error());
-  return cache.emplace(robots, std::move(sc).value()).first->second;
-}
+const symb::sim::Scenario& scenario(int robots) { return symb::bench::parsed_scenario(write_scenario(robots)); }
 
 void run_raw(benchmark::State& state, symb::sim::Engine2d engine) {
   const int robots = static_cast<int>(state.range(0));
