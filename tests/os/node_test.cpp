@@ -2,6 +2,8 @@
 
 #include <memory>
 #include <span>
+#include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -252,6 +254,95 @@ TEST(Payload, CopiesAndMovesKeepTheNumbersInUseAndShareTheBlob) {
   Payload f;
   f = e;
   EXPECT_EQ(f.numbers().size(), Payload::kInlineValues);
+}
+
+// Records notifications and messages in the order the node hands them over, and what it sends
+// from on_notify (which starts a chain of its own, as a tick does).
+class NotifiedTask : public Task {
+ public:
+  std::vector<std::string> seen;
+
+ protected:
+  void on_notify() override {
+    seen.push_back("notify");
+    send(0, {1.0f});
+  }
+  void on_message(const Message& m) override { seen.push_back("message " + std::to_string(m.numbers()[0])); }
+};
+
+TEST(Node, NotifyWakesATaskOnceWithoutAMessage) {
+  kernel::VirtualTimeExecutor ex;
+  Node node(ex, {"robot", 1});
+  auto task = std::make_unique<NotifiedTask>();
+  NotifiedTask* t = task.get();
+  const TaskId id = *node.create("dev", std::move(task));
+  auto sink = std::make_unique<Collector>();
+  Collector* c = sink.get();
+  const TaskId sink_id = *node.create("sink", std::move(sink));
+  ASSERT_TRUE(node.hook(id, sink_id));
+  ex.run_until_idle();
+
+  // Three notifications and a message before the task runs: one on_notify, first, then the message.
+  ASSERT_TRUE(node.notify(id));
+  Message m;
+  m.payload = Payload{7.0f};
+  ASSERT_TRUE(node.post(id, m));
+  ASSERT_TRUE(node.notify(id));
+  ASSERT_TRUE(node.notify(id));
+  ex.run_until_idle();
+  EXPECT_EQ(t->seen, (std::vector<std::string>{"notify", "message 7.000000"}));
+  // Nothing was queued for a notification: only the posted message is in the task's traffic.
+  EXPECT_EQ(node.info(id)->traffic.attempted, 1u);
+  EXPECT_EQ(node.info(id)->traffic.delivered, 1u);
+  ASSERT_EQ(c->count(), 1u);
+  EXPECT_EQ(node.longest_chain(), 0u);  // the send from on_notify started a chain: 0 hops
+
+  // Suspended, a notification waits for resume; it is not lost and not doubled.
+  ASSERT_TRUE(node.suspend(id));
+  ASSERT_TRUE(node.notify(id));
+  ASSERT_TRUE(node.notify(id));
+  ex.run_until_idle();
+  EXPECT_EQ(t->seen.size(), 2u);
+  ASSERT_TRUE(node.resume(id));
+  ex.run_until_idle();
+  EXPECT_EQ(t->seen.size(), 3u);
+  EXPECT_EQ(t->seen.back(), "notify");
+
+  // A task not started yet gets it when it starts.
+  auto later = std::make_unique<NotifiedTask>();
+  NotifiedTask* l = later.get();
+  const TaskId later_id = *node.create("later", std::move(later), {.autostart = false});
+  ASSERT_TRUE(node.notify(later_id));
+  ex.run_until_idle();
+  EXPECT_TRUE(l->seen.empty());
+  ASSERT_TRUE(node.start(later_id));
+  ex.run_until_idle();
+  EXPECT_EQ(l->seen, std::vector<std::string>{"notify"});
+
+  // An unknown or removed task is an error, not a crash.
+  ASSERT_TRUE(node.remove(later_id));
+  const auto gone = node.notify(later_id);
+  ASSERT_FALSE(gone);
+  EXPECT_NE(gone.error().find("has no task"), std::string::npos);
+  EXPECT_FALSE(node.notify(TaskId{}));
+}
+
+TEST(Node, NotifyFromAnotherThreadUnderTheThreadExecutor) {
+  kernel::ThreadExecutor ex;
+  Node node(ex, {"robot", 1});
+  auto sink = std::make_unique<Collector>();
+  Collector* c = sink.get();
+  auto task = std::make_unique<NotifiedTask>();
+  const TaskId id = *node.create("dev", std::move(task));
+  const TaskId sink_id = *node.create("sink", std::move(sink));
+  ASSERT_TRUE(node.hook(id, sink_id, {.policy = QueuePolicy::kRefuse}));
+  // Each notification is followed by waiting for its send: every one must run on_notify.
+  for (int i = 0; i < 50; ++i) {
+    ASSERT_TRUE(node.notify(id));
+    for (int spin = 0; spin < 20000 && c->count() < static_cast<std::size_t>(i + 1); ++spin)
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
+    ASSERT_EQ(c->count(), static_cast<std::size_t>(i + 1));
+  }
 }
 
 }  // namespace

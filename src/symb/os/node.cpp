@@ -24,13 +24,13 @@ std::uint64_t fnv1a(std::string_view s) {
 
 std::string id_text(TaskId id) { return "#" + std::to_string(id.index) + "." + std::to_string(id.generation); }
 
-// A task that can run again (started, resumed) is woken for the messages queued meanwhile, unless
-// a wake-up is pending already. Wakes outside the inbox lock.
+// A task that can run again (started, resumed) is woken for the messages queued (and the
+// notification made) meanwhile, unless a wake-up is pending already. Wakes outside the inbox lock.
 void wake_if_queued(detail::TaskRecord& r) {
   kernel::ActivitySlot* wake = nullptr;
   {
     std::lock_guard in(r.in_mu);
-    if (!r.queue.empty() && !r.wake_pending) {
+    if ((!r.queue.empty() || r.notified) && !r.wake_pending) {
       r.wake_pending = true;
       wake = r.slot;
     }
@@ -115,11 +115,11 @@ void TaskRecord::on_activity_start() {
 void TaskRecord::apply_pending_parameters() {
   // `params` is set before the task starts and never replaced, so this unlocked test is safe
   // and spares the common case (no parameters) a lock per batch.
-  if (!params || !params->any_pending.load(std::memory_order_acquire)) return;
+  if (!params_pending.load(std::memory_order_acquire)) return;
   std::vector<std::pair<std::string, ParamValue>> pending;
   {
     std::lock_guard lock(in_mu);
-    params->any_pending.store(false, std::memory_order_relaxed);
+    params_pending.store(false, std::memory_order_relaxed);
     if (params->pending.empty()) return;
     pending.swap(params->pending);
   }
@@ -141,21 +141,35 @@ void TaskRecord::on_activity_input() {
   // meanwhile). Its payload's numbers are left unset: only the ones a message carries are copied in.
   Message handling{.source = {}, .port = 0, .hops = 0, .edge = 0, .time = {}, .payload = Payload(Payload::kUnset)};
   for (;;) {
+    bool notification = false;
     {
       std::lock_guard lock(in_mu);
-      // A task suspended, faulted or deleted mid-batch leaves the rest queued; whoever resumes it
-      // wakes it again.
-      if (queue.empty() || state.load(std::memory_order_relaxed) != TaskState::kRunning) {
+      // A task suspended, faulted or deleted mid-batch leaves the rest queued (and a notification
+      // due); whoever resumes it wakes it again.
+      if ((queue.empty() && !notified) || state.load(std::memory_order_relaxed) != TaskState::kRunning) {
         wake_pending = false;
         next_hops = 0;
         return;
       }
-      handling = std::move(queue.front());
-      queue.pop();
-      if (InHook* e = in_hook(handling.edge)) {
-        ++e->traffic.delivered;
-        if (!e->hooked) retire_in_hook_if_done(handling.edge);
+      // A notification comes before the messages queued with it: it says that the device's data
+      // is ready, which is what a message it is about to handle may be asking for.
+      if (notified) {
+        notified = false;
+        notification = true;
+      } else {
+        handling = std::move(queue.front());
+        queue.pop();
+        if (InHook* e = in_hook(handling.edge)) {
+          ++e->traffic.delivered;
+          if (!e->hooked) retire_in_hook_if_done(handling.edge);
+        }
       }
+    }
+    if (notification) {
+      // What it sends starts a chain of its own, as from a tick.
+      next_hops = 0;
+      SYMB_GUARDED("on_notify", task->on_notify())
+      continue;
     }
     const Message& m = handling;
     kernel::bump(delivered);
@@ -577,7 +591,7 @@ Status Node::set_parameter(TaskId id, std::string_view param, std::string_view v
     auto v = parse_param_value(*spec, value);
     if (!v) return Error{v.error()};
     r->params->pending.emplace_back(spec->name, std::move(v).value());
-    r->params->any_pending.store(true, std::memory_order_release);
+    r->params_pending.store(true, std::memory_order_release);
     // Wake the task so that it applies the change on its own context soon.
     if (!r->wake_pending && r->slot != nullptr) {
       r->wake_pending = true;
@@ -842,6 +856,23 @@ Status Node::post(TaskId receiver, const Message& message, QueuePolicy policy) {
   bool accepted = false;
   if (kernel::ActivitySlot* wake = r->offer(m, 0, 0, policy, kernel::Duration{0}, &accepted)) wake->wake();
   if (!accepted) return Error{"task '" + r->name + "' did not take the message (queue full or suppressed)"};
+  return {};
+}
+
+Status Node::notify(TaskId receiver) {
+  std::lock_guard lock(mu_);
+  TaskRecord* r = lookup_locked(receiver);
+  if (r == nullptr) return no_task(receiver);
+  kernel::ActivitySlot* wake = nullptr;
+  {
+    std::lock_guard in(r->in_mu);
+    r->notified = true;
+    if (!r->wake_pending && r->slot != nullptr) {
+      r->wake_pending = true;
+      wake = r->slot;
+    }
+  }
+  if (wake != nullptr) wake->wake();
   return {};
 }
 

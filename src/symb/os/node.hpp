@@ -130,6 +130,12 @@ class Node {
   // either way the message is counted like any other.
   kernel::Status post(TaskId receiver, const Message& message, QueuePolicy policy = QueuePolicy::kRefuse);
 
+  // Wakes a task without a message, the way an RTOS's direct-to-task notification does: its
+  // on_notify() runs once on its own context, before the messages queued with it, however many
+  // notifications came first. The cheap way for a device to say that its data is ready (a swarm's
+  // sensors say it thousands of times a step): no message is built, queued or counted.
+  kernel::Status notify(TaskId receiver);
+
   // Runs `fn` on the executor's context (see kernel::Executor::inject). The one Node call that
   // a thread outside the executor (a device reader) may make under every executor. `fn` must
   // not assume the node or any task still exists when it runs: pass handles, not pointers.

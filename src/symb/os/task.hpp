@@ -1,5 +1,5 @@
 // Task: one reactive unit of a robot's control system (the paper's Task class). A task never
-// blocks or sleeps: its node's executor calls its handlers (start, message, tick, stop) one at a
+// blocks or sleeps: its node's executor calls its handlers (start, message, tick, notify, stop) one at a
 // time, on the task's own execution context, and the task answers by sending messages to the
 // tasks hooked to it. State: created -> running <-> suspended -> deleted, or faulted when a
 // handler throws (that task only; the rest of the node goes on).
@@ -84,6 +84,8 @@ class Task {
   virtual void on_start() {}
   virtual void on_message(const Message& /*message*/) {}
   virtual void on_tick() {}
+  // Node::notify woke the task (once for any number of notifications since it last ran).
+  virtual void on_notify() {}
   virtual void on_stop() {}
   // A live parameter (ParamTable's .live()) was just written into the options this task bound
   // (bind_parameters), on this task's own context. Recompute what depends on it here, or refuse

@@ -15,7 +15,7 @@ using kernel::Error;
 // --- Actuator --------------------------------------------------------------------------------------
 
 Actuator::Actuator(std::string name, std::vector<ChannelSpec> channels)
-    : io::Device(std::move(name)), channels_(std::move(channels)) {
+    : io::Device(std::move(name)), channels_(std::move(channels)), ranges_(ranges_of(channels_)) {
   if (auto st = validate_channels(channels_); !st)
     throw std::invalid_argument("actuator '" + this->name() + "': " + st.error());
   output_.resize(channels_.size());
@@ -62,7 +62,7 @@ kernel::Result<std::size_t> Actuator::set(std::span<const float> values) {
     ++stats_.not_open;
     return Error{"actuator '" + name() + "' is closed"};
   }
-  const Conditioned c = condition_sample(channels_, values, staged_);
+  const Conditioned c = condition_sample(ranges_, values, staged_);
   if (!c.ok()) {
     ++stats_.rejected;
     if (c.fault == SampleFault::kWrongCount)

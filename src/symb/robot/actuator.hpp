@@ -76,6 +76,7 @@ class Actuator : public io::Device {
 
  private:
   const std::vector<ChannelSpec> channels_;
+  const std::vector<ChannelRange> ranges_;  // channels_' ranges, packed: what set() reads
   std::atomic<bool> open_{false};
   mutable std::mutex mu_;  // output_, stats_ and the driver's apply()
   std::vector<float> output_;

@@ -42,7 +42,10 @@ const char* to_string(SampleFault f) {
   return "?";
 }
 
-Conditioned condition_sample(std::span<const ChannelSpec> channels, std::span<const float> in, std::span<float> out) {
+namespace {
+
+template <class Channel>
+Conditioned condition(std::span<const Channel> channels, std::span<const float> in, std::span<float> out) {
   Conditioned r;
   if (in.size() != channels.size() || out.size() < channels.size()) {
     r.fault = SampleFault::kWrongCount;
@@ -61,6 +64,23 @@ Conditioned condition_sample(std::span<const ChannelSpec> channels, std::span<co
     if (v != in[i]) ++r.clamped;
     out[i] = v;
   }
+  return r;
+}
+
+}  // namespace
+
+Conditioned condition_sample(std::span<const ChannelSpec> channels, std::span<const float> in, std::span<float> out) {
+  return condition(channels, in, out);
+}
+
+Conditioned condition_sample(std::span<const ChannelRange> ranges, std::span<const float> in, std::span<float> out) {
+  return condition(ranges, in, out);
+}
+
+std::vector<ChannelRange> ranges_of(std::span<const ChannelSpec> channels) {
+  std::vector<ChannelRange> r;
+  r.reserve(channels.size());
+  for (const ChannelSpec& c : channels) r.push_back({c.min, c.max});
   return r;
 }
 

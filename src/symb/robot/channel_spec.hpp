@@ -23,6 +23,19 @@
 
 namespace symb::robot {
 
+// A channel's range alone, which is all that conditioning reads. Devices keep their channels'
+// ranges packed in one array: in a ChannelSpec the two strings put every range on a cache line of
+// its own, and a swarm conditions a reading of each of its thousands of robots every step.
+struct ChannelRange {
+  float min = 0.0f;
+  float max = 0.0f;
+
+  float clamp(float v) const {
+    if (std::isnan(v)) return v;
+    return v < min ? min : (v > max ? max : v);
+  }
+};
+
 struct ChannelSpec {
   std::string name;   // a valid os name: "ir0", "left"
   std::string units;  // "m", "rad/s", "raw", ...
@@ -31,11 +44,10 @@ struct ChannelSpec {
 
   bool contains(float v) const { return v >= min && v <= max; }
   // The nearest value in range; NaN stays NaN (callers reject it).
-  float clamp(float v) const {
-    if (std::isnan(v)) return v;
-    return v < min ? min : (v > max ? max : v);
-  }
+  float clamp(float v) const { return ChannelRange{min, max}.clamp(v); }
 };
+
+std::vector<ChannelRange> ranges_of(std::span<const ChannelSpec> channels);
 
 // "name [min, max] units", for listings and ioctl answers.
 std::string describe(const ChannelSpec& c);
@@ -64,6 +76,7 @@ struct Conditioned {
 // Conditions `in` against `channels` into `out` (which needs room for channels.size() values).
 // On a fault `out` is left as it was, so a caller can keep its previous output.
 Conditioned condition_sample(std::span<const ChannelSpec> channels, std::span<const float> in, std::span<float> out);
+Conditioned condition_sample(std::span<const ChannelRange> ranges, std::span<const float> in, std::span<float> out);
 
 // Applies a range override written as text to a copy of `base`: "" keeps base; "lo:hi" gives every
 // channel that range; "lo:hi,lo:hi,..." gives one range per channel (exactly one per channel).

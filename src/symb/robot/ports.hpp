@@ -16,8 +16,6 @@ inline constexpr os::Port kDataPort = 0;
 inline constexpr os::Port kCommandPort = 1;
 // Goal reports from actuator tasks: accepted, completed, aborted, rejected.
 inline constexpr os::Port kStatusPort = 2;
-// Internal: a device's "new data" notification, posted by a task to itself from outside any task.
-inline constexpr os::Port kWakePort = 0xfffe;
 
 // The message layouts task types declare on their ports (TaskType::inputs, outputs): a hook
 // whose ends disagree on a port is refused at hook time. os::kAnyLayout stands for a device's own

@@ -15,7 +15,10 @@ using kernel::Error;
 // --- Sensor ----------------------------------------------------------------------------------------
 
 Sensor::Sensor(std::string name, std::vector<ChannelSpec> channels, Options options)
-    : io::Device(std::move(name)), channels_(std::move(channels)), mailbox_capacity_(options.mailbox) {
+    : io::Device(std::move(name)),
+      channels_(std::move(channels)),
+      ranges_(ranges_of(channels_)),
+      mailbox_capacity_(options.mailbox) {
   if (auto st = validate_channels(channels_); !st)
     throw std::invalid_argument("sensor '" + this->name() + "': " + st.error());
   if (options.mailbox == 0)
@@ -69,13 +72,13 @@ PublishResult Sensor::publish(std::span<const float> values, std::shared_ptr<con
     ++stats_.not_open;
     return PublishResult::kNotOpen;
   }
-  const Conditioned c = condition_sample(channels_, values, s.values);
+  const Conditioned c = condition_sample(ranges_, values, s.values);
   PublishResult result = PublishResult::kQueued;
   if (!c.ok()) {
     ++stats_.rejected;
     result = PublishResult::kRejected;
   } else {
-    s.count = static_cast<std::uint8_t>(channels_.size());
+    s.count = static_cast<std::uint8_t>(ranges_.size());
     stats_.clamped_values += c.clamped;
     latest_ = s;
     if (!notify_) {
@@ -140,10 +143,10 @@ SensorStats Sensor::take(std::vector<SensorSample>& out) {
 
 // --- SensorTask ------------------------------------------------------------------------------------
 
-// What an injected notification needs to find the task. Owned by the task alone: the injected
-// work holds it weakly, so work still queued in a virtual-time executor after the task is gone
-// does nothing (and so never touches a node that may be gone too).
-struct SensorTask::Link {
+// What a notification needs to find the task. Owned by the task alone: injected work holds it
+// weakly, so work still queued in a virtual-time executor after the task is gone does nothing
+// (and so never touches a node that may be gone too).
+struct SensorTask::Link : std::enable_shared_from_this<Link> {
   os::Node* node = nullptr;
   os::TaskId self;
 };
@@ -180,29 +183,18 @@ void SensorTask::on_start() {
   if (!sensor_->is_open())
     if (auto st = sensor_->open(); !st) log(os::LogLevel::kWarn, st.error());
   seen_ = sensor_->stats();
-  // The notifier runs on the driver's thread with the sensor locked. The node pointer it uses is
-  // valid there: the task detaches in on_stop, under that same lock, before the task (and so
-  // its node) can go away.
-  os::Node* node = &this->node();
-  std::weak_ptr<Link> weak = link_;
-  auto st = sensor_->attach([node, weak, self = id()] {
-    // Keep-newest: the notification must never be refused; at most one is ever in flight.
-    const auto wake = [](os::Node& n, os::TaskId task) {
-      os::Message m;
-      m.port = kWakePort;
-      (void)n.post(task, m, os::QueuePolicy::kKeepNewest);
-    };
-    // A simulated device publishes from a handler on the executor's own thread: the task is
-    // alive there (it detaches under this lock) and the post can be made at once. It is queued
-    // exactly where the injected one would have been, before any later event.
-    if (node->on_own_context()) {
-      wake(*node, self);
+  // The notifier runs on the driver's thread with the sensor locked, and the task detaches in
+  // on_stop under that same lock: while it runs, the link and the node it names are alive. It
+  // captures one pointer, so std::function keeps it without a heap block of its own.
+  auto st = sensor_->attach([link = link_.get()] {
+    // A simulated device publishes on the executor's own context: the notification is made at
+    // once, exactly where the injected one would have run, before any later event.
+    if (link->node->on_own_context()) {
+      (void)link->node->notify(link->self);
       return;
     }
-    node->inject([weak, wake] {
-      auto link = weak.lock();
-      if (!link) return;
-      wake(*link->node, link->self);
+    link->node->inject([weak = link->weak_from_this()] {
+      if (auto alive = weak.lock()) (void)alive->node->notify(alive->self);
     });
   });
   if (!st) {
@@ -217,10 +209,7 @@ void SensorTask::on_stop() {
   attached_ = false;
 }
 
-void SensorTask::on_message(const os::Message& m) {
-  // Only our own notification means anything; someone hooked to us by mistake is ignored.
-  if (m.port == kWakePort && !m.source.valid()) drain();
-}
+void SensorTask::on_notify() { drain(); }
 
 void SensorTask::drain() {
   const SensorStats after = sensor_->take(batch_);

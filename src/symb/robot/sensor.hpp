@@ -10,8 +10,9 @@
 //    queues it and, like an interrupt handler giving a semaphore, notifies the task once; more
 //    samples before the task runs just join the mailbox. A full mailbox drops its oldest sample
 //    (counted): for sensor data only the newest matters.
-//  - The notification goes through Node::inject, the one node call a foreign thread may make
-//    under every executor, and becomes a message the task posts to itself; so the same code runs
+//  - The notification is a Node::notify (no message), made at once when the driver runs on the
+//    executor's own context (a simulated device) and otherwise handed over through Node::inject,
+//    the one node call a foreign thread may make under every executor; so the same code runs
 //    under the thread executor (at once, on the driver's thread) and under the virtual-time one
 //    (between events, on its thread). The task then drains the mailbox on its own context.
 //  - Every counter is exact: published == not_open + rejected + unheard + queued_total, and
@@ -137,7 +138,8 @@ class Sensor : public io::Device {
   SensorStats take(std::vector<SensorSample>& out);
 
   const std::vector<ChannelSpec> channels_;
-  std::mutex open_mu_;  // serialises open/close (and the driver's activate/deactivate)
+  const std::vector<ChannelRange> ranges_;  // channels_' ranges, packed: what publish() reads
+  std::mutex open_mu_;                      // serialises open/close (and the driver's activate/deactivate)
   std::atomic<bool> open_{false};
   // Mirrors `notify_ != nullptr` for has_listener(), which a simulator asks every step.
   std::atomic<bool> listening_{false};
@@ -178,7 +180,7 @@ class SensorTask : public os::Task {
 
  protected:
   void on_start() override;
-  void on_message(const os::Message& m) override;
+  void on_notify() override;
   void on_stop() override;
   kernel::Status on_parameter_changed(std::string_view name) override;
 
