@@ -305,5 +305,37 @@ TEST(LockstepExecutor, RunUntilIdleEndsWhenEveryLaneIsIdle) {
   EXPECT_EQ(ex.pending_events(), 0u);
 }
 
+TEST(LockstepExecutor, WorkBesideTheLanesRunsInTheNextWindowAndBeforeReturning) {
+  LockstepExecutor ex({.threads = 2, .quantum = 30ms});
+  LockstepProbe world(ex), robot(ex.lane(0)), other(ex.lane(1));
+  std::atomic<int> jobs{0};
+  std::vector<int> seen_by_world;  // jobs done, as each world tick sees it
+  world.on_tick = [&] {
+    seen_by_world.push_back(jobs.load());
+    // A job may not run on this context: the tick that asked for it must still see it undone.
+    ex.run_alongside_lanes([&] { jobs.fetch_add(1); });
+    EXPECT_EQ(jobs.load(), static_cast<int>(seen_by_world.size()) - 1);
+    if (world.now_ms() == 90) ex.stop();
+  };
+  int robot_ticks = 0;
+  robot.on_tick = [&] { ++robot_ticks; };
+  ex.lane(0).attach(robot, {0, 10ms, "robot"});
+  ex.lane(1).attach(other, {0, Duration{0}, "other"});
+  ex.attach(world, {100, 30ms, "world"});
+  ex.run_until(Time{200ms});
+  // Each tick found the jobs of every earlier tick done: they ran in the windows between.
+  EXPECT_EQ(seen_by_world, (std::vector<int>{0, 1, 2}));
+  // The run stopped at 90 ms, before another window: the last job still ran before it returned.
+  EXPECT_EQ(ex.now(), Time{90ms});
+  EXPECT_EQ(jobs.load(), 3);
+  EXPECT_EQ(robot_ticks, 8);
+
+  // Every other executor runs the job at once.
+  VirtualTimeExecutor plain;
+  int ran = 0;
+  plain.run_alongside_lanes([&] { ++ran; });
+  EXPECT_EQ(ran, 1);
+}
+
 }  // namespace
 }  // namespace symb::kernel

@@ -96,6 +96,12 @@ class Executor {
   virtual void for_each_lane(std::size_t n, const std::function<void(std::size_t)>& fn) {
     for (std::size_t i = 0; i < n; ++i) fn(i);
   }
+  // Work of this executor's own context that touches nothing a lane's nodes touch (a world's next
+  // physics step, begun while the robots think: sim::World::begin_next_step). An executor whose
+  // lanes run on several threads runs it during their next window, on one of its threads beside
+  // them, and finishes it before the next instant at which its own context runs again, and before
+  // run_*() returns; every other executor runs it at once. Only from this executor's own context.
+  virtual void run_alongside_lanes(std::function<void()> job) { job(); }
 };
 
 }  // namespace symb::kernel

@@ -75,15 +75,31 @@ bool LockstepExecutor::lanes_pending_by(Time t) const {
   return std::any_of(lanes_.begin(), lanes_.end(), [t](const auto& lane) { return due_by(*lane, t); });
 }
 
+void LockstepExecutor::run_alongside_lanes(std::function<void()> job) {
+  assert(main_.on_own_context() || !running_);
+  alongside_.push_back(std::move(job));
+}
+
 std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
-  if (lanes_.empty()) return 0;
+  // The jobs are the first items of the pool's run: the thread that takes them takes fewer lanes.
+  std::vector<std::function<void()>> jobs;
+  jobs.swap(alongside_);
+  if (lanes_.empty()) {
+    for (auto& job : jobs) job();
+    return 0;
+  }
   const auto started = std::chrono::steady_clock::now();
   ++stats_.windows;
   std::atomic<std::uint64_t> handled{0};
-  pool_.run(lanes_.size(), [&](std::size_t begin, std::size_t stop) {
+  const std::size_t first_lane = jobs.size();
+  pool_.run(first_lane + lanes_.size(), [&](std::size_t begin, std::size_t stop) {
     std::uint64_t n = 0;
     for (std::size_t i = begin; i < stop; ++i) {
-      VirtualTimeExecutor& lane = *lanes_[i];
+      if (i < first_lane) {
+        jobs[i]();
+        continue;
+      }
+      VirtualTimeExecutor& lane = *lanes_[i - first_lane];
       if (idle)
         n += lane.run_until_idle(end);
       else if (inclusive)
@@ -139,6 +155,12 @@ std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {
     // What the main lane did at the end (injected work) may have left work at or before it.
     if (due_by(main_, limit) || lanes_pending_by(until_idle ? main_.now() : limit)) continue;
     break;
+  }
+  // A run that stopped before another window still finishes what was to run beside it.
+  while (!alongside_.empty()) {
+    std::vector<std::function<void()>> jobs;
+    jobs.swap(alongside_);
+    for (auto& job : jobs) job();
   }
   stats_.run_wall += std::chrono::steady_clock::now() - started;
   return handled;

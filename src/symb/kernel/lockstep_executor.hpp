@@ -63,6 +63,9 @@ class LockstepExecutor final : public Executor {
   // On the worker pool: each call's thread is lane i's guest (VirtualTimeExecutor::set_guest) for
   // the call. Calls for indices without a lane run after the others, on the calling thread.
   void for_each_lane(std::size_t n, const std::function<void(std::size_t)>& fn) override;
+  // Runs `job` during the next window (B), beside the lanes, as one more item of the worker pool's
+  // run; a run that stops before another window runs it before it returns.
+  void run_alongside_lanes(std::function<void()> job) override;
 
   // Handles every event (main lane and lanes) up to and including `until`, then sets every clock
   // to `until`. Returns the number of events handled. stop() from a main-lane handler returns
@@ -107,6 +110,7 @@ class LockstepExecutor final : public Executor {
   WorkerPool pool_;
   VirtualTimeExecutor main_;
   std::vector<std::unique_ptr<VirtualTimeExecutor>> lanes_;
+  std::vector<std::function<void()>> alongside_;  // run_alongside_lanes(), for the next window
   std::atomic<bool> stop_requested_{false};
   bool running_ = false;
   Stats stats_;

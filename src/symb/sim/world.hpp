@@ -61,6 +61,16 @@ class World {
   virtual IrReadings ir(std::size_t robot) const = 0;
   virtual RobotState state(std::size_t robot) const = 0;
 
+  // Stepping ahead. A world whose step moves each robot with the wheel speeds set before the
+  // previous step (Enki's one-step actuation delay) knows a whole period early how its next step
+  // will move the bodies. begin_next_step(dt), called right after step(dt), does that part (the
+  // physics) at once; the next step(dt) then only makes it visible (poses, contacts, IR). Between
+  // the two, ir(), state() and set_wheels() behave as if nothing had begun, so a runner may move
+  // the physics onto another thread while the robots think (kernel::Executor::
+  // run_alongside_lanes) and get the same run, bit for bit. Default: cannot; begin is a no-op.
+  virtual bool can_step_ahead() const { return false; }
+  virtual void begin_next_step(double /*dt*/) {}
+
   // Threads for the per-robot work of a step (IR sensing), or null for the caller's thread. A
   // backend that uses them gives the same results, bit for bit, as without. The object must
   // outlive the world or be unset first. Default: ignored (everything on the caller's thread).

@@ -81,6 +81,13 @@ kernel::Status WorldRunner::step_once(kernel::Time now) {
     if (pose_[i]->has_listener()) pose_[i]->publish_pose(r.state.pose, now);
     if (ground_[i]->has_listener()) ground_[i]->publish_readings(r.ground, now);
   });
+  // The next step's physics needs nothing the robots are about to decide (their commands act one
+  // step later): under the lockstep executor it runs beside their nodes' window.
+  if (world_.can_step_ahead())
+    executor().run_alongside_lanes([this] {
+      std::lock_guard lock(world_mu_);
+      world_.begin_next_step(dt_);
+    });
   // One writer (this handler): a plain store, not a locked read-modify-write per step.
   steps_.store(steps_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
   if (!has_observers_.load(std::memory_order_acquire)) return {};

@@ -8,6 +8,11 @@
 //   4. hands a StepRecord (poses, IR, wheel speeds, contacts) to the observers (CSV writers,
 //      trajectory pictures, fitness functions).
 //
+// A world that can step ahead (World::can_step_ahead: Box2DWorld) has its next step's physics
+// begun right after the readings are published, through Executor::run_alongside_lanes: under the
+// lockstep executor it runs on one of its threads while the robots' nodes run their window, and
+// the next tick only makes the step visible. The same run, bit for bit.
+//
 // Latency contract: IR published after step k reaches the robot's SensorTask, its controller
 // and its ActuatorSinkTask within the same virtual instant, and the wheel command that results
 // is used by step k + 1: exactly one control period from reading to action, as on a robot that

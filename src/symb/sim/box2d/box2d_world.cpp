@@ -217,13 +217,36 @@ const std::string& Box2DWorld::robot_name(std::size_t robot) const { return robo
 void Box2DWorld::step(double dt) {
   if (!(dt > 0 && dt <= 1))
     throw std::invalid_argument("box2d world: step dt must be in (0, 1] s, got " + std::to_string(dt));
-  move(dt);
+  if (begun_dt_ > 0) {
+    if (dt != begun_dt_)
+      throw std::invalid_argument("box2d world: step of " + std::to_string(dt) + " s after a step of " +
+                                  std::to_string(begun_dt_) + " s was begun");
+    begun_dt_ = 0;
+  } else {
+    advance(dt);
+  }
+  settle();
   read_ir();  // outside the lock: IrModel is this world's own
   ++steps_;
   time_ += dt;
 }
 
-void Box2DWorld::move(double dt) {
+void Box2DWorld::begin_next_step(double dt) {
+  if (!(dt > 0 && dt <= 1))
+    throw std::invalid_argument("box2d world: step dt must be in (0, 1] s, got " + std::to_string(dt));
+  if (begun_dt_ > 0) return;  // begun already: the next step() finishes it
+  // Run whole, the next step would move with the speeds set before the step just made (its
+  // advance() made them the acting ones). When that step was itself begun early, speeds were set
+  // after its advance(): either way the ones to move with are the speeds set so far.
+  for (Robot& r : robots_) {
+    r.acting_left = r.state.left_speed;
+    r.acting_right = r.state.right_speed;
+  }
+  advance(dt);
+  begun_dt_ = dt;
+}
+
+void Box2DWorld::advance(double dt) {
   std::lock_guard lock(box2d_mutex());
   for (std::size_t i = 0; i < robots_.size(); ++i) {
     Robot& r = robots_[i];
@@ -239,6 +262,10 @@ void Box2DWorld::move(double dt) {
     body->SetAngularVelocity(static_cast<float>(turn));
   }
   engine_->world.Step(static_cast<float>(dt), 8, 3);
+}
+
+void Box2DWorld::settle() {
+  std::lock_guard lock(box2d_mutex());
   for (std::size_t i = 0; i < robots_.size(); ++i) {
     Robot& r = robots_[i];
     b2Body* body = engine_->bodies[i];

@@ -59,8 +59,11 @@ class Box2DWorld final : public World {
   // Throws std::out_of_range for a bad index (as do set_wheels, ir and state).
   const std::string& robot_name(std::size_t robot) const override;
 
-  // Throws std::invalid_argument unless 0 < dt <= 1.
+  // Throws std::invalid_argument unless 0 < dt <= 1 (and, after begin_next_step, unless dt is
+  // the begun step's).
   void step(double dt) override;
+  bool can_step_ahead() const override { return true; }
+  void begin_next_step(double dt) override;
   double time() const override { return time_; }
   std::uint64_t steps() const override { return steps_; }
 
@@ -92,7 +95,10 @@ class Box2DWorld final : public World {
   struct Engine;  // Box2D's world and bodies
 
   const Robot& robot_at(std::size_t robot, const char* what) const;
-  void move(double dt);  // the wheels' velocities, Box2D's step, poses and contacts
+  // The wheels' velocities from the acting speeds, which then become those set since, and
+  // Box2D's step: the physics of a step, which begin_next_step may run early.
+  void advance(double dt);
+  void settle();  // poses, distances and contacts after advance()
   void read_ir();
 
   WorldSpec spec_;
@@ -103,6 +109,7 @@ class Box2DWorld final : public World {
   kernel::ParallelFor* parallel_ = nullptr;
   std::uint64_t steps_ = 0;
   double time_ = 0;
+  double begun_dt_ = 0;  // > 0: advance(begun_dt_) ran for the next step (begin_next_step)
 };
 
 }  // namespace symb::sim
