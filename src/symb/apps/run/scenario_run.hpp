@@ -41,6 +41,15 @@ struct ShellRequest {
   std::string token;       // kTcp: empty makes one up
 };
 
+// `symb run --view`: the web view (apps/view/live_view.hpp), 2D runs.
+struct ViewRequest {
+  bool on = false;
+  std::string host = "127.0.0.1";
+  std::uint16_t port = 0;  // 0 picks a free port
+  std::string robot;       // shown first; empty: the first robot
+  std::string token;       // empty makes one up
+};
+
 struct RunProgress {
   double simulated_seconds = 0;
   double total_seconds = 0;
@@ -62,6 +71,7 @@ struct RunOptions {
   // clock (a shell needs this: otherwise the run is over before anyone could type).
   double speed = 0;
   ShellRequest shell;
+  ViewRequest view;
   // Replaying a champion (--genome): every robot's task named `genome_controller` gets these
   // weights (its `weights` parameter, a network task's flat genome); no such task is an error.
   std::optional<std::string> controller_weights;
@@ -71,7 +81,7 @@ struct RunOptions {
   // (record_options.hpp); `csv_every` picks the steps for either.
   RecordOptions record;
   std::function<void(const RunProgress&)> on_progress;
-  std::function<void(const std::string&)> on_notice;  // "shell: ..." for the person
+  std::function<void(const std::string&)> on_notice;  // "shell: ...", "view: ..." for the person
   // Polled between slices of the run (at most 20 ms of wall clock apart while pacing, one
   // simulated second otherwise): true stops the run there, and what was run is written as for a
   // finished one (RunResult::interrupted).
