@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "symb/apps/view/web_assets.hpp"
+#include "symb/io/tcp_stream.hpp"
 #include "symb/shell/shell_task.hpp"
 #include "symb/shell/tcp_shell.hpp"
 
@@ -45,6 +46,7 @@ struct ViewServer::Client {
   FrameQueue queue;
   std::thread sender;
   std::atomic<bool> open{true};
+  std::atomic<bool> farewell{false};  // the server is going: say goodbye so the client closes
 };
 
 kernel::Result<std::unique_ptr<ViewServer>> ViewServer::start(ViewServerOptions options, ViewServerHandlers handlers) {
@@ -72,6 +74,7 @@ kernel::Result<std::unique_ptr<ViewServer>> ViewServer::start(ViewServerOptions 
                               "3600000",
                               "enable_keep_alive",
                               "no",
+
                               nullptr};
   mg_callbacks callbacks{};
   callbacks.log_message = [](const mg_connection*, const char*) { return 1; };  // errors come back as results
@@ -96,9 +99,27 @@ ViewServer::~ViewServer() {
     std::lock_guard lock(mu_);
     clients = clients_;
   }
-  // The senders first: mg_stop closes the connections, and a sender may be inside a write.
-  for (auto& c : clients) c->queue.close();
-  if (ctx_) mg_stop(ctx_);  // calls on_ws_close for each open WebSocket, which joins its sender
+  // The senders first: each says goodbye (a WebSocket close), so that a browser closes its end and
+  // civetweb's thread reading it stops at once rather than at its next 2 s poll.
+  for (auto& c : clients) {
+    c->farewell = true;
+    c->queue.close();
+  }
+  if (ctx_) {
+    // civetweb's listening thread sees the stop only when its poll() returns, which it does every
+    // 2 s when nothing happens: a connection made meanwhile wakes it at once.
+    std::atomic<bool> stopped{false};
+    std::thread waker([this, &stopped] {
+      while (!stopped.load()) {
+        std::this_thread::sleep_for(5ms);
+        if (auto conn = io::TcpStream::connect(options_.host == "0.0.0.0" ? "127.0.0.1" : options_.host, port_, 100ms))
+          (*conn)->close();
+      }
+    });
+    mg_stop(ctx_);  // calls on_ws_close for each open WebSocket, which joins its sender
+    stopped = true;
+    waker.join();
+  }
   for (auto& c : clients)
     if (c->sender.joinable()) c->sender.join();
 }
@@ -202,8 +223,12 @@ void ViewServer::send_loop(const std::shared_ptr<Client>& client) {
     if (mg_websocket_write(client->conn, MG_WEBSOCKET_OPCODE_TEXT, frame->data(), frame->size()) <= 0) {
       // The client is gone or timed out: stop sending; civetweb closes the connection.
       client->queue.close();
-      break;
+      return;
     }
+  }
+  if (client->farewell.load()) {
+    static constexpr char kGoingAway[] = {'\x03', '\xe9'};  // status 1001: the server is going away
+    mg_websocket_write(client->conn, MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE, kGoingAway, sizeof kGoingAway);
   }
 }
 
