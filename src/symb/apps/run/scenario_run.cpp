@@ -213,8 +213,11 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   SpikeRecorder spikes;
   // The web view sees every sample too; it is made further down, once the shell is open.
   std::atomic<view::LiveView*> live_view{nullptr};
-  const os::ProbeSink sink = [&probes, &spikes, &live_view](const os::ProbeSample& s) {
+  const os::ProbeSink view_sink = [&live_view](const os::ProbeSample& s) {
     if (view::LiveView* v = live_view.load(std::memory_order_acquire)) v->on_probe(s);
+  };
+  const os::ProbeSink sink = [&probes, &spikes, &view_sink](const os::ProbeSample& s) {
+    view_sink(s);
     if (SpikeRecorder::takes(s.channel))
       spikes.record(s);
     else
@@ -223,10 +226,14 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   // Lockstep: the robots probe from several threads at once; their samples are put in order at
   // each step. Threads (--realtime) have no order to keep: straight to the recorders.
   OrderedProbes ordered(session->robot_count(), sink);
-  if (write_files || options.view.on) {
+  if (write_files) {
     for (std::size_t i = 0; i < session->robot_count(); ++i)
       session->robot(i).node().set_probe_sink(lockstep ? ordered.sink(i) : sink);
     if (lockstep) session->runner().add_observer([&ordered](const sim::StepRecord&) { ordered.flush(); });
+  } else if (options.view.on) {
+    // Only the view looks: it keeps the latest sample per series, which needs no order (and
+    // takes its own lock when the lanes probe at once).
+    for (std::size_t i = 0; i < session->robot_count(); ++i) session->robot(i).node().set_probe_sink(view_sink);
   }
   struct ProbeSinkGuard {  // the sinks point at `probes`, which goes before the session
     sim::ScenarioSession& s;

@@ -70,7 +70,10 @@ LiveView::LiveView(sim::ScenarioSession& session, std::string scenario, double d
       duration_(duration),
       control_(control),
       options_(std::move(options)) {
-  for (std::size_t i = 0; i < session_.robot_count(); ++i) robots_.push_back(session_.robot(i).name());
+  for (std::size_t i = 0; i < session_.robot_count(); ++i) {
+    robots_.push_back(session_.robot(i).name());
+    nodes_.push_back(session_.robot(i).node().name());
+  }
 }
 
 LiveView::~LiveView() {
@@ -208,7 +211,7 @@ std::optional<std::string> LiveView::poll(ClientId client) {
 
 void LiveView::on_probe(const os::ProbeSample& s) {
   const std::size_t sel = selected_.load();
-  if (sel >= robots_.size() || s.node != session_.robot(sel).node().name()) return;
+  if (sel >= nodes_.size() || s.node != nodes_[sel]) return;
   std::lock_guard lock(probes_mu_);
   auto it = std::find_if(probes_.begin(), probes_.end(),
                          [&](const ProbeValue& p) { return p.task == s.task && p.channel == s.channel; });

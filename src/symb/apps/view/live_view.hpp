@@ -77,6 +77,7 @@ class LiveView {
   run::RunControl* const control_;
   const LiveViewOptions options_;
   std::vector<std::string> robots_;
+  std::vector<std::string> nodes_;  // robot i's node name, as probe samples carry it
   std::unique_ptr<ViewServer> server_;
 
   std::atomic<std::size_t> selected_{0};
