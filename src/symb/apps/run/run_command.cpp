@@ -83,6 +83,21 @@ std::string progress_text(const RunProgress& p, bool realtime) {
   return s;
 }
 
+// [HOST:]PORT as --shell tcp:... and --view take it: `host` stays as it is when none is given.
+std::optional<UsageError> parse_host_port(std::string_view option, std::string_view text, std::string_view whole,
+                                          std::string& host, std::uint16_t& port) {
+  const auto colon = text.rfind(':');
+  if (colon != std::string_view::npos) {
+    host = std::string(text.substr(0, colon));
+    text = text.substr(colon + 1);
+    if (host.empty()) return UsageError{std::string(option) + ": empty host in " + quote_arg(whole)};
+  }
+  auto p = parse_count(std::string(option) + " port", text, 0, 65535);
+  if (auto* e = std::get_if<UsageError>(&p)) return *e;
+  port = static_cast<std::uint16_t>(std::get<std::uint64_t>(p));
+  return std::nullopt;
+}
+
 std::variant<ShellRequest, UsageError> parse_shell(std::string_view text) {
   ShellRequest r;
   if (text == "stdio") {
@@ -91,17 +106,8 @@ std::variant<ShellRequest, UsageError> parse_shell(std::string_view text) {
   }
   if (!text.starts_with("tcp:"))
     return UsageError{"--shell: expected stdio, tcp:PORT or tcp:HOST:PORT, not " + quote_arg(text)};
-  std::string_view rest = text.substr(4);
-  const auto colon = rest.rfind(':');
-  if (colon != std::string_view::npos) {
-    r.host = std::string(rest.substr(0, colon));
-    rest = rest.substr(colon + 1);
-    if (r.host.empty()) return UsageError{"--shell: empty host in " + quote_arg(text)};
-  }
-  auto port = parse_count("--shell port", rest, 0, 65535);
-  if (auto* e = std::get_if<UsageError>(&port)) return *e;
+  if (auto e = parse_host_port("--shell", text.substr(4), text, r.host, r.port)) return *e;
   r.kind = ShellRequest::Kind::kTcp;
-  r.port = static_cast<std::uint16_t>(std::get<std::uint64_t>(port));
   return r;
 }
 
@@ -109,16 +115,7 @@ std::variant<ShellRequest, UsageError> parse_shell(std::string_view text) {
 std::variant<ViewRequest, UsageError> parse_view(std::string_view text) {
   ViewRequest r;
   r.on = true;
-  std::string_view port_text = text;
-  const auto colon = text.rfind(':');
-  if (colon != std::string_view::npos) {
-    r.host = std::string(text.substr(0, colon));
-    port_text = text.substr(colon + 1);
-    if (r.host.empty()) return UsageError{"--view: empty address in " + quote_arg(text)};
-  }
-  auto port = parse_count("--view port", port_text, 0, 65535);
-  if (auto* e = std::get_if<UsageError>(&port)) return *e;
-  r.port = static_cast<std::uint16_t>(std::get<std::uint64_t>(port));
+  if (auto e = parse_host_port("--view", text, text, r.host, r.port)) return *e;
   return r;
 }
 
