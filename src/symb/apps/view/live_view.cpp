@@ -60,6 +60,7 @@ kernel::Result<std::unique_ptr<LiveView>> LiveView::start(sim::ScenarioSession& 
   auto server = ViewServer::start(view->options_.server, std::move(handlers));
   if (!server) return kernel::Error{server.error()};
   view->server_ = std::move(server).value();
+  view->handlers_server_.store(view->server_.get(), std::memory_order_release);
   return view;
 }
 
@@ -77,10 +78,15 @@ LiveView::LiveView(sim::ScenarioSession& session, std::string scenario, double d
 }
 
 LiveView::~LiveView() {
+  handlers_server_.store(nullptr, std::memory_order_release);
   server_.reset();  // no handler runs after this
   std::lock_guard lock(shells_mu_);
   for (auto& [client, link] : shells_) close_shell(*link);
   shells_.clear();
+}
+
+void LiveView::send(ClientId client, std::string frame) {
+  if (ViewServer* s = handlers_server_.load(std::memory_order_acquire)) s->send(client, std::move(frame));
 }
 
 std::string LiveView::hello() const {
@@ -97,7 +103,7 @@ std::string LiveView::hello() const {
 }
 
 void LiveView::on_open(ClientId client) {
-  server_->send(client, hello());
+  send(client, hello());
   selection_changed_ = true;  // the next details go to every client, this one included
 }
 
@@ -106,7 +112,7 @@ void LiveView::on_message(ClientId client, std::string_view text) {
   const auto space = text.find(' ');
   const std::string_view word = text.substr(0, space);
   const std::string_view rest = space == std::string_view::npos ? std::string_view() : text.substr(space + 1);
-  const auto refuse = [&](const std::string& why) { server_->send(client, shell_json("view: " + why + "\n")); };
+  const auto refuse = [&](const std::string& why) { send(client, shell_json("view: " + why + "\n")); };
   if (word == "shell") return shell_line(client, rest);
   if (word == "robot") {
     const auto it = std::find(robots_.begin(), robots_.end(), rest);
@@ -136,7 +142,7 @@ void LiveView::on_message(ClientId client, std::string_view text) {
 
 void LiveView::shell_line(ClientId client, std::string_view line) {
   if (line.size() > kMaxLineBytes) {
-    server_->send(client, shell_json("error: line longer than 4096 bytes\n"));
+    send(client, shell_json("error: line longer than 4096 bytes\n"));
     return;
   }
   std::lock_guard lock(shells_mu_);

@@ -68,6 +68,8 @@ class LiveView {
   std::optional<std::string> poll(ClientId client);
   void shell_line(ClientId client, std::string_view line);
   void close_shell(ShellLink& link);
+  // To one client from a handler: a browser may connect before start() has the server in hand.
+  void send(ClientId client, std::string frame);
   std::string hello() const;
   void send_details(bool finished);
 
@@ -79,6 +81,7 @@ class LiveView {
   std::vector<std::string> robots_;
   std::vector<std::string> nodes_;  // robot i's node name, as probe samples carry it
   std::unique_ptr<ViewServer> server_;
+  std::atomic<ViewServer*> handlers_server_{nullptr};  // server_ once it is there, for the handlers
 
   std::atomic<std::size_t> selected_{0};
   std::atomic<bool> selection_changed_{true};
