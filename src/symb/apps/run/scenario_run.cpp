@@ -314,6 +314,12 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   ordered.flush();
   result.wall_seconds = wall_seconds();
   live_view.store(nullptr, std::memory_order_release);
+  if (live) {
+    const view::ViewServerStats vs = live->server().stats();
+    result.view_frames = vs.frames.pushed;
+    result.view_frames_sent = vs.frames.sent;
+    result.view_frames_dropped = vs.frames.dropped;
+  }
   live.reset();
   tcp_shell.reset();
 

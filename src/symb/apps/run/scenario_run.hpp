@@ -119,6 +119,8 @@ struct RunResult {
   std::string organism;
   // A 2D run's recording: format, bytes, wall clock spent (run_recording.hpp).
   RecordFigures recording;
+  // --view: the frames queued for the pages, sent, and dropped because a page did not keep up.
+  std::uint64_t view_frames = 0, view_frames_sent = 0, view_frames_dropped = 0;
 };
 
 kernel::Result<RunResult> run_scenario(const RunOptions& options);
