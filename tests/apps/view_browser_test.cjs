@@ -60,15 +60,15 @@ async function check(name, fn) {
     await maze.goto(mazeUrl);
     await check('the maze run\'s robot moves in the page', async () => {
       await maze.waitForFunction(() => document.getElementById('robot-pos').textContent.startsWith('x '),
-                                 null, { timeout: 3000 });
+                                 null, { timeout: 10000 });
       const first = await maze.textContent('#robot-pos');
       await maze.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
-                                 { timeout: 3000 });
+                                 { timeout: 10000 });
       const second = await maze.textContent('#robot-pos');
       console.log(`  position ${first} -> ${second}`);
     });
     await check('a hook typed into the page\'s shell appears in the hook table', async () => {
-      await maze.waitForSelector('#hooks tbody tr[data-hook="ir->controller"]', { timeout: 3000 });
+      await maze.waitForSelector('#hooks tbody tr[data-hook="ir->controller"]', { timeout: 10000 });
       // The scenario hooks ir -> controller at priority 0: rewired at priority 7, the row is new.
       const withPriority7 = () => [...document.querySelectorAll('#hooks tbody tr[data-hook="ir->controller"]')]
         .filter((tr) => tr.cells[3].textContent === '7').length;
@@ -77,33 +77,33 @@ async function check(name, fn) {
       await maze.press('#shell-input', 'Enter');
       await maze.fill('#shell-input', 'hook ir controller --priority 7');
       await maze.press('#shell-input', 'Enter');
-      await maze.waitForFunction(withPriority7, null, { timeout: 3000 })
+      await maze.waitForFunction(withPriority7, null, { timeout: 10000 })
         .catch(async (e) => { throw new Error(`${e.message.split('\n')[0]}; the shell said ${JSON.stringify(await maze.textContent('#shell-output'))}`); });
       await maze.waitForFunction(() => document.getElementById('shell-output').textContent.includes('hook'), null,
-                                 { timeout: 3000 });
+                                 { timeout: 10000 });
       console.log(`  shell: ${JSON.stringify(await maze.textContent('#shell-output'))}`);
     });
     await check('pause stops the clock; resume goes on', async () => {
       await maze.click('#pause');
-      await maze.waitForFunction(() => document.body.dataset.paused === 'true', null, { timeout: 2000 });
+      await maze.waitForFunction(() => document.body.dataset.paused === 'true', null, { timeout: 10000 });
       const t0 = await maze.textContent('#clock');
       await maze.waitForTimeout(400);
       const t1 = await maze.textContent('#clock');
       if (t0 !== t1) throw new Error(`the clock went on while paused: ${t0} -> ${t1}`);
       await maze.click('#pause');
-      await maze.waitForFunction((t) => document.getElementById('clock').textContent !== t, t1, { timeout: 2000 });
+      await maze.waitForFunction((t) => document.getElementById('clock').textContent !== t, t1, { timeout: 10000 });
     });
     await check('a wrong token is refused', async () => {
       const bad = await browser.newPage();
       await bad.goto(mazeUrl.replace(/token=[^&]*/, 'token=0123456789abcdef'));
       await bad.waitForFunction(() => document.getElementById('conn').textContent.startsWith('refused'), null,
-                                { timeout: 3000 });
+                                { timeout: 10000 });
       if (await bad.$('#tasks tbody tr')) throw new Error('a refused page shows tasks');
     });
     await check('the AHHS run\'s hormone levels appear among the probes', async () => {
       const ahhs = await browser.newPage();
       await ahhs.goto(ahhsUrl);
-      const probe = await ahhs.waitForSelector('#probes .probe', { timeout: 3000 });
+      const probe = await ahhs.waitForSelector('#probes .probe', { timeout: 10000 });
       const label = await probe.getAttribute('data-probe');
       const values = await probe.$eval('.values', (e) => e.textContent);
       console.log(`  ${label}: ${values}`);

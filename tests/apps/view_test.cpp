@@ -2,13 +2,17 @@
 // waits), the JSON frames, the server (token, refusal, a stalled client) and `symb run --view`
 // end to end in-process with a WebSocket client (the page's protocol without a browser; the
 // browser itself is view_browser_test.cjs).
+#include <unistd.h>
+
 #include <atomic>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "symb/apps/evolve/evolve_run.hpp"
 #include "symb/apps/run/scenario_run.hpp"
 #include "symb/apps/view/frame_queue.hpp"
 #include "symb/apps/view/view_json.hpp"
@@ -241,6 +245,52 @@ TEST(ViewRun, AClientSeesTheWorldTheRobotTheGraphAndItsShellReplies) {
   EXPECT_TRUE(has("step", "\"xy\":[25,"));
   EXPECT_TRUE(has("graph", "\"sender\":\"ir\",\"receiver\":\"controller\""));
   EXPECT_TRUE(has("shell", "controller")) << "the shell's `hooks` reply";
+  EXPECT_TRUE(has("status", "\"finished\":true"));
+}
+
+// `symb evolve --view`: the same page on an evolution run, the evolving robot shown first, and
+// the evolution's result unchanged by the view (same evaluations, same history).
+TEST(ViewRun, AnEvolutionRunIsShownWithItsEvolvingRobotAndRunsTheSame) {
+  const std::string scenario = std::string(SYMB_SCENARIO_DIR) + "/evolve_maze.yaml";
+  const auto out = std::filesystem::temp_directory_path() / ("symb_view_evolve_" + std::to_string(::getpid()));
+  symb::apps::evolve::EvolveOptions plain;
+  plain.scenario_path = scenario;
+  plain.duration = 2min;
+  plain.checkpoint_every = symb::kernel::Duration{0};
+  plain.out_dir = out / "plain";
+  symb::apps::evolve::EvolveOptions viewed = plain;
+  viewed.out_dir = out / "viewed";
+  viewed.view.on = true;
+  WsTestClient client;
+  std::vector<std::string> frames;
+  std::thread reader;
+  viewed.on_notice = [&](const std::string& line) {
+    const auto port = line.find(":", line.find("127.0.0.1")) + 1;
+    const auto slash = line.find('/', port);
+    client.open(static_cast<std::uint16_t>(std::stoi(line.substr(port, slash - port))),
+                "/ws" + line.substr(line.find("?token=")));
+    reader = std::thread([&] {
+      for (auto f = client.read_frame(5000ms); f; f = client.read_frame(5000ms)) frames.push_back(*f);
+      client.close();
+    });
+  };
+  auto a = symb::apps::evolve::run_evolution(plain);
+  auto b = symb::apps::evolve::run_evolution(viewed);
+  if (reader.joinable()) reader.join();
+  std::filesystem::remove_all(out);
+  ASSERT_TRUE(a) << a.error();
+  ASSERT_TRUE(b) << b.error();
+  EXPECT_GT(a->evaluations, 0u);
+  EXPECT_EQ(a->evaluations, b->evaluations);
+  EXPECT_EQ(a->history_hash, b->history_hash);
+  ASSERT_TRUE(client.upgraded());
+  const auto has = [&](const std::string& type, const std::string& part) {
+    for (const auto& f : frames)
+      if (f.find("{\"type\":\"" + type + "\"") == 0 && f.find(part) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("hello", "\"scenario\":\"evolve_maze\"")) << frames.size() << " frames";
+  EXPECT_TRUE(has("graph", "{\"name\":\"evolution\",\"type\":\"one_plus_one\""));
   EXPECT_TRUE(has("status", "\"finished\":true"));
 }
 

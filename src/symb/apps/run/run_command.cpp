@@ -83,21 +83,6 @@ std::string progress_text(const RunProgress& p, bool realtime) {
   return s;
 }
 
-// [HOST:]PORT as --shell tcp:... and --view take it: `host` stays as it is when none is given.
-std::optional<UsageError> parse_host_port(std::string_view option, std::string_view text, std::string_view whole,
-                                          std::string& host, std::uint16_t& port) {
-  const auto colon = text.rfind(':');
-  if (colon != std::string_view::npos) {
-    host = std::string(text.substr(0, colon));
-    text = text.substr(colon + 1);
-    if (host.empty()) return UsageError{std::string(option) + ": empty host in " + quote_arg(whole)};
-  }
-  auto p = parse_count(std::string(option) + " port", text, 0, 65535);
-  if (auto* e = std::get_if<UsageError>(&p)) return *e;
-  port = static_cast<std::uint16_t>(std::get<std::uint64_t>(p));
-  return std::nullopt;
-}
-
 std::variant<ShellRequest, UsageError> parse_shell(std::string_view text) {
   ShellRequest r;
   if (text == "stdio") {
@@ -108,14 +93,6 @@ std::variant<ShellRequest, UsageError> parse_shell(std::string_view text) {
     return UsageError{"--shell: expected stdio, tcp:PORT or tcp:HOST:PORT, not " + quote_arg(text)};
   if (auto e = parse_host_port("--shell", text.substr(4), text, r.host, r.port)) return *e;
   r.kind = ShellRequest::Kind::kTcp;
-  return r;
-}
-
-// --view [ADDR:]PORT
-std::variant<ViewRequest, UsageError> parse_view(std::string_view text) {
-  ViewRequest r;
-  r.on = true;
-  if (auto e = parse_host_port("--view", text, text, r.host, r.port)) return *e;
   return r;
 }
 
@@ -176,9 +153,9 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
       options.shell = std::get<ShellRequest>(v);
     } else if (o.name == "--view") {
-      auto v = parse_view(o.value);
+      auto v = view::parse_view(o.value);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
-      options.view = std::get<ViewRequest>(v);
+      options.view = std::get<view::ViewRequest>(v);
     } else if (o.name == "--view-robot") {
       view_robot = o.value;
     } else if (o.name == "--shell-robot") {

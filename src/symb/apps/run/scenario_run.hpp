@@ -26,6 +26,7 @@
 
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/apps/run/run_recording.hpp"
+#include "symb/apps/view/view_request.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/sim/world_spec.hpp"
@@ -42,13 +43,7 @@ struct ShellRequest {
 };
 
 // `symb run --view`: the web view (apps/view/live_view.hpp), 2D runs.
-struct ViewRequest {
-  bool on = false;
-  std::string host = "127.0.0.1";
-  std::uint16_t port = 0;  // 0 picks a free port
-  std::string robot;       // shown first; empty: the first robot
-  std::string token;       // empty makes one up
-};
+using view::ViewRequest;
 
 struct RunProgress {
   double simulated_seconds = 0;
