@@ -246,6 +246,14 @@ TEST(ViewRun, AClientSeesTheWorldTheRobotTheGraphAndItsShellReplies) {
   EXPECT_TRUE(has("graph", "\"sender\":\"ir\",\"receiver\":\"controller\""));
   EXPECT_TRUE(has("shell", "controller")) << "the shell's `hooks` reply";
   EXPECT_TRUE(has("status", "\"finished\":true"));
+  // The view only looks: the run is the one without it, bit for bit.
+  symb::apps::run::RunOptions plain;
+  plain.scenario_path = o.scenario_path;
+  plain.duration = o.duration;
+  auto unseen = symb::apps::run::run_scenario(plain);
+  ASSERT_TRUE(unseen) << unseen.error();
+  EXPECT_EQ(result->trajectory_hash, unseen->trajectory_hash);
+  EXPECT_EQ(result->steps, unseen->steps);
 }
 
 // `symb evolve --view`: the same page on an evolution run, the evolving robot shown first, and
