@@ -162,16 +162,17 @@ function draw() {
     ctx.lineWidth = Math.max(1, thick * s);
     ctx.beginPath(); ctx.moveTo(X(x1), Y(y1)); ctx.lineTo(X(x2), Y(y2)); ctx.stroke();
   }
-  ctx.lineWidth = 1;
+  ctx.lineWidth = 2;
   view.trails.forEach((t, i) => {
     if (!t || t.length < 4) return;
     ctx.strokeStyle = palette[i % palette.length];
-    ctx.globalAlpha = 0.5;
+    ctx.globalAlpha = 0.6;
     ctx.beginPath(); ctx.moveTo(X(t[0]), Y(t[1]));
     for (let k = 2; k < t.length; k += 2) ctx.lineTo(X(t[k]), Y(t[k + 1]));
     ctx.stroke();
     ctx.globalAlpha = 1;
   });
+  ctx.lineWidth = 1;
   const p = view.poses;
   if (!p) return;
   const count = p.length / 3;
@@ -179,8 +180,14 @@ function draw() {
   for (let k = 0; k < count; ++k) {
     const i = k * view.stride;
     const x = X(p[3 * k]), y = Y(p[3 * k + 1]), a = p[3 * k + 2] * Math.PI / 180;
-    ctx.fillStyle = i === view.selected ? '#d62728' : palette[i % palette.length];
+    ctx.fillStyle = palette[i % palette.length];
     ctx.beginPath(); ctx.arc(x, y, r, 0, 2 * Math.PI); ctx.fill();
+    if (i === view.selected) {   // the chosen robot: a ring around it
+      ctx.strokeStyle = '#000';
+      ctx.lineWidth = 2;
+      ctx.beginPath(); ctx.arc(x, y, r + 3, 0, 2 * Math.PI); ctx.stroke();
+      ctx.lineWidth = 1;
+    }
     if (count <= kMaxTrailRobots) {
       ctx.strokeStyle = '#000';
       ctx.beginPath(); ctx.moveTo(x, y); ctx.lineTo(x + r * Math.cos(a), y - r * Math.sin(a)); ctx.stroke();
@@ -188,10 +195,28 @@ function draw() {
   }
 }
 
-$('robot').onchange = (e) => {
-  view.selected = view.robots.indexOf(e.target.value);
+function choose(name) {
+  view.selected = view.robots.indexOf(name);
+  $('robot').value = name;
   $('log').textContent = '';
-  send(`robot ${e.target.value}`);
+  send(`robot ${name}`);
+  draw();
+}
+$('robot').onchange = (e) => choose(e.target.value);
+// A click on the world chooses the robot nearest to it.
+canvas.onclick = (e) => {
+  const p = view.poses;
+  if (!p || !view.world) return;
+  const rect = canvas.getBoundingClientRect();
+  const s = canvas.width / view.world.width;
+  const x = (e.clientX - rect.left) * canvas.width / rect.width / s;
+  const y = (canvas.height - (e.clientY - rect.top) * canvas.height / rect.height) / s;
+  let best = -1, bestD = Infinity;
+  for (let k = 0; k < p.length / 3; ++k) {
+    const d = (p[3 * k] - x) ** 2 + (p[3 * k + 1] - y) ** 2;
+    if (d < bestD) { bestD = d; best = k * view.stride; }
+  }
+  if (best >= 0) choose(view.robots[best]);
 };
 $('pause').onclick = () => send(view.paused ? 'resume' : 'pause');
 $('step').onclick = () => send('step');
