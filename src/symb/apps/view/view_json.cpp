@@ -69,7 +69,7 @@ std::string step_json(std::uint64_t step, double seconds, std::span<const sim::R
   const std::size_t stride = max_robots == 0 || n <= max_robots ? 1 : (n + max_robots - 1) / max_robots;
   std::string out;
   out.reserve(64 + (n / stride) * 18);
-  out += "{\"type\":\"step\",\"step\":";
+  out += R"({"type":"step","step":)";
   out += std::to_string(step);
   out += ",\"t\":";
   append_number(out, seconds, 3);
