@@ -83,6 +83,20 @@ std::string describe_options(std::span<const OptionSpec> specs) {
   return s;
 }
 
+std::optional<UsageError> parse_host_port(std::string_view what, std::string_view text, std::string_view whole,
+                                          std::string& host, std::uint16_t& port) {
+  const auto colon = text.rfind(':');
+  if (colon != std::string_view::npos) {
+    host = std::string(text.substr(0, colon));
+    text = text.substr(colon + 1);
+    if (host.empty()) return UsageError{std::string(what) + ": empty host in " + quote_arg(whole)};
+  }
+  auto p = parse_count(std::string(what) + " port", text, 0, 65535);
+  if (auto* e = std::get_if<UsageError>(&p)) return *e;
+  port = static_cast<std::uint16_t>(std::get<std::uint64_t>(p));
+  return std::nullopt;
+}
+
 std::variant<std::uint64_t, UsageError> parse_count(std::string_view what, std::string_view text, std::uint64_t min,
                                                     std::uint64_t max) {
   const std::string range = "a whole number from " + std::to_string(min) + " to " + std::to_string(max);

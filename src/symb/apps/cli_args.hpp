@@ -79,6 +79,10 @@ std::variant<kernel::Duration, UsageError> parse_duration(std::string_view what,
                                                           kernel::Duration max);
 // A virtual-time pace (--speed): a number above 0 and at most 1e6.
 std::variant<double, UsageError> parse_speed(std::string_view what, std::string_view text);
+// [HOST:]PORT (--shell tcp:..., --view): sets `host` when one is given and `port`; an error names
+// `what` and quotes `whole`, the option's whole value.
+std::optional<UsageError> parse_host_port(std::string_view what, std::string_view text, std::string_view whole,
+                                          std::string& host, std::uint16_t& port);
 // A fraction in [0, 1].
 std::variant<double, UsageError> parse_fraction(std::string_view what, std::string_view text);
 

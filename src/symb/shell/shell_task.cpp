@@ -11,8 +11,8 @@ namespace {
 constexpr std::size_t kShellQueue = 256;  // raw chunks of a fast paste must not be dropped
 constexpr std::size_t kStreamQueue = 64;  // replies waiting to be written
 
-// Compares without stopping at the first difference, so the time taken says nothing about how
-// much of a guessed token was right.
+}  // namespace
+
 bool same_token(std::string_view a, std::string_view b) {
   unsigned char diff = a.size() == b.size() ? 0 : 1;
   const std::size_t n = std::max(a.size(), b.size());
@@ -23,8 +23,6 @@ bool same_token(std::string_view a, std::string_view b) {
   }
   return diff == 0;
 }
-
-}  // namespace
 
 CommandShellTask::CommandShellTask(ShellOptions options)
     : options_(std::move(options)),

@@ -94,6 +94,11 @@ class CommandShellTask : public os::Task {
   std::vector<EditorEvent> events_;
 };
 
+// Whether a token given equals the expected one. Compares without stopping at the first
+// difference, so the time taken says nothing about how much of a guessed token was right (the
+// shell's sessions and the web view check their tokens with it).
+bool same_token(std::string_view given, std::string_view expected);
+
 // The two tasks of one shell session on a node.
 struct ShellSession {
   os::TaskId io;     // the StreamTask, named "<name>.io"

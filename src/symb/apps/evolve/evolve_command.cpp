@@ -21,6 +21,8 @@ constexpr OptionSpec kOptions[] = {
     {"--checkpoint-every", "D", "simulated time between checkpoints (default 10min; 0 for none)"},
     {"--resume", "", "carry on from DIR/checkpoint.txt (re-runs to it, checks it, continues)"},
     {"--speed", "X", "virtual time at X times the wall clock (default: as fast as possible)"},
+    {"--view", "[ADDR:]PORT", "watch and drive the run in a browser (docs/view.md; implies --speed 1 unless given)"},
+    {"--token", "T", "the web view's token (default: a random one, printed)"},
     {"--quiet", "", "no progress line and no summary"},
     {"--help", "", "this help"},
 };
@@ -60,7 +62,8 @@ int run_evolve_command(std::span<const std::string_view> args, const CliContext&
   if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& parsed = std::get<SplitArgs>(split);
   options.scenario_path = std::string(parsed.positional.front());
-  bool quiet = false;
+  bool quiet = false, speed_given = false;
+  std::optional<std::string> token;
   for (const ParsedOption& o : parsed.options) {
     if (o.name == "--out") {
       if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--out: empty folder name"});
@@ -89,6 +92,13 @@ int run_evolve_command(std::span<const std::string_view> args, const CliContext&
       auto v = parse_speed("--speed", o.value);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
       options.speed = std::get<double>(v);
+      speed_given = true;
+    } else if (o.name == "--view") {
+      auto v = view::parse_view(o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.view = std::get<view::ViewRequest>(v);
+    } else if (o.name == "--token") {
+      token = o.value;
     } else if (o.name == "--quiet") {
       quiet = true;
     }
@@ -98,8 +108,13 @@ int run_evolve_command(std::span<const std::string_view> args, const CliContext&
     options.out_dir = std::filesystem::path("out") / "evolve" / std::filesystem::path(options.scenario_path).stem();
   }
 
+  if (token && !options.view.on) return usage_error(ctx, kCommand, UsageError{"--token is for --view"});
+  if (token) options.view.token = *token;
+  if (options.view.on && !speed_given) options.speed = 1.0;
+
   ProgressLine progress(ctx.err, !quiet, ctx.err_is_terminal);
   options.on_progress = [&](const EvolveProgress& p) { progress.update(p.fraction(), progress_text(p)); };
+  options.on_notice = [&ctx](const std::string& line) { ctx.err << line << "\n" << std::flush; };
   auto result = run_evolution(options);
   if (!result) {
     progress.finish("evolve: stopped");

@@ -17,7 +17,9 @@
 #include "symb/apps/cli_args.hpp"
 #include "symb/apps/evolve/evolve_checkpoint.hpp"
 #include "symb/apps/run/probe_plot.hpp"
+#include "symb/apps/run/run_control.hpp"
 #include "symb/apps/text_file.hpp"
+#include "symb/apps/view/live_view.hpp"
 #include "symb/evo/genome/genome.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
@@ -208,7 +210,24 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   result.scenario = scenario.name;
   result.seed = session->seed();
   Watcher watcher(node.name(), task_name);
-  node.set_probe_sink([&watcher](const os::ProbeSample& s) { watcher.record(s); });
+  // The web view: made before the sink, which hands it the evolving robot's probes too.
+  run::RunControl control(options.speed, scenario.control_period);
+  std::unique_ptr<view::LiveView> live;
+  if (options.view.on) {
+    view::LiveViewOptions vo;
+    vo.server.host = options.view.host;
+    vo.server.port = options.view.port;
+    vo.server.token = options.view.token;
+    vo.robot = options.view.robot.empty() ? robot_name : options.view.robot;
+    auto started = view::LiveView::start(*session, scenario.name, seconds(scenario.duration), &control, std::move(vo));
+    if (!started) return Error{started.error()};
+    live = std::move(started).value();
+    if (options.on_notice) options.on_notice("view: " + live->url());
+  }
+  node.set_probe_sink([&watcher, &live](const os::ProbeSample& s) {
+    watcher.record(s);
+    if (live) live->on_probe(s);
+  });
   struct ProbeSinkGuard {  // the sink points at `watcher`, which goes before the session
     os::Node& n;
     ~ProbeSinkGuard() { n.set_probe_sink({}); }
@@ -251,7 +270,6 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   const kernel::Time stop_at = options.stop_at ? start + *options.stop_at : kernel::kTimeNever;
   const bool checkpoints = options.checkpoint_every.count() > 0;
   kernel::Time next_checkpoint = checkpoints ? start + options.checkpoint_every : kernel::kTimeNever;
-  const kernel::Duration slice = options.speed > 0 ? std::chrono::milliseconds(20) : std::chrono::milliseconds(1000);
   // Pacing (--speed) runs from the resume point: the replay before it goes as fast as it can.
   auto pace_start = wall_start;
   kernel::Time pace_from = replaying() ? resume_at : start;
@@ -274,7 +292,33 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   };
 
   session->start();
+  double paced_speed = control.speed();
   for (kernel::Time t = start; t < end;) {
+    if (live) {
+      // The page's controls (not while replaying to a checkpoint): paused, the run stands at t,
+      // serving the page's shell, until resumed or asked for a step (one control period).
+      bool step = false, waited = false;
+      while (!replaying() && control.paused() && !(step = control.take_step())) {
+        waited = true;
+        executor.wait_injected(std::chrono::milliseconds(20));
+        executor.run_until(t);
+        live->between_slices();
+      }
+      if (control.speed() != paced_speed || step || waited) {
+        paced_speed = control.speed();
+        pace_start = std::chrono::steady_clock::now();
+        pace_from = t;
+      }
+      if (step) {
+        executor.run_until(t = std::min(end, t + control.step_length()));
+        if (auto st = flush(); !st) return Error{st.error()};
+        live->between_slices();
+        continue;
+      }
+    }
+    const double speed = live ? paced_speed : options.speed;
+    const kernel::Duration slice =
+        speed > 0 ? std::chrono::milliseconds(20) : std::chrono::milliseconds(live ? 100 : 1000);
     kernel::Time next = std::min({end, t + slice, next_checkpoint});
     next = std::min(next, resume_at);
     next = std::min(next, stop_at);
@@ -307,19 +351,31 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
       result.stopped = true;
       break;
     }
-    if (options.speed > 0 && !replaying()) {
+    if (live) live->between_slices();
+    if (speed > 0 && !replaying()) {
       const auto due = pace_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                        std::chrono::duration<double>(seconds(t - pace_from) / options.speed));
-      std::this_thread::sleep_until(due);
+                                        std::chrono::duration<double>(seconds(t - pace_from) / speed));
+      if (!live) {
+        std::this_thread::sleep_until(due);
+      } else {
+        // Waiting, the page's shell is served and its controls are heard.
+        for (auto now = std::chrono::steady_clock::now(); now < due && !control.paused() && control.speed() == speed;
+             now = std::chrono::steady_clock::now()) {
+          executor.wait_injected(std::min<kernel::Duration>(due - now, std::chrono::milliseconds(20)));
+          live->between_slices();
+        }
+      }
     }
     if (std::chrono::steady_clock::now() - last_report > std::chrono::milliseconds(100) || t == end) {
       report(t);
       last_report = std::chrono::steady_clock::now();
     }
   }
+  if (live) live->finish();
   session->stop();
   if (auto st = flush(); !st) return Error{st.error()};
   result.wall_seconds = wall_seconds();
+  live.reset();
   result.simulated_seconds = seconds(executor.clock().now() - start);
   result.evaluations = history.size();
   result.champion_fitness = best;

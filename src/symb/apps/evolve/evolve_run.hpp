@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "symb/apps/view/view_request.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
 
@@ -49,6 +50,11 @@ struct EvolveOptions {
   // Tests: stop at this virtual time as if killed (the checkpoints so far stay, no final files).
   std::optional<kernel::Duration> stop_at;
   std::function<void(const EvolveProgress&)> on_progress;
+  // --view: the web view of the run (docs/view.md), the evolving robot shown first; its fitness
+  // probes among the probes. Pause, step and speed work as in `symb run --view` (not while a
+  // --resume replays to its checkpoint). on_notice hears the URL.
+  view::ViewRequest view;
+  std::function<void(const std::string&)> on_notice;
 };
 
 struct EvolveResult {

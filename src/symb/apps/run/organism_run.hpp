@@ -79,14 +79,16 @@ kernel::Result<RunResult> run_organism(Session& session, kernel::VirtualTimeExec
   const auto wall_start = std::chrono::steady_clock::now();
   result.planned_seconds = std::chrono::duration<double>(scenario.duration).count();
   session.start();
-  result.interrupted = run_slices(
-      {.virtual_time = virtual_time,
-       .duration = scenario.duration,
-       .speed = options.speed,
-       .wall_start = wall_start,
-       .on_progress = options.on_progress,
-       .stop_requested = options.stop_requested,
-       .failed = [&session] { return !session.cycle_error().empty() || !session.runner().error().empty(); }});
+  result.interrupted =
+      run_slices({.virtual_time = virtual_time,
+                  .duration = scenario.duration,
+                  .speed = options.speed,
+                  .wall_start = wall_start,
+                  .on_progress = options.on_progress,
+                  .stop_requested = options.stop_requested,
+                  .failed = [&session] { return !session.cycle_error().empty() || !session.runner().error().empty(); },
+                  .control = nullptr,
+                  .between_slices = {}});
   session.stop();
   result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   fill_organism_result(recorder, result);

@@ -34,7 +34,10 @@ constexpr OptionSpec kOptions[] = {
     {"--speed", "X", "virtual time at X times the wall clock (default: as fast as possible)"},
     {"--shell", "WHERE", "open a robot's command shell while it runs: stdio, or tcp:PORT / tcp:HOST:PORT"},
     {"--shell-robot", "NAME", "the robot whose shell it is (default: the first)"},
-    {"--token", "T", "the TCP shell's token (default: a random one, printed)"},
+    {"--token", "T", "the TCP shell's and the web view's token (default: a random one, printed)"},
+    {"--view", "[ADDR:]PORT",
+     "watch and drive the run in a browser at http://ADDR:PORT (default address 127.0.0.1; port 0: a free one)"},
+    {"--view-robot", "NAME", "the robot the web view shows first (default: the first)"},
     {"--genome", "FILE", "replay a champion: the controller task gets this genome's weights (symb evolve)"},
     {"--controller", "NAME", "the task --genome replaces the weights of (default controller)"},
     {"--csv-every", "N", "record every N-th step in steps.csv (3D: poses.csv, joints.csv; default 1)"},
@@ -63,6 +66,9 @@ void print_help(std::ostream& out) {
       << "MuJoCo's simulate), summary.txt, syslog.txt and the probes (docs/run.md).\n"
       << "A shell needs --realtime or --speed (a virtual-time run is over before anyone could type);\n"
       << "with --shell and neither, --speed 1 is implied.\n"
+      << "--view serves a page (the URL with its token is printed) showing the world, a robot's task\n"
+      << "graph, probes and SysLog live, with a shell and pause, step and speed controls; with\n"
+      << "--view and neither --realtime nor --speed, --speed 1 is implied (docs/view.md).\n"
       << "More than 100 robots: steps.h5 instead of steps.csv (--record), and density.svg, trails.svg,\n"
       << "robot_stats.csv and robot_stats.svg instead of trajectory.svg.\n"
       << "Ctrl-C stops the run early: the files are written for what was run (summary.txt says\n"
@@ -85,17 +91,8 @@ std::variant<ShellRequest, UsageError> parse_shell(std::string_view text) {
   }
   if (!text.starts_with("tcp:"))
     return UsageError{"--shell: expected stdio, tcp:PORT or tcp:HOST:PORT, not " + quote_arg(text)};
-  std::string_view rest = text.substr(4);
-  const auto colon = rest.rfind(':');
-  if (colon != std::string_view::npos) {
-    r.host = std::string(rest.substr(0, colon));
-    rest = rest.substr(colon + 1);
-    if (r.host.empty()) return UsageError{"--shell: empty host in " + quote_arg(text)};
-  }
-  auto port = parse_count("--shell port", rest, 0, 65535);
-  if (auto* e = std::get_if<UsageError>(&port)) return *e;
+  if (auto e = parse_host_port("--shell", text.substr(4), text, r.host, r.port)) return *e;
   r.kind = ShellRequest::Kind::kTcp;
-  r.port = static_cast<std::uint16_t>(std::get<std::uint64_t>(port));
   return r;
 }
 
@@ -127,7 +124,7 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
 
   bool print_hash = false, quiet = false, speed_given = false;
   std::optional<std::uint32_t> every_given;  // --csv-every and --record-every, which must agree
-  std::optional<std::string> token, shell_robot, genome_controller;
+  std::optional<std::string> token, shell_robot, genome_controller, view_robot;
   for (const ParsedOption& o : opts) {
     if (o.name == "--out") {
       if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--out: empty folder name"});
@@ -155,6 +152,12 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
       auto v = parse_shell(o.value);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
       options.shell = std::get<ShellRequest>(v);
+    } else if (o.name == "--view") {
+      auto v = view::parse_view(o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.view = std::get<view::ViewRequest>(v);
+    } else if (o.name == "--view-robot") {
+      view_robot = o.value;
     } else if (o.name == "--shell-robot") {
       shell_robot = o.value;
     } else if (o.name == "--token") {
@@ -195,16 +198,17 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
   if (options.realtime && speed_given)
     return usage_error(ctx, kCommand, UsageError{"--speed is for virtual time; --realtime runs at the wall clock"});
   const bool has_shell = options.shell.kind != ShellRequest::Kind::kNone;
-  if ((shell_robot || token) && !has_shell)
-    return usage_error(ctx, kCommand, UsageError{"--shell-robot and --token need --shell"});
-  if (token && options.shell.kind != ShellRequest::Kind::kTcp)
-    return usage_error(ctx, kCommand, UsageError{"--token is for --shell tcp:..."});
+  if (shell_robot && !has_shell) return usage_error(ctx, kCommand, UsageError{"--shell-robot needs --shell"});
+  if (view_robot && !options.view.on) return usage_error(ctx, kCommand, UsageError{"--view-robot needs --view"});
+  if (token && options.shell.kind != ShellRequest::Kind::kTcp && !options.view.on)
+    return usage_error(ctx, kCommand, UsageError{"--token is for --shell tcp:... and --view"});
   if (genome_controller && !options.controller_weights)
     return usage_error(ctx, kCommand, UsageError{"--controller names the task --genome replays into: give --genome"});
   if (genome_controller) options.genome_controller = *genome_controller;
   if (shell_robot) options.shell.robot = *shell_robot;
-  if (token) options.shell.token = *token;
-  if (has_shell && !options.realtime && !speed_given) options.speed = 1.0;
+  if (token) options.shell.token = options.view.token = *token;
+  if (view_robot) options.view.robot = *view_robot;
+  if ((has_shell || options.view.on) && !options.realtime && !speed_given) options.speed = 1.0;
   // A stdio shell owns stdout; the progress line and the summary then stay off it.
   if (options.shell.kind == ShellRequest::Kind::kStdio) quiet = true;
 

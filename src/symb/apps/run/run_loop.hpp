@@ -7,6 +7,7 @@
 #include <chrono>
 #include <functional>
 
+#include "symb/apps/run/run_control.hpp"
 #include "symb/apps/run/scenario_run.hpp"
 #include "symb/kernel/lockstep_executor.hpp"
 #include "symb/kernel/time.hpp"
@@ -25,6 +26,12 @@ struct RunLoop {
   std::function<void(const RunProgress&)> on_progress;  // may be empty
   std::function<bool()> stop_requested;                 // may be empty
   std::function<bool()> failed;                         // polled after each slice; may be empty
+  // Virtual time: pause, step and speed asked for while it runs (then `speed` above is only
+  // where it starts; the control's speed rules). May be null.
+  RunControl* control = nullptr;
+  // Called on the run's thread after each slice and while it waits (pacing, paused): between
+  // slices no robot's node runs, so a node may be read here (the web view). May be empty.
+  std::function<void()> between_slices;
 };
 
 // Runs until the duration is over, a stop is requested or the session failed; true when a stop

@@ -19,6 +19,7 @@
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/apps/run/spike_recorder.hpp"
 #include "symb/apps/text_file.hpp"
+#include "symb/apps/view/live_view.hpp"
 #include "symb/io/stdio_stream.hpp"
 #include "symb/kernel/lockstep_executor.hpp"
 #include "symb/kernel/thread_executor.hpp"
@@ -186,6 +187,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
       return Error{"--record: a 3D run records CSV (poses.csv, joints.csv), not " +
                    std::string(record_format_name(options.record.format))};
     if (!options.record.robots.empty()) return Error{"--record-robots: a 3D run records every module"};
+    if (options.view.on) return Error{"--view: the web view shows 2D runs; a 3D organism is not shown yet"};
     return run_organism(**organism, virtual_time, scenario, options, std::move(result));
   }
   auto created = sim::ScenarioSession::create(scenario, *executor, session_options);
@@ -209,7 +211,13 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   // Spiking networks' spikes and layouts go to their own recorder (AEDAT, raster, network picture).
   ProbeRecorder probes(write_files ? &probes_csv : nullptr);
   SpikeRecorder spikes;
-  const os::ProbeSink sink = [&probes, &spikes](const os::ProbeSample& s) {
+  // The web view sees every sample too; it is made further down, once the shell is open.
+  std::atomic<view::LiveView*> live_view{nullptr};
+  const os::ProbeSink view_sink = [&live_view](const os::ProbeSample& s) {
+    if (view::LiveView* v = live_view.load(std::memory_order_acquire)) v->on_probe(s);
+  };
+  const os::ProbeSink sink = [&probes, &spikes, &view_sink](const os::ProbeSample& s) {
+    view_sink(s);
     if (SpikeRecorder::takes(s.channel))
       spikes.record(s);
     else
@@ -222,6 +230,10 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     for (std::size_t i = 0; i < session->robot_count(); ++i)
       session->robot(i).node().set_probe_sink(lockstep ? ordered.sink(i) : sink);
     if (lockstep) session->runner().add_observer([&ordered](const sim::StepRecord&) { ordered.flush(); });
+  } else if (options.view.on) {
+    // Only the view looks: it keeps the latest sample per series, which needs no order (and
+    // takes its own lock when the lanes probe at once).
+    for (std::size_t i = 0; i < session->robot_count(); ++i) session->robot(i).node().set_probe_sink(view_sink);
   }
   struct ProbeSinkGuard {  // the sinks point at `probes`, which goes before the session
     sim::ScenarioSession& s;
@@ -261,24 +273,54 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     }
   }
 
+  // The web view: made last, so that it goes first (its shell sessions live on the robots' nodes).
+  std::optional<RunControl> control;
+  if (!options.realtime) control.emplace(options.speed, scenario.control_period);
+  std::unique_ptr<view::LiveView> live;
+  if (options.view.on) {
+    view::LiveViewOptions vo;
+    vo.server.host = options.view.host;
+    vo.server.port = options.view.port;
+    vo.server.token = options.view.token;
+    vo.robot = options.view.robot;
+    auto started = view::LiveView::start(*session, scenario.name, seconds(scenario.duration),
+                                         control ? &*control : nullptr, std::move(vo));
+    if (!started) return Error{started.error()};
+    live = std::move(started).value();
+    live_view.store(live.get(), std::memory_order_release);
+    if (options.on_notice) options.on_notice("view: " + live->url());
+  }
+
   const auto wall_start = std::chrono::steady_clock::now();
   const auto wall_seconds = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   };
   result.planned_seconds = seconds(scenario.duration);
   session->start();
-  const bool stopped = run_slices({.virtual_time = virtual_time,
-                                   .lockstep = lockstep,
-                                   .duration = scenario.duration,
-                                   .speed = options.speed,
-                                   .wall_start = wall_start,
-                                   .on_progress = options.on_progress,
-                                   .stop_requested = options.stop_requested,
-                                   .failed = [&session] { return !session->cycle_error().empty(); }});
+  const bool stopped = run_slices(
+      {.virtual_time = virtual_time,
+       .lockstep = lockstep,
+       .duration = scenario.duration,
+       .speed = options.speed,
+       .wall_start = wall_start,
+       .on_progress = options.on_progress,
+       .stop_requested = options.stop_requested,
+       .failed = [&session] { return !session->cycle_error().empty(); },
+       .control = live && control ? &*control : nullptr,
+       .between_slices = live ? std::function<void()>([&live] { live->between_slices(); }) : std::function<void()>()});
+  if (live) live->finish();
   running = false;
   session->stop();
   ordered.flush();
   result.wall_seconds = wall_seconds();
+  live_view.store(nullptr, std::memory_order_release);
+  if (live) {
+    const view::ViewServerStats vs = live->server().stats();
+    result.view_frames = vs.frames.pushed;
+    result.view_frames_sent = vs.frames.sent;
+    result.view_frames_dropped = vs.frames.dropped;
+  }
+  live.reset();
   tcp_shell.reset();
 
   result.interrupted = stopped;

@@ -26,6 +26,7 @@
 
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/apps/run/run_recording.hpp"
+#include "symb/apps/view/view_request.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/sim/world_spec.hpp"
@@ -40,6 +41,9 @@ struct ShellRequest {
   std::string robot;       // empty: the first robot
   std::string token;       // kTcp: empty makes one up
 };
+
+// `symb run --view`: the web view (apps/view/live_view.hpp), 2D runs.
+using view::ViewRequest;
 
 struct RunProgress {
   double simulated_seconds = 0;
@@ -62,6 +66,7 @@ struct RunOptions {
   // clock (a shell needs this: otherwise the run is over before anyone could type).
   double speed = 0;
   ShellRequest shell;
+  ViewRequest view;
   // Replaying a champion (--genome): every robot's task named `genome_controller` gets these
   // weights (its `weights` parameter, a network task's flat genome); no such task is an error.
   std::optional<std::string> controller_weights;
@@ -71,7 +76,7 @@ struct RunOptions {
   // (record_options.hpp); `csv_every` picks the steps for either.
   RecordOptions record;
   std::function<void(const RunProgress&)> on_progress;
-  std::function<void(const std::string&)> on_notice;  // "shell: ..." for the person
+  std::function<void(const std::string&)> on_notice;  // "shell: ...", "view: ..." for the person
   // Polled between slices of the run (at most 20 ms of wall clock apart while pacing, one
   // simulated second otherwise): true stops the run there, and what was run is written as for a
   // finished one (RunResult::interrupted).
@@ -109,6 +114,8 @@ struct RunResult {
   std::string organism;
   // A 2D run's recording: format, bytes, wall clock spent (run_recording.hpp).
   RecordFigures recording;
+  // --view: the frames queued for the pages, sent, and dropped because a page did not keep up.
+  std::uint64_t view_frames = 0, view_frames_sent = 0, view_frames_dropped = 0;
 };
 
 kernel::Result<RunResult> run_scenario(const RunOptions& options);

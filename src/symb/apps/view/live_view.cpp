@@ -1,0 +1,297 @@
+#include "symb/apps/view/live_view.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <thread>
+
+#include "symb/io/loopback_stream.hpp"
+#include "symb/shell/shell_task.hpp"
+
+namespace symb::apps::view {
+
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr std::size_t kMaxProbeSeries = 32;      // per robot shown
+constexpr std::size_t kMaxLogLines = 200;        // per frame; the rest in the next
+constexpr std::size_t kLogBacklog = 50;          // lines shown from before a robot was chosen
+constexpr std::size_t kMaxLineBytes = 4096;      // a shell line from the page
+constexpr kernel::Duration kFlushLimit = 500ms;  // finish(): how long the last frames may take
+
+double view_seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
+
+}  // namespace
+
+// A page's shell session on one robot: the page's end of a loopback stream, and the tasks the
+// session made on the node (known once the injected attach ran).
+struct LiveView::ShellLink {
+  struct Tasks {
+    std::mutex mu;
+    bool cancelled = false;
+    bool attached = false;
+    os::TaskId io, shell;
+  };
+  std::size_t robot = 0;
+  std::unique_ptr<io::IOStream> ours;
+  std::shared_ptr<Tasks> tasks = std::make_shared<Tasks>();
+};
+
+kernel::Result<std::unique_ptr<LiveView>> LiveView::start(sim::ScenarioSession& session, std::string scenario_name,
+                                                          double duration_seconds, run::RunControl* control,
+                                                          LiveViewOptions options) {
+  std::size_t selected = 0;
+  if (!options.robot.empty()) {
+    std::size_t i = 0;
+    while (i < session.robot_count() && session.robot(i).name() != options.robot) ++i;
+    if (i == session.robot_count())
+      return kernel::Error{"--view-robot: the scenario has no robot '" + options.robot + "'"};
+    selected = i;
+  }
+  auto view = std::unique_ptr<LiveView>(
+      new LiveView(session, std::move(scenario_name), duration_seconds, control, std::move(options)));
+  view->selected_ = selected;
+  LiveView* v = view.get();
+  ViewServerHandlers handlers;
+  handlers.on_open = [v](ClientId c) { v->on_open(c); };
+  handlers.on_message = [v](ClientId c, std::string_view text) { v->on_message(c, text); };
+  handlers.on_close = [v](ClientId c) { v->on_close(c); };
+  handlers.poll = [v](ClientId c) { return v->poll(c); };
+  auto server = ViewServer::start(view->options_.server, std::move(handlers));
+  if (!server) return kernel::Error{server.error()};
+  view->server_ = std::move(server).value();
+  view->handlers_server_.store(view->server_.get(), std::memory_order_release);
+  return view;
+}
+
+LiveView::LiveView(sim::ScenarioSession& session, std::string scenario, double duration, run::RunControl* control,
+                   LiveViewOptions options)
+    : session_(session),
+      scenario_(std::move(scenario)),
+      duration_(duration),
+      control_(control),
+      options_(std::move(options)) {
+  for (std::size_t i = 0; i < session_.robot_count(); ++i) {
+    robots_.push_back(session_.robot(i).name());
+    nodes_.push_back(session_.robot(i).node().name());
+  }
+}
+
+LiveView::~LiveView() {
+  handlers_server_.store(nullptr, std::memory_order_release);
+  server_.reset();  // no handler runs after this
+  std::lock_guard lock(shells_mu_);
+  for (auto& [client, link] : shells_) close_shell(*link);
+  shells_.clear();
+}
+
+void LiveView::send(ClientId client, std::string frame) {
+  if (ViewServer* s = handlers_server_.load(std::memory_order_acquire)) s->send(client, std::move(frame));
+}
+
+std::string LiveView::hello() const {
+  HelloInfo h;
+  h.scenario = scenario_;
+  h.world = &session_.world().spec();
+  h.robots = robots_;
+  h.selected = selected_.load();
+  h.virtual_time = control_ != nullptr;
+  h.paused = control_ && control_->paused();
+  h.speed = control_ ? control_->speed() : 1.0;
+  h.duration_seconds = duration_;
+  return hello_json(h);
+}
+
+void LiveView::on_open(ClientId client) {
+  send(client, hello());
+  selection_changed_ = true;  // the next details go to every client, this one included
+}
+
+void LiveView::on_message(ClientId client, std::string_view text) {
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.remove_suffix(1);
+  const auto space = text.find(' ');
+  const std::string_view word = text.substr(0, space);
+  const std::string_view rest = space == std::string_view::npos ? std::string_view() : text.substr(space + 1);
+  const auto refuse = [&](const std::string& why) { send(client, shell_json("view: " + why + "\n")); };
+  if (word == "shell") return shell_line(client, rest);
+  if (word == "robot") {
+    const auto it = std::find(robots_.begin(), robots_.end(), rest);
+    if (it == robots_.end()) return refuse("no robot '" + std::string(rest.substr(0, 64)) + "'");
+    selected_ = static_cast<std::size_t>(it - robots_.begin());
+    selection_changed_ = true;
+    return;
+  }
+  if (word == "pause" || word == "resume" || word == "step" || word == "speed") {
+    if (!control_) return refuse("a --realtime run cannot be paused, stepped or sped up");
+    if (word == "pause") control_->pause();
+    if (word == "resume") control_->resume();
+    if (word == "step") control_->step();
+    if (word == "speed") {
+      double s = -1;
+      const auto r = std::from_chars(rest.data(), rest.data() + rest.size(), s);
+      if (r.ec != std::errc() || r.ptr != rest.data() + rest.size() || !(s >= 0) || s > 1e6)
+        return refuse("speed: expected a number from 0 (as fast as possible) to 1000000, not '" +
+                      std::string(rest.substr(0, 32)) + "'");
+      control_->set_speed(s);
+    }
+    selection_changed_ = true;  // a status frame at once
+    return;
+  }
+  refuse("unknown command '" + std::string(word.substr(0, 32)) + "' (shell, robot, pause, resume, step, speed)");
+}
+
+void LiveView::shell_line(ClientId client, std::string_view line) {
+  if (line.size() > kMaxLineBytes) {
+    send(client, shell_json("error: line longer than 4096 bytes\n"));
+    return;
+  }
+  std::lock_guard lock(shells_mu_);
+  auto& link = shells_[client];
+  const std::size_t robot = selected_.load();
+  if (link && (link->robot != robot || !link->ours->is_open())) {
+    close_shell(*link);
+    link.reset();
+  }
+  if (!link) {
+    link = std::make_unique<ShellLink>();
+    link->robot = robot;
+    const std::string name = "view" + std::to_string(++shells_opened_);
+    auto [ours, theirs] = io::make_loopback_pair(name);
+    link->ours = std::move(ours);
+    std::shared_ptr<io::IOStream> stream = std::move(theirs);
+    os::Node* node = &session_.robot(robot).node();
+    // As the TCP shell opens its sessions: on the node's own context, where node calls are made.
+    node->inject([node, stream, tasks = link->tasks, name] {
+      std::lock_guard tl(tasks->mu);
+      if (tasks->cancelled) return;
+      std::string free_name = name;
+      for (int k = 2; k < 100 && (node->find(free_name) || node->find(free_name + ".io")); ++k)
+        free_name = name + "-" + std::to_string(k);
+      shell::ShellOptions so;
+      so.close_on_exit = true;
+      auto r = shell::attach_shell(*node, stream, std::move(so), free_name);
+      if (!r) {
+        node->log().warn("view", "cannot open a shell session: " + r.error());
+        stream->close();
+        return;
+      }
+      tasks->io = r->io;
+      tasks->shell = r->shell;
+      tasks->attached = true;
+    });
+  }
+  std::string text(line);
+  text += '\n';
+  (void)link->ours->write_all(std::as_bytes(std::span(text.data(), text.size())));
+}
+
+void LiveView::close_shell(ShellLink& link) {
+  link.ours->close();
+  std::lock_guard tl(link.tasks->mu);
+  link.tasks->cancelled = true;
+  if (!link.tasks->attached) return;
+  os::Node* node = &session_.robot(link.robot).node();
+  node->inject([node, io = link.tasks->io, shell = link.tasks->shell] {
+    (void)node->remove(shell);
+    (void)node->remove(io);
+  });
+}
+
+void LiveView::on_close(ClientId client) {
+  std::lock_guard lock(shells_mu_);
+  const auto it = shells_.find(client);
+  if (it == shells_.end()) return;
+  if (it->second) close_shell(*it->second);
+  shells_.erase(it);
+}
+
+std::optional<std::string> LiveView::poll(ClientId client) {
+  std::lock_guard lock(shells_mu_);
+  const auto it = shells_.find(client);
+  if (it == shells_.end() || !it->second || !it->second->ours->is_open()) return std::nullopt;
+  std::byte buf[4096];
+  auto n = it->second->ours->read_some(buf, kernel::Duration{0});
+  if (!n || *n == 0) return std::nullopt;
+  return shell_json(std::string_view(reinterpret_cast<const char*>(buf), *n));
+}
+
+void LiveView::on_probe(const os::ProbeSample& s) {
+  const std::size_t sel = selected_.load();
+  if (sel >= nodes_.size() || s.node != nodes_[sel]) return;
+  std::lock_guard lock(probes_mu_);
+  auto it = std::find_if(probes_.begin(), probes_.end(),
+                         [&](const ProbeValue& p) { return p.task == s.task && p.channel == s.channel; });
+  if (it == probes_.end()) {
+    if (probes_.size() >= kMaxProbeSeries) return;
+    it = probes_.insert(probes_.end(), ProbeValue{0, std::string(s.task), std::string(s.channel), {}});
+  }
+  it->seconds = view_seconds(s.time);
+  it->values.assign(s.values.begin(), s.values.end());
+}
+
+void LiveView::between_slices() {
+  if (server_->client_count() == 0) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (now - last_pose_ >= options_.pose_every) {
+    last_pose_ = now;
+    std::uint64_t step = 0;
+    double t = 0;
+    session_.runner().with_world([&](sim::World& w) {
+      states_.resize(w.robot_count());
+      for (std::size_t i = 0; i < states_.size(); ++i) states_[i] = w.state(i);
+      step = w.steps();
+      t = w.time();
+    });
+    server_->broadcast(step_json(step, t, states_, options_.max_pose_robots));
+  }
+  if (now - last_detail_ >= options_.detail_every || selection_changed_.load()) {
+    last_detail_ = now;
+    send_details(false);
+  }
+}
+
+void LiveView::send_details(bool finished) {
+  const std::size_t sel = selected_.load();
+  if (sel != shown_) {
+    shown_ = sel;
+    const std::uint64_t last = session_.robot(sel).node().log().last_seq();
+    log_seq_ = last > kLogBacklog ? last - kLogBacklog : 0;
+    std::lock_guard lock(probes_mu_);
+    probes_.clear();
+  }
+  selection_changed_ = false;
+  os::Node& node = session_.robot(sel).node();
+  const auto tasks = node.tasks();
+  const auto hooks = node.hooks();
+  server_->broadcast(graph_json(robots_[sel], tasks, hooks, node.now()));
+  const auto entries = node.log().since(log_seq_, kMaxLogLines);
+  if (!entries.empty()) {
+    log_seq_ = entries.back().seq;
+    server_->broadcast(log_json(robots_[sel], entries));
+  }
+  std::vector<ProbeValue> probes;
+  {
+    std::lock_guard lock(probes_mu_);
+    probes = probes_;
+  }
+  if (!probes.empty()) server_->broadcast(probes_json(robots_[sel], probes));
+  StatusInfo st;
+  st.virtual_time = control_ != nullptr;
+  st.paused = control_ && control_->paused();
+  st.speed = control_ ? control_->speed() : 1.0;
+  st.seconds = session_.runner().with_world([](sim::World& w) { return w.time(); });
+  st.frames_dropped = server_->stats().frames.dropped;
+  st.finished = finished;
+  server_->broadcast(status_json(st));
+}
+
+void LiveView::finish() {
+  if (server_->client_count() == 0) return;
+  send_details(true);
+  // The last frames are worth a moment: the page then says the run is over.
+  const auto until = std::chrono::steady_clock::now() + kFlushLimit;
+  while (server_->stats().frames.queued > 0 && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(10ms);
+}
+
+}  // namespace symb::apps::view
