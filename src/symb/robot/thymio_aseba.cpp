@@ -196,9 +196,9 @@ kernel::Status AsebaThymio::write_targets(std::int16_t left, std::int16_t right)
 kernel::Status AsebaThymio::write_wheels(float left, float right) {
   {
     std::lock_guard lock(mu_);
-    if (!stats_.up) {
+    if (!stats_.up || stopping_) {
       ++stats_.wheel_refused;
-      return kernel::Error{"the link to the Thymio is down"};
+      return kernel::Error{stopping_ ? "the Thymio's driver is stopped" : "the link to the Thymio is down"};
     }
   }
   auto st = write_targets(to_target(left, options_.speed_scale), to_target(right, options_.speed_scale));

@@ -112,7 +112,8 @@ class AsebaThymio : public std::enable_shared_from_this<AsebaThymio> {
   // Opens the stream when needed, finds the node and checks it is a Thymio. An error names what
   // failed (nothing answered, not a Thymio, ...).
   kernel::Status connect();
-  // Starts and stops the reading thread (stop() also writes zero targets when it can).
+  // Starts and stops the reading thread. After stop() wheel commands are refused and zero
+  // targets are written when the robot can be reached.
   void start();
   void stop();
 
