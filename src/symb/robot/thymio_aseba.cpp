@@ -114,7 +114,7 @@ void AsebaThymio::report(os::LogLevel level, const std::string& text) {
 }
 
 kernel::Time AsebaThymio::now() const {
-  return std::chrono::duration_cast<kernel::Duration>(std::chrono::steady_clock::now() - epoch_);
+  return std::chrono::duration_cast<kernel::Duration>(std::chrono::steady_clock::now().time_since_epoch());
 }
 
 kernel::Status AsebaThymio::connect() {
@@ -251,6 +251,8 @@ void AsebaThymio::run() {
 }
 
 void AsebaThymio::read_once() {
+  // The sample's time is when it was asked for: the robot read its sensors after that.
+  const kernel::Time t = now();
   auto v = link_.get(*node_, block_start_, block_count_, options_.reply_timeout);
   if (!v) {
     if (!link_.stream().is_open()) return lose(v.error());
@@ -264,12 +266,13 @@ void AsebaThymio::read_once() {
     return;
   }
   misses_ = 0;
-  const kernel::Time t = now();
+  const kernel::Duration round_trip = now() - t;
   float ir[kIrCount];
   for (std::size_t i = 0; i < kIrCount; ++i)
     ir[i] = static_cast<float>((*v)[layout_.prox_horizontal - block_start_ + i]);
   ir_->publish(std::span<const float>(ir, kIrCount), t);
   std::lock_guard lock(mu_);
+  stats_.last_round_trip = round_trip;
   ++stats_.samples;
   stats_.link = link_.stats();
   if (layout_.motor_left_speed && last_read_) {

@@ -14,8 +14,9 @@
 //
 // A thread of its own (a driver's, like a serial reader) reads the robot each control period:
 // one get variables for prox.horizontal and the measured wheel speeds (one block when they lie
-// close together, as on a Thymio), published to `ir` as an interrupt would. The wheel speeds
-// give odometry (pose and path length, integrated over the read intervals).
+// close together, as on a Thymio), published to `ir` as an interrupt would, stamped with the
+// steady clock's time (since its epoch) at which it was asked for. The wheel speeds give odometry
+// (pose and path length, integrated over the read intervals).
 //
 // Link loss: a read error, the end of the stream, or `lost_periods` unanswered reads in a row.
 // When it notices, it marks the link down, counts a stop and tries to write zero targets (it
@@ -93,6 +94,7 @@ struct AsebaThymioStats {
   std::uint16_t node = 0;
   std::string node_name;
   kernel::Duration last_stop_delay{0};             // from noticing the last loss to the wheels' stop
+  kernel::Duration last_round_trip{0};             // of the newest read: get variables sent to its answer
   std::int16_t left_target = 0, right_target = 0;  // what the robot was last told
   // Odometry from the measured wheel speeds (cm, cm, rad; cm).
   double x = 0, y = 0, heading = 0, path = 0;
@@ -155,7 +157,6 @@ class AsebaThymio : public std::enable_shared_from_this<AsebaThymio> {
   std::optional<kernel::Time> last_read_;
   io::ReopenBackoff backoff_;  // the reading thread's
   std::thread thread_;
-  const std::chrono::steady_clock::time_point epoch_ = std::chrono::steady_clock::now();
 };
 
 }  // namespace symb::robot::thymio
