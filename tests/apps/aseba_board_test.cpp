@@ -1,14 +1,17 @@
 // `symb board`'s Aseba forms without Playground (apps/hil/aseba_board.cpp): a malformed --robot
 // is a usage error naming the form, a robot nobody answers for and a node that is not a Thymio
 // are failures with the reason, --playground writes the world file, and a board run against a
-// fake Thymio (tests/support/aseba_node.hpp) drives its motor targets and ends with the stop.
+// fake Thymio (tests/support/aseba_node.hpp) drives its motor targets, answers on its shell line
+// and ends with the stop.
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include <gtest/gtest.h>
 
 #include "symb/apps/hil/hil_commands.hpp"
+#include "symb/io/pty_pair.hpp"
 
 #include "support/aseba_node.hpp"
 
@@ -71,13 +74,37 @@ TEST(AsebaBoard, PlaygroundWritesTheWorldFile) {
   fs::remove(out);
 }
 
-TEST(AsebaBoard, RunsTheScenarioOnAFakeThymio) {
+TEST(AsebaBoard, RunsTheScenarioOnAFakeThymioWithItsShell) {
   symb::testing::FakeAsebaNode thymio;
   ASSERT_TRUE(thymio.listen());
   const std::uint16_t prox = thymio.address_of("prox.horizontal");
   thymio.poke(prox + 2, 3000);  // a wall ahead: the maze controller turns
-  const Outcome o = board(
-      {kMaze, "--robot", "aseba:tcp:127.0.0.1:" + std::to_string(thymio.port()), "--duration", "600ms", "--quiet"});
+  auto pty = io::PtyPair::open("shell");
+  ASSERT_TRUE(pty) << pty.error();
+  Outcome o;
+  std::thread run([&] {
+    o = board({kMaze, "--robot", "aseba:tcp:127.0.0.1:" + std::to_string(thymio.port()), "--duration", "1200ms",
+               "--quiet", "--shell", pty->slave_path});
+  });
+  // The shell answers on its line as on any board. The question is asked again until the board
+  // has opened its line (bytes written before that may be flushed by its opening).
+  std::string replies;
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+  auto next_ask = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+  int asked = 0;
+  while (std::chrono::steady_clock::now() < end && replies.find("controller") == std::string::npos) {
+    if (std::chrono::steady_clock::now() >= next_ask) {
+      asked += pty->master->write_all(io::as_bytes("tasks\n")) ? 1 : 0;
+      next_ask += std::chrono::milliseconds(200);
+    }
+    std::byte buf[512];
+    auto n = pty->master->read_some(buf, std::chrono::milliseconds(20));
+    if (n) replies.append(reinterpret_cast<const char*>(buf), *n);
+  }
+  run.join();
+  EXPECT_GT(asked, 0) << replies;
+  EXPECT_NE(replies.find("controller"), std::string::npos) << replies;
+  EXPECT_NE(replies.find("wheels"), std::string::npos) << replies;
   EXPECT_EQ(o.status, kExitOk) << o.err;
   EXPECT_NE(o.out.find("on Aseba node 1 'thymio-II'"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("losses=0"), std::string::npos) << o.out;
