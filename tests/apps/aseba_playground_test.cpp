@@ -185,6 +185,7 @@ class AsebaPlayground : public ::testing::Test {
     sim::RobotDevices devices;
     devices.ir = run_.thymio->ir();
     devices.wheels = run_.thymio->wheels();
+    devices.ground = run_.thymio->ground();
     auto built = sim::RobotSystem::build(*run_.executor, robot, devices, ro);
     ASSERT_TRUE(built) << built.error();
     run_.system = std::move(built).value();

@@ -1,9 +1,9 @@
 // AsebaThymio (robot/thymio_aseba) against a fake Aseba node on a local TCP port: a node that is
 // not a Thymio is refused by name; prox.horizontal reaches the `ir` device with the simulation's
-// channels (clamped into [0, kIrMax]); wheel commands reach motor.*.target (scaled); the
-// measured speeds give odometry; and a lost link (the node's end closed, or a node that stops
-// answering) stops the wheels, refuses commands while down, and comes back on the same port
-// with zero targets written first.
+// channels (clamped into [0, kIrMax]) and prox.ground.reflected the `ground` device (/ 1023); wheel commands reach
+// motor.*.target (scaled); the measured speeds give odometry; and a lost link (the node's end closed, or a node that
+// stops answering) stops the wheels, refuses commands while down, and comes back on the same port with zero targets
+// written first.
 #include "symb/robot/thymio_aseba.hpp"
 
 #include <chrono>
@@ -72,9 +72,12 @@ TEST(ThymioAseba, ProxReachesIrAndWheelCommandsReachTheMotorTargets) {
   ASSERT_EQ(prox, 42);
   const std::int16_t raw[7] = {0, 100, 2000, 5000, -3, 7, 4505};
   for (std::size_t i = 0; i < 7; ++i) node.poke(prox + i, raw[i]);
+  node.poke(node.address_of("prox.ground.reflected"), 1023);
+  node.poke(node.address_of("prox.ground.reflected") + 1, 100);
   node.poke(node.address_of("motor.left.speed"), 300);
   node.poke(node.address_of("motor.right.speed"), 300);
   ASSERT_TRUE(t->ir()->open());
+  ASSERT_TRUE(t->ground()->open());
   t->start();
   ASSERT_TRUE(eventually([&] { return t->stats().samples >= 5; }));
   auto s = t->ir()->latest();
@@ -82,6 +85,10 @@ TEST(ThymioAseba, ProxReachesIrAndWheelCommandsReachTheMotorTargets) {
   EXPECT_EQ(std::vector<float>(s->numbers().begin(), s->numbers().end()),
             (std::vector<float>{0, 100, 2000, static_cast<float>(kIrMax), 0, 7, 4505}));
   EXPECT_EQ(t->ir()->stats().clamped_values % 2, 0u);  // 5000 and -3, in every sample
+  auto g = t->ground()->latest();
+  ASSERT_TRUE(g);
+  EXPECT_EQ(g->numbers()[0], 1.0f);
+  EXPECT_FLOAT_EQ(g->numbers()[1], 100.0f / 1023.0f);
 
   ASSERT_TRUE(t->wheels()->open());
   ASSERT_TRUE(t->wheels()->set(std::vector<float>{400, -250}));
@@ -137,8 +144,8 @@ TEST(ThymioAseba, ALostLinkStopsTheWheelsAndComesBackOnTheSamePort) {
 
   ASSERT_TRUE(node.listen(port));  // back on the same port; it still holds 300 as its targets
   ASSERT_TRUE(eventually([&] { return t->stats().reconnects == 1 && t->stats().up; }));
-  EXPECT_EQ(node.peek(57), 0);  // zero targets written before anything else
-  EXPECT_EQ(node.peek(58), 0);
+  // Zero targets written before anything else (the node handles them on its own thread).
+  EXPECT_TRUE(eventually([&] { return node.peek(57) == 0 && node.peek(58) == 0; }));
   ASSERT_TRUE(eventually([&] { return t->stats().samples > samples + 3; }));
   ASSERT_TRUE(t->wheels()->set(std::vector<float>{-100, 100}));
   ASSERT_TRUE(eventually([&] { return node.peek(57) == -100; }));

@@ -70,6 +70,7 @@ TEST(PlaygroundWorld, ThymioOverAsebaHasTheSimulatedDevicesChannels) {
   };
   EXPECT_TRUE(same(thymio->ir()->channels(), SimIrSensor::channel_specs()));
   EXPECT_TRUE(same(thymio->wheels()->channels(), SimWheels::channel_specs()));
+  EXPECT_TRUE(same(thymio->ground()->channels(), SimGroundSensor::channel_specs()));
   // Playground's Thymio turns 500 units into the simulation's top speed.
   EXPECT_DOUBLE_EQ(robot::thymio::kPlaygroundCmPerSecondPerUnit, kCmPerSecondPerWheelUnit);
 }

@@ -20,6 +20,10 @@ std::vector<ChannelSpec> ir_channels() {
   return c;
 }
 
+std::vector<ChannelSpec> ground_channels() {
+  return {ChannelSpec{"left", "reflectance", 0.0f, 1.0f}, ChannelSpec{"right", "reflectance", 0.0f, 1.0f}};
+}
+
 std::vector<ChannelSpec> wheel_channels() {
   return {ChannelSpec{"left", "thymio", -500.0f, 500.0f}, ChannelSpec{"right", "thymio", -500.0f, 500.0f}};
 }
@@ -70,6 +74,8 @@ kernel::Result<AsebaLayout> thymio_layout(const io::aseba::NodeDescription& d) {
   l.motor_right_target = need("motor.right.target", 1);
   if (!wrong.empty())
     return kernel::Error{"node " + std::to_string(d.node) + " '" + d.name + "' is not a Thymio II: " + wrong};
+  if (const auto* g = d.find("prox.ground.reflected"); g != nullptr && g->size == 2)
+    l.prox_ground_reflected = g->address;
   const auto* ls = d.find("motor.left.speed");
   const auto* rs = d.find("motor.right.speed");
   if (ls != nullptr && rs != nullptr && ls->size == 1 && rs->size == 1) {
@@ -94,6 +100,7 @@ AsebaThymio::AsebaThymio(std::shared_ptr<io::IOStream> stream, AsebaThymioOption
     : options_(options),
       link_(std::move(stream)),
       ir_(std::make_shared<Sensor>("ir", ir_channels())),
+      ground_(std::make_shared<Sensor>("ground", ground_channels())),
       wheels_(std::make_shared<AsebaWheels>()),
       backoff_(options.reopen_first, options.reopen_most) {}
 
@@ -132,8 +139,18 @@ kernel::Status AsebaThymio::handshake() {
   auto checked = thymio_layout(*d);
   if (!checked) return kernel::Error{checked.error()};
   AsebaLayout layout = *checked;
-  // One read per period: prox.horizontal and the measured speeds together when they lie close.
+  // One read per period: prox.horizontal, the ground sensors and the measured speeds together
+  // when they lie close (as on a Thymio: 42..60); what lies far is not read.
   std::uint32_t lo = layout.prox_horizontal, hi = lo + kIrCount;
+  if (layout.prox_ground_reflected) {
+    const std::uint32_t g = *layout.prox_ground_reflected;
+    if (std::max(hi, g + 2) - std::min(lo, g) <= 64) {
+      lo = std::min(lo, g);
+      hi = std::max(hi, g + 2);
+    } else {
+      layout.prox_ground_reflected.reset();
+    }
+  }
   if (layout.motor_left_speed) {
     const std::uint32_t l2 = std::min(*layout.motor_left_speed, *layout.motor_right_speed);
     const std::uint32_t h2 = std::max(*layout.motor_left_speed, *layout.motor_right_speed) + 1u;
@@ -271,6 +288,12 @@ void AsebaThymio::read_once() {
   for (std::size_t i = 0; i < kIrCount; ++i)
     ir[i] = static_cast<float>((*v)[layout_.prox_horizontal - block_start_ + i]);
   ir_->publish(std::span<const float>(ir, kIrCount), t);
+  if (layout_.prox_ground_reflected) {
+    const std::size_t g = *layout_.prox_ground_reflected - block_start_;
+    const float ground[2] = {static_cast<float>((*v)[g] / kGroundFullScale),
+                             static_cast<float>((*v)[g + 1] / kGroundFullScale)};
+    ground_->publish(std::span<const float>(ground, 2), t);
+  }
   std::lock_guard lock(mu_);
   stats_.last_round_trip = round_trip;
   ++stats_.samples;

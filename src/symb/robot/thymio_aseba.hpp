@@ -7,6 +7,8 @@
 //           The robot's raw values are the simulation's units: Enki's Thymio2 model (which the
 //           simulator's IrModel follows) was fitted to them, 0 = nothing seen, about 4500 at
 //           contact; values above kIrMax are clamped (docs/thymio.md).
+//   ground  2 channels left, right, reflectance [0, 1]: prox.ground.reflected / 1023, read with
+//           the IR (a simulated robot's `ground` task is made only when a hook names it; so here)
 //   wheels  2 channels left, right, Thymio motor units, [-500, 500]: written to
 //           motor.left.target / motor.right.target at once, multiplied by `speed_scale`
 //           (1 for Playground, whose 500 is the simulation's 16.6 cm/s; 16.6/20 for a real
@@ -56,7 +58,8 @@ struct AsebaLayout {
   std::uint16_t prox_horizontal = 0;  // 7 words
   std::uint16_t motor_left_target = 0;
   std::uint16_t motor_right_target = 0;
-  std::optional<std::uint16_t> motor_left_speed;  // measured speeds, for odometry (when present)
+  std::optional<std::uint16_t> prox_ground_reflected;  // 2 words (when present)
+  std::optional<std::uint16_t> motor_left_speed;       // measured speeds, for odometry (when present)
   std::optional<std::uint16_t> motor_right_speed;
 };
 // The layout of a Thymio II's description, or an error naming every variable that is missing or
@@ -68,6 +71,8 @@ kernel::Result<AsebaLayout> thymio_layout(const io::aseba::NodeDescription& d);
 inline constexpr double kPlaygroundCmPerSecondPerUnit = 16.6 / 500.0;
 inline constexpr double kRealCmPerSecondPerUnit = 20.0 / 500.0;
 inline constexpr double kWheelBase = 9.4;  // cm, between the wheels' contact points
+// prox.ground.reflected's full scale (a 10-bit reading): reflectance = raw / this.
+inline constexpr double kGroundFullScale = 1023.0;
 
 struct AsebaThymioOptions {
   kernel::Duration control_period = std::chrono::milliseconds(30);
@@ -120,6 +125,7 @@ class AsebaThymio : public std::enable_shared_from_this<AsebaThymio> {
   void stop();
 
   std::shared_ptr<Sensor> ir() const { return ir_; }
+  std::shared_ptr<Sensor> ground() const { return ground_; }
   std::shared_ptr<Actuator> wheels() const { return wheels_; }
   io::aseba::AsebaLink& link() { return link_; }
   AsebaThymioStats stats() const;
@@ -142,6 +148,7 @@ class AsebaThymio : public std::enable_shared_from_this<AsebaThymio> {
   AsebaThymioOptions options_;
   io::aseba::AsebaLink link_;
   std::shared_ptr<Sensor> ir_;
+  std::shared_ptr<Sensor> ground_;
   std::shared_ptr<Actuator> wheels_;
 
   mutable std::mutex mu_;  // everything below

@@ -124,6 +124,7 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
   sim::RobotDevices devices;
   devices.ir = thymio->ir();
   devices.wheels = thymio->wheels();
+  devices.ground = thymio->ground();
   auto built = sim::RobotSystem::build(executor, spec, devices, ro);
   if (!built) {
     ctx.err << kCommand << ": " << built.error() << "\n";
