@@ -176,5 +176,18 @@ TEST(ThymioAseba, ANodeThatStopsAnsweringIsLostAndToldToStop) {
   t->stop();
 }
 
+TEST(ThymioAseba, StartedWithoutConnectFindsTheRobotItself) {
+  FakeAsebaNode node;
+  ASSERT_TRUE(node.listen());
+  AsebaThymioOptions o;
+  o.control_period = 10ms;
+  auto t = AsebaThymio::create(connect_to(node), o);
+  t->start();
+  ASSERT_TRUE(eventually([&] { return t->stats().up && t->stats().samples > 0; }));
+  EXPECT_EQ(t->stats().node_name, "thymio-II");
+  EXPECT_EQ(t->stats().reconnects, 1u);
+  t->stop();
+}
+
 }  // namespace
 }  // namespace symb::robot::thymio

@@ -347,6 +347,7 @@ void AsebaThymio::lose(const std::string& why) {
 
 void AsebaThymio::try_reconnect() {
   const kernel::Time t = now();
+  if (!backoff_.down()) backoff_.lost(t);  // started without a connect() that succeeded
   if (!backoff_.due(t)) return;
   kernel::Status st = link_.stream().open();
   if (st) {

@@ -87,7 +87,7 @@ struct AsebaThymioOptions {
 };
 
 struct AsebaThymioStats {
-  io::aseba::LinkStats link;        // of the current connection
+  io::aseba::LinkStats link;        // every connection's, since the backend was made
   std::uint64_t samples = 0;        // IR samples published
   std::uint64_t missed_reads = 0;   // reads not answered in time
   std::uint64_t wheel_writes = 0;   // wheel commands written to the robot
