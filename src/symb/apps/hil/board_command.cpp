@@ -10,6 +10,7 @@
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/shell/shell_task.hpp"
 #include "symb/sim/board_link.hpp"
+#include "symb/sim/playground_world.hpp"
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 
@@ -64,7 +65,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   kernel::Duration stats_every = 5s;
   bool quiet = false;
   std::string playground;
-  std::uint16_t playground_port = 33333;
+  std::uint16_t playground_port = sim::kPlaygroundFirstPort;
   std::optional<double> speed_scale;
   for (const ParsedOption& o : a.options) {
     if (o.name == "--serial" || o.name == "--shell" || o.name == "--robot") {
