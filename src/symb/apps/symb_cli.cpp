@@ -29,6 +29,8 @@ void print_help(std::ostream& out) {
       << "  sim SCENARIO --serial PATH   hardware in the loop: the simulator side (docs/hil.md)\n"
       << "  board SCENARIO --serial PATH [--shell PATH]   ... the board side: one robot's tasks\n"
       << "  link [--dir DIR]        ... the serial lines between them, from pseudo-terminals\n"
+      << "  board SCENARIO --robot aseba:tcp:HOST:PORT | aseba:serial:PATH\n"
+      << "                          a real Thymio II, or Aseba Playground's, over Aseba (docs/thymio.md)\n"
       << "  demo <name> [options]   run a built-in demo (symb demo --help lists them)\n"
       << "  shell --tcp HOST:PORT | --serial PATH\n"
       << "                          open a running node's command shell (like telnet or picocom)\n"

@@ -10,6 +10,7 @@
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/shell/shell_task.hpp"
 #include "symb/sim/board_link.hpp"
+#include "symb/sim/playground_world.hpp"
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 
@@ -25,6 +26,9 @@ constexpr OptionSpec kBoardOptions[] = {
     {"--serial", "PATH", "the data line to the simulator"},
     {"--shell", "PATH", "a second serial line for the command shell (symb shell --serial ...)"},
     {"--robot", "NAME", "the scenario's robot this board runs (default: the first; 3D: required)"},
+    {"--playground", "OUT", "write the scenario's world as an Aseba Playground file and exit (docs/thymio.md)"},
+    {"--port", "N", "--playground: the first robot's port (default 33333)"},
+    {"--speed-scale", "X", "aseba: Thymio motor target per wheel unit (default 1 on tcp, 0.83 on serial)"},
     {"--duration", "D", "stop after this long (default: at Ctrl-C)"},
     {"--seed", "S", "the run's seed, for the node's random streams (default: the scenario's)"},
     {"--stats-every", "D", "print the link statistics this often (default 5s)"},
@@ -39,6 +43,9 @@ void print_board_help(std::ostream& out) {
       << "the serial line: link (frames) -> ir -> the scenario's controller -> wheels -> link. The\n"
       << "simulator (symb sim) sends IR frames and reads the wheel speeds back. The robot's log and\n"
       << "the link statistics (frames good, bad, missed) are printed as it runs.\n\n"
+      << "With --robot aseba:tcp:HOST:PORT (Aseba Playground) or aseba:serial:PATH (a Thymio II on USB)\n"
+      << "the scenario's first robot runs against that Thymio over the Aseba protocol instead of a\n"
+      << "simulator; --serial is then not needed (docs/thymio.md).\n\n"
       << "Options:\n"
       << describe_options(kBoardOptions) << "\n"
       << "Runs until Ctrl-C (or --duration); it keeps running when the link goes silent, and when the\n"
@@ -57,6 +64,9 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   std::optional<std::uint64_t> seed;
   kernel::Duration stats_every = 5s;
   bool quiet = false;
+  std::string playground;
+  std::uint16_t playground_port = sim::kPlaygroundFirstPort;
+  std::optional<double> speed_scale;
   for (const ParsedOption& o : a.options) {
     if (o.name == "--serial" || o.name == "--shell" || o.name == "--robot") {
       if (o.value.empty()) return usage_error(ctx, kBoardCommand, UsageError{std::string(o.name) + ": empty value"});
@@ -74,9 +84,30 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
       seed = std::get<std::uint64_t>(v);
     } else if (o.name == "--quiet") {
       quiet = true;
+    } else if (o.name == "--playground") {
+      if (o.value.empty()) return usage_error(ctx, kBoardCommand, UsageError{"--playground: empty value"});
+      playground = o.value;
+    } else if (o.name == "--port") {
+      auto v = parse_count("--port", o.value, 1, 65535);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kBoardCommand, *e);
+      playground_port = static_cast<std::uint16_t>(std::get<std::uint64_t>(v));
+    } else if (o.name == "--speed-scale") {
+      auto v = parse_fraction("--speed-scale", o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kBoardCommand, *e);
+      if (std::get<double>(v) <= 0)
+        return usage_error(ctx, kBoardCommand, UsageError{"--speed-scale: must be above 0"});
+      speed_scale = std::get<double>(v);
     }
   }
-  if (serial.empty()) return usage_error(ctx, kBoardCommand, UsageError{"missing --serial PATH (the data line)"});
+  const bool aseba = robot_name.substr(0, 6) == "aseba:";
+  AsebaTarget aseba_target;
+  if (aseba) {
+    auto t = parse_aseba_target(robot_name);
+    if (auto* e = std::get_if<UsageError>(&t)) return usage_error(ctx, kBoardCommand, *e);
+    aseba_target = std::get<AsebaTarget>(t);
+  }
+  if (serial.empty() && !aseba && playground.empty())
+    return usage_error(ctx, kBoardCommand, UsageError{"missing --serial PATH (the data line)"});
 
   auto loaded = sim::load_scenario(std::string(a.positional.front()));
   if (!loaded) {
@@ -84,6 +115,18 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     return kExitFailure;
   }
   const sim::Scenario& sc = *loaded;
+  if (!playground.empty()) return write_playground(sc, playground, playground_port, ctx);
+  if (aseba) {
+    BoardAsebaArgs ba;
+    ba.target = aseba_target;
+    ba.shell = shell_path;
+    ba.seed = seed;
+    ba.duration = duration;
+    ba.stats_every = stats_every;
+    ba.speed_scale = speed_scale;
+    ba.quiet = quiet;
+    return run_board_aseba(sc, ba, ctx);
+  }
   if (sc.world_kind == sim::WorldKind::kMujoco) {
     BoardOrganismArgs oa;
     oa.serial = serial;

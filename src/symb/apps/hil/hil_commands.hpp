@@ -13,6 +13,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 #include "symb/apps/cli_args.hpp"
@@ -49,5 +50,28 @@ struct BoardOrganismArgs {
   bool quiet = false;
 };
 int run_board_organism(const sim::Scenario& scenario, const BoardOrganismArgs& args, const CliContext& ctx);
+
+// A Thymio II over the Aseba protocol (aseba_board.cpp; docs/thymio.md): `--robot
+// aseba:tcp:HOST:PORT` (Aseba Playground, or a robot behind Aseba's switch) or
+// `aseba:serial:PATH` (a Thymio on USB).
+struct AsebaTarget {
+  std::string host;  // tcp
+  std::uint16_t port = 0;
+  std::string serial_path;  // serial
+};
+std::variant<AsebaTarget, UsageError> parse_aseba_target(std::string_view text);
+struct BoardAsebaArgs {
+  AsebaTarget target;
+  std::string shell;
+  std::optional<std::uint64_t> seed;
+  std::optional<kernel::Duration> duration;
+  kernel::Duration stats_every = std::chrono::seconds(5);
+  std::optional<double> speed_scale;  // default: 1 over TCP (Playground), 16.6/20 on serial (a real robot)
+  bool quiet = false;
+};
+// Runs the scenario's first robot on the Thymio until Ctrl-C or the duration.
+int run_board_aseba(const sim::Scenario& scenario, const BoardAsebaArgs& args, const CliContext& ctx);
+// Writes the scenario's world as an Aseba Playground world file, its robots from port `port` on.
+int write_playground(const sim::Scenario& scenario, const std::string& out, std::uint16_t port, const CliContext& ctx);
 
 }  // namespace symb::apps::hil
