@@ -13,8 +13,8 @@ namespace symb::apps::run {
 
 namespace {
 
-constexpr double kLongSide = 900;  // px for the arena's longer side, as maze_svg
-constexpr double kMargin = 20;
+constexpr double kCrowdLongSide = 900;  // px for the arena's longer side, as maze_svg
+constexpr double kCrowdMargin = 20;
 constexpr double kCaption = 28;
 constexpr double kLegend = 130;  // px right of the arena
 constexpr int kBins = 20;        // per histogram
@@ -46,8 +46,8 @@ std::string level_colour(int l) {
 
 struct Frame {
   double scale, w, h;
-  double px(double x) const { return kMargin + x * scale; }
-  double py(double y, double height) const { return kMargin + (height - y) * scale; }
+  double px(double x) const { return kCrowdMargin + x * scale; }
+  double py(double y, double height) const { return kCrowdMargin + (height - y) * scale; }
 };
 
 void draw_walls(std::ostream& out, const sim::WorldSpec& world, const Frame& f) {
@@ -93,13 +93,14 @@ std::uint64_t DensityGrid::max() const {
 void write_density_svg(std::ostream& out, const sim::WorldSpec& world, const DensityGrid& grid, double step_seconds,
                        std::string_view caption) {
   const double longer = std::max({world.width, world.height, 1.0});
-  const Frame f{kLongSide / longer, world.width * (kLongSide / longer), world.height * (kLongSide / longer)};
+  const Frame f{kCrowdLongSide / longer, world.width * (kCrowdLongSide / longer),
+                world.height * (kCrowdLongSide / longer)};
   const double top = static_cast<double>(grid.max());
   char buf[240];
-  out << svg_picture_open(f.w + 2 * kMargin + kLegend, f.h + 2 * kMargin + kCaption);
+  out << svg_picture_open(f.w + 2 * kCrowdMargin + kLegend, f.h + 2 * kCrowdMargin + kCaption);
   std::snprintf(buf, sizeof buf,
                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f7f7f2\" stroke=\"#333\"/>\n",
-                kMargin, kMargin, f.w, f.h);
+                kCrowdMargin, kCrowdMargin, f.w, f.h);
   out << buf;
   // Linear scale from 0 to the busiest cell: level 0 is a cell visited at all (empty cells keep
   // the floor's colour), the top level the busiest. Equal neighbours along a row share a rect.
@@ -138,13 +139,13 @@ void write_density_svg(std::ostream& out, const sim::WorldSpec& world, const Den
   draw_walls(out, world, f);
 
   // The legend: the colour bar from 0 (bottom) to the busiest cell (top), ticks in robot-seconds.
-  const double lx = f.w + 2 * kMargin + 10, bar_top = kMargin + 30, bar_h = std::min(300.0, f.h - 40);
+  const double lx = f.w + 2 * kCrowdMargin + 10, bar_top = kCrowdMargin + 30, bar_h = std::min(300.0, f.h - 40);
   const double top_seconds = top * step_seconds;
   out << "<g id=\"legend\" font-family=\"sans-serif\" font-size=\"11\" fill=\"#222\">\n";
-  std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\">robot-seconds</text>\n", lx, kMargin + 8);
+  std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\">robot-seconds</text>\n", lx, kCrowdMargin + 8);
   out << buf;
   std::snprintf(
-      buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\">per %s cm cell</text>\n", lx, kMargin + 21,
+      buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\">per %s cm cell</text>\n", lx, kCrowdMargin + 21,
       (svg_number(std::round(grid.cell() * 10) / 10) + " x " + svg_number(std::round(grid.cell() * 10) / 10)).c_str());
   out << buf;
   for (int l = 0; l < kDensityLevels; ++l) {
@@ -168,7 +169,7 @@ void write_density_svg(std::ostream& out, const sim::WorldSpec& world, const Den
                 fixed(top_seconds, 2).c_str());
   out << buf << "</g>\n";
   std::snprintf(buf, sizeof buf, R"(<text x="%.1f" y="%.1f" font-family="sans-serif" font-size="14" fill="#222">)",
-                kMargin, f.h + 2 * kMargin + 14);
+                kCrowdMargin, f.h + 2 * kCrowdMargin + 14);
   out << buf << svg_escape(caption) << "</text>\n</svg>\n";
 }
 
@@ -192,13 +193,14 @@ void write_robot_stats_svg(std::ostream& out, std::span<const RobotSummary> robo
   }
   constexpr double kPanelW = 320, kPanelH = 240, kPad = 45;
   char buf[260];
-  out << svg_plot_open(3 * kPanelW + kMargin, kPanelH + 2 * kMargin + kCaption + 20);
+  out << svg_plot_open(3 * kPanelW + kCrowdMargin, kPanelH + 2 * kCrowdMargin + kCaption + 20);
   for (int p = 0; p < 3; ++p) {
     std::vector<double>& v = stats[p].values;
     std::sort(v.begin(), v.end());
-    const double x0 = kMargin + p * kPanelW + kPad, y0 = kMargin + 20, w = kPanelW - kPad - 15, h = kPanelH - 40;
+    const double x0 = kCrowdMargin + p * kPanelW + kPad, y0 = kCrowdMargin + 20, w = kPanelW - kPad - 15,
+                 h = kPanelH - 40;
     out << "<g class=\"histogram\">\n";
-    std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" font-weight=\"bold\">%s</text>\n", x0, kMargin + 8,
+    std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" font-weight=\"bold\">%s</text>\n", x0, kCrowdMargin + 8,
                   stats[p].title);
     out << buf;
     if (v.empty()) {
@@ -247,8 +249,8 @@ void write_robot_stats_svg(std::ostream& out, std::span<const RobotSummary> robo
                   y0 + h + 32, v.size(), fixed(mean, 2).c_str(), fixed(v[v.size() / 2], 2).c_str());
     out << buf << "</g>\n";
   }
-  std::snprintf(buf, sizeof buf, R"(<text x="%.1f" y="%.1f" font-size="14" fill="#222">)", kMargin,
-                kPanelH + 2 * kMargin + 30);
+  std::snprintf(buf, sizeof buf, R"(<text x="%.1f" y="%.1f" font-size="14" fill="#222">)", kCrowdMargin,
+                kPanelH + 2 * kCrowdMargin + 30);
   out << buf << svg_escape(caption) << "</text>\n</svg>\n";
 }
 

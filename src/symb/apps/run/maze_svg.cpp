@@ -10,28 +10,28 @@ namespace symb::apps::run {
 
 namespace {
 
-constexpr double kLongSide = 900;  // px for the arena's longer side
-constexpr double kMargin = 20;     // px around it
-constexpr double kCaption = 28;    // px below it
+constexpr double kMazeLongSide = 900;  // px for the arena's longer side
+constexpr double kMazeMargin = 20;     // px around it
+constexpr double kCaption = 28;        // px below it
 
 }  // namespace
 
 void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<const RobotPath> robots,
                     std::string_view caption, std::span<const PathPoint> backdrop) {
   const double longer = std::max({world.width, world.height, 1.0});
-  const double scale = kLongSide / longer;
+  const double scale = kMazeLongSide / longer;
   const double w = world.width * scale, h = world.height * scale;
   // SVG's y axis points down; the world's points up.
-  const auto px = [&](double x) { return kMargin + x * scale; };
-  const auto py = [&](double y) { return kMargin + (world.height - y) * scale; };
+  const auto px = [&](double x) { return kMazeMargin + x * scale; };
+  const auto py = [&](double y) { return kMazeMargin + (world.height - y) * scale; };
   const double stroke = robots.size() > 30 ? 1.0 : 1.8;
   char buf[200];
 
-  out << svg_picture_open(w + 2 * kMargin, h + 2 * kMargin + kCaption);
+  out << svg_picture_open(w + 2 * kMazeMargin, h + 2 * kMazeMargin + kCaption);
   std::snprintf(buf, sizeof buf,
                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f7f7f2\" stroke=\"#333\" "
                 "stroke-width=\"%.1f\"/>\n",
-                kMargin, kMargin, w, h, std::max(2.0, 2.0 * scale));
+                kMazeMargin, kMazeMargin, w, h, std::max(2.0, 2.0 * scale));
   out << buf;
   // Floor zones under everything, in their own grey (0 black .. 1 the floor's white), labelled.
   for (const sim::ZoneSpec& z : world.zones) {
@@ -97,7 +97,7 @@ void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<co
   }
   out << "</g>\n";
   std::snprintf(buf, sizeof buf, R"(<text x="%.1f" y="%.1f" font-family="sans-serif" font-size="14" fill="#222">)",
-                kMargin, h + 2 * kMargin + 14);
+                kMazeMargin, h + 2 * kMazeMargin + 14);
   out << buf << svg_escape(caption) << "</text>\n</svg>\n";
 }
 

@@ -14,11 +14,11 @@ namespace {
 using sim::mujoco::Pose3;
 using sim::mujoco::Vec3;
 
-constexpr double kLongSide = 900;  // px for the drawing's longer side
-constexpr double kMargin = 50;     // px around it: room for the axis labels
-constexpr double kTitle = 30;      // px above it
-constexpr double kLegend = 120;    // px right of it for the modules' names
-constexpr double kMinSpan = 0.3;   // m: a module that barely moved is still drawn at a readable size
+constexpr double kOrganismLongSide = 900;  // px for the drawing's longer side
+constexpr double kOrganismMargin = 50;     // px around it: room for the axis labels
+constexpr double kTitle = 30;              // px above it
+constexpr double kLegend = 120;            // px right of it for the modules' names
+constexpr double kMinSpan = 0.3;           // m: a module that barely moved is still drawn at a readable size
 
 struct Point2 {
   double u = 0, v = 0;
@@ -154,15 +154,15 @@ void write_path_view_svg(std::ostream& out, PathView view, const std::vector<Mod
   };
   widen(u0, u1);
   widen(v0, v1);
-  const double scale = kLongSide / std::max(u1 - u0, v1 - v0);
+  const double scale = kOrganismLongSide / std::max(u1 - u0, v1 - v0);
   const double w = (u1 - u0) * scale, h = (v1 - v0) * scale;
   // SVG's y axis points down; the world's y (top) and z (side) point up.
-  const auto px = [&](double u) { return kMargin + (u - u0) * scale; };
-  const auto py = [&](double v) { return kTitle + kMargin / 2 + (v1 - v) * scale; };
+  const auto px = [&](double u) { return kOrganismMargin + (u - u0) * scale; };
+  const auto py = [&](double v) { return kTitle + kOrganismMargin / 2 + (v1 - v) * scale; };
   char buf[256];
 
-  out << svg_plot_open(w + kMargin * 1.5 + kLegend, h + kTitle + kMargin * 1.5);
-  out << "<text x=\"" << kMargin << "\" y=\"20\" font-size=\"14\" fill=\"#222\">"
+  out << svg_plot_open(w + kOrganismMargin * 1.5 + kLegend, h + kTitle + kOrganismMargin * 1.5);
+  out << "<text x=\"" << kOrganismMargin << "\" y=\"20\" font-size=\"14\" fill=\"#222\">"
       << (view == PathView::kTop ? "top view (x-y), " : "side view (x-z), ") << svg_escape(caption) << "</text>\n";
   // A metre grid, labelled.
   out << "<g stroke=\"#e4e4e4\" fill=\"#555\" font-size=\"10\">\n";
@@ -234,7 +234,7 @@ void write_path_view_svg(std::ostream& out, PathView view, const std::vector<Mod
   // Legend: the modules' names in their colours.
   const double lx = px(u1) + 16;
   for (std::size_t i = 0; i < modules.size() && i < 40; ++i) {
-    const double y = kTitle + kMargin / 2 + 8 + 16 * static_cast<double>(i);
+    const double y = kTitle + kOrganismMargin / 2 + 8 + 16 * static_cast<double>(i);
     std::snprintf(buf, sizeof buf,
                   "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" stroke-width=\"3\"/>"
                   "<text x=\"%.1f\" y=\"%.1f\" fill=\"#222\">",

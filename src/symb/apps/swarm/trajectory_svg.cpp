@@ -11,9 +11,9 @@ namespace symb::apps::swarm {
 
 namespace {
 
-constexpr double kSide = 800;    // px for the arena
-constexpr double kMargin = 20;   // px around it
-constexpr double kCaption = 28;  // px below it
+constexpr double kSide = 800;             // px for the arena
+constexpr double kTrajectoryMargin = 20;  // px around it
+constexpr double kCaption = 28;           // px below it
 
 }  // namespace
 
@@ -21,9 +21,9 @@ void write_trajectory_svg(std::ostream& out, double arena, std::span<const Traje
                           std::string_view caption) {
   const double scale = kSide / arena;
   // SVG's y axis points down; the arena's points up (north).
-  const auto px = [&](double x) { return kMargin + x * scale; };
-  const auto py = [&](double y) { return kMargin + (arena - y) * scale; };
-  const double width = kSide + 2 * kMargin, height = kSide + 2 * kMargin + kCaption;
+  const auto px = [&](double x) { return kTrajectoryMargin + x * scale; };
+  const auto py = [&](double y) { return kTrajectoryMargin + (arena - y) * scale; };
+  const double width = kSide + 2 * kTrajectoryMargin, height = kSide + 2 * kTrajectoryMargin + kCaption;
   // Thinner, fainter lines when there are many robots, so that a crowd stays readable.
   const double stroke = robots.size() > 200 ? 0.6 : robots.size() > 30 ? 1.0 : 1.6;
   const double opacity = robots.size() > 200 ? 0.5 : 0.8;
@@ -33,7 +33,7 @@ void write_trajectory_svg(std::ostream& out, double arena, std::span<const Traje
   std::snprintf(buf, sizeof buf,
                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f7f7f2\" stroke=\"#222\" "
                 "stroke-width=\"3\"/>\n",
-                kMargin, kMargin, kSide, kSide);
+                kTrajectoryMargin, kTrajectoryMargin, kSide, kSide);
   out << buf;
   out << "<g fill=\"none\" stroke-linejoin=\"round\" stroke-linecap=\"round\">\n";
   for (std::size_t i = 0; i < robots.size(); ++i) {
@@ -61,7 +61,7 @@ void write_trajectory_svg(std::ostream& out, double arena, std::span<const Traje
   }
   out << "</g>\n";
   std::snprintf(buf, sizeof buf, R"(<text x="%.1f" y="%.1f" font-family="sans-serif" font-size="14" fill="#222">)",
-                kMargin, kSide + 2 * kMargin + 12);
+                kTrajectoryMargin, kSide + 2 * kTrajectoryMargin + 12);
   out << buf << svg_escape(caption) << "</text>\n</svg>\n";
 }
 
