@@ -214,12 +214,8 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   run::RunControl control(options.speed, scenario.control_period);
   std::unique_ptr<view::LiveView> live;
   if (options.view.on) {
-    view::LiveViewOptions vo;
-    vo.server.host = options.view.host;
-    vo.server.port = options.view.port;
-    vo.server.token = options.view.token;
-    vo.robot = options.view.robot.empty() ? robot_name : options.view.robot;
-    auto started = view::LiveView::start(*session, scenario.name, seconds(scenario.duration), &control, std::move(vo));
+    auto started = view::LiveView::start(*session, scenario.name, seconds(scenario.duration), &control,
+                                         view::live_view_options(options.view, robot_name));
     if (!started) return Error{started.error()};
     live = std::move(started).value();
     if (options.on_notice) options.on_notice("view: " + live->url());

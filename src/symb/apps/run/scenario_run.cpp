@@ -278,13 +278,8 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (!options.realtime) control.emplace(options.speed, scenario.control_period);
   std::unique_ptr<view::LiveView> live;
   if (options.view.on) {
-    view::LiveViewOptions vo;
-    vo.server.host = options.view.host;
-    vo.server.port = options.view.port;
-    vo.server.token = options.view.token;
-    vo.robot = options.view.robot;
     auto started = view::LiveView::start(*session, scenario.name, seconds(scenario.duration),
-                                         control ? &*control : nullptr, std::move(vo));
+                                         control ? &*control : nullptr, view::live_view_options(options.view));
     if (!started) return Error{started.error()};
     live = std::move(started).value();
     live_view.store(live.get(), std::memory_order_release);

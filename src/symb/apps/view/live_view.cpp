@@ -9,6 +9,15 @@
 
 namespace symb::apps::view {
 
+LiveViewOptions live_view_options(const ViewRequest& request, std::string robot) {
+  LiveViewOptions o;
+  o.server.host = request.host;
+  o.server.port = request.port;
+  o.server.token = request.token;
+  o.robot = request.robot.empty() ? std::move(robot) : request.robot;
+  return o;
+}
+
 namespace {
 
 using namespace std::chrono_literals;

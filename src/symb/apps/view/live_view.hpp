@@ -22,6 +22,7 @@
 
 #include "symb/apps/run/run_control.hpp"
 #include "symb/apps/view/view_json.hpp"
+#include "symb/apps/view/view_request.hpp"
 #include "symb/apps/view/view_server.hpp"
 #include "symb/io/stream.hpp"
 #include "symb/os/node.hpp"
@@ -36,6 +37,9 @@ struct LiveViewOptions {
   kernel::Duration pose_every = std::chrono::milliseconds(50);
   kernel::Duration detail_every = std::chrono::milliseconds(200);
 };
+
+// The options a --view request asks for; `robot` is shown first when the request names none.
+LiveViewOptions live_view_options(const ViewRequest& request, std::string robot = {});
 
 class LiveView {
  public:
