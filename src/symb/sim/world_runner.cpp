@@ -85,7 +85,7 @@ kernel::Status WorldRunner::step_once(kernel::Time now) {
   // step later): under the lockstep executor it runs beside their nodes' window.
   if (world_.can_step_ahead())
     executor().run_alongside_lanes([this] {
-      std::lock_guard lock(world_mu_);
+      std::lock_guard lock(physics_mu_);
       world_.begin_next_step(dt_);
     });
   // One writer (this handler): a plain store, not a locked read-modify-write per step.

@@ -31,8 +31,9 @@
 // it takes.
 //
 // Robots are those in the world when the runner is made; add every robot first. The runner owns
-// one mutex for the world: it holds it while it steps, and with_world() takes it for anyone else
-// (a shell, a test) who wants to look at the world while it runs on another thread.
+// one mutex for the world: it holds it while it steps, and with_world() takes it (and the lock of
+// a next step begun early) for anyone else (a shell, a test) who wants to look at the world while
+// it runs on another thread.
 #pragma once
 
 #include <atomic>
@@ -95,6 +96,7 @@ class WorldRunner final : public PeriodicRunner {
   template <class F>
   decltype(auto) with_world(F&& fn) {
     std::lock_guard lock(world_mu_);
+    std::lock_guard physics(physics_mu_);
     return fn(world_);
   }
 
@@ -109,6 +111,10 @@ class WorldRunner final : public PeriodicRunner {
   std::vector<std::shared_ptr<SimGroundSensor>> ground_;
 
   std::mutex world_mu_;
+  // Held by the next step's physics begun beside the robots' window (and, innermost, by
+  // with_world()): not world_mu_, which the step holds while it hands work to the executor's
+  // threads, the very threads that run the physics job.
+  std::mutex physics_mu_;
   StepRecord record_;  // reused every tick; only the runner's context touches it
 
   std::mutex observers_mu_;
