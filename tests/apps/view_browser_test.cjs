@@ -1,8 +1,14 @@
-// The web view in a real browser (`symb run --view`): Debian's chromium driven headless by npm's
-// playwright-core (both installed by scripts/setup). Two runs at real-time speed, side by side:
+// The web view in a real browser (`symb run --view`, `symb evolve --view`, `symb board --view`):
+// Debian's chromium driven headless by npm's playwright-core (both installed by scripts/setup).
+// Six runs side by side, paced to the wall clock:
 //   maze:  the robot moves (its position in the page changes); a `hook` typed into the page's
 //          shell appears in the page's hook table, with its priority; a wrong token is refused
-//   ahhs:  the hormone controller's levels appear among the probes
+//   ahhs:  the hormone controller's levels appear among the probes, with a plot over time
+//   linda: the spiking network's raster gains spikes
+//   caterpillar: the 3D organism's five modules are drawn and move; four docked pairs are listed
+//   evolve: the fitness plot gains points as evaluations end
+//   board: a board (over `symb link`'s lines, no simulator) shows its tasks and no world
+// No page may throw.
 // Run by ctest through view_browser_test.sh, which skips (77) when node, chromium or
 // playwright-core is missing.
 //   node view_browser_test.cjs SYMB_BINARY SCENARIO_DIR PLAYWRIGHT_DIR CHROMIUM
@@ -26,19 +32,25 @@ function fail(message) {
 
 // Starts `symb run SCENARIO --view 0` and resolves with the URL it prints.
 function startRun(scenario, extra = []) {
-  const child = spawn(symb, ['run', path.join(scenarios, scenario), '--view', '0', '--speed', '1', '--duration', '60s',
-                             '--quiet', '--out', path.join(out, scenario), ...extra],
-                      { stdio: ['ignore', 'ignore', 'pipe'] });
+  return startSymb(['run', path.join(scenarios, scenario), '--view', '0', '--speed', '1', '--duration', '60s',
+                    '--quiet', '--out', path.join(out, scenario), ...extra], scenario);
+}
+
+// Starts `symb ARGS` and resolves with the view URL it prints (on stderr or stdout).
+function startSymb(args, what) {
+  const child = spawn(symb, args, { stdio: ['ignore', 'pipe', 'pipe'] });
   children.push(child);
+  const scenario = what;
   return new Promise((resolve, reject) => {
     let err = '';
+    child.stdout.on('data', (d) => { err += d; });
     child.stderr.on('data', (d) => {
       err += d;
       const m = err.match(/view: (http:\/\/\S+)/);
       if (m) resolve(m[1]);
     });
-    child.on('exit', (code) => reject(new Error(`symb run ${scenario} ended (${code}) before its view: ${err}`)));
-    setTimeout(() => reject(new Error(`no view URL from symb run ${scenario}: ${err}`)), 5000);
+    child.on('exit', (code) => reject(new Error(`symb ${scenario} ended (${code}) before its view: ${err}`)));
+    setTimeout(() => reject(new Error(`no view URL from symb ${scenario}: ${err}`)), 10000);
   });
 }
 
@@ -51,13 +63,37 @@ async function check(name, fn) {
   }
 }
 
+// `symb link` (two pseudo-terminal lines) and `symb board` on the board's line, with its view.
+async function startBoard() {
+  const tty = path.join(out, 'tty');
+  children.push(spawn(symb, ['link', '--dir', tty], { stdio: 'ignore' }));
+  for (let i = 0; i < 250 && !fs.existsSync(path.join(tty, 'shell')); ++i) await new Promise((r) => setTimeout(r, 20));
+  return startSymb(['board', path.join(scenarios, 'maze.yaml'), '--serial', path.join(tty, 'board'), '--view', '0',
+                    '--duration', '60s', '--quiet'], 'board');
+}
+
+// A page that fails the test when its script throws.
+async function open(browser, url, name) {
+  const page = await browser.newPage();
+  page.on('pageerror', (e) => fail(`${name}'s page threw: ${e.message}`));
+  await page.goto(url);
+  return page;
+}
+
 (async () => {
-  const [mazeUrl, ahhsUrl] = await Promise.all([startRun('maze.yaml'), startRun('ahhs_obstacle_avoidance.yaml')]);
+  const [mazeUrl, ahhsUrl, lindaUrl, caterpillarUrl, evolveUrl, boardUrl] = await Promise.all([
+    startRun('maze.yaml'), startRun('ahhs_obstacle_avoidance.yaml'), startRun('linda_maze.yaml'),
+    startRun('caterpillar.yaml'),
+    startSymb(['evolve', path.join(scenarios, 'evolve_maze.yaml'), '--view', '0', '--speed', '30', '--quiet',
+               '--checkpoint-every', '0', '--out', path.join(out, 'evolve')], 'evolve_maze.yaml'),
+    startBoard()]);
   const args = process.getuid && process.getuid() === 0 ? ['--no-sandbox'] : [];
   const browser = await chromium.launch({ executablePath: chromiumPath, args, headless: true });
   try {
-    const maze = await browser.newPage();
-    await maze.goto(mazeUrl);
+    // Every page opens at once; the checks below then find their runs well under way.
+    const [maze, ahhsPage, linda, caterpillar, evolve, board] = await Promise.all([
+      open(browser, mazeUrl, 'maze'), open(browser, ahhsUrl, 'ahhs'), open(browser, lindaUrl, 'linda'),
+      open(browser, caterpillarUrl, 'caterpillar'), open(browser, evolveUrl, 'evolve'), open(browser, boardUrl, 'board')]);
     await check('the maze run\'s robot moves in the page', async () => {
       await maze.waitForFunction(() => document.getElementById('robot-pos').textContent.startsWith('x '),
                                  null, { timeout: 10000 });
@@ -101,14 +137,58 @@ async function check(name, fn) {
       if (await bad.$('#tasks tbody tr')) throw new Error('a refused page shows tasks');
     });
     await check('the AHHS run\'s hormone levels appear among the probes', async () => {
-      const ahhs = await browser.newPage();
-      await ahhs.goto(ahhsUrl);
+      const ahhs = ahhsPage;
       const probe = await ahhs.waitForSelector('#probes .probe', { timeout: 10000 });
       const label = await probe.getAttribute('data-probe');
       const values = await probe.$eval('.values', (e) => e.textContent);
       console.log(`  ${label}: ${values}`);
       if (!/hormone/.test(label)) throw new Error(`the first probe is ${label}, not hormone levels`);
       if (!values.split(' ').some((v) => Number(v) > 0)) throw new Error(`no hormone level above 0: ${values}`);
+      // Its plot over time gains points.
+      const key = label;
+      await ahhs.waitForFunction((k) => Number(document.querySelector(`#probes .probe[data-probe="${k}"]`).dataset.points) >= 3,
+                                 key, { timeout: 10000 });
+    });
+    await check('the spiking network\'s raster gains spikes', async () => {
+      await linda.waitForSelector('#spikes .raster', { timeout: 10000 });
+      const spikes = () => Number(document.querySelector('#spikes .raster').dataset.spikes);
+      const first = await linda.evaluate(spikes);
+      await linda.waitForFunction((n) => Number(document.querySelector('#spikes .raster').dataset.spikes) > n, first,
+                                  { timeout: 10000 });
+      console.log(`  ${first} -> ${await linda.evaluate(spikes)} spikes`);
+    });
+    await check('the 3D organism\'s modules are drawn and move', async () => {
+      await caterpillar.waitForFunction(() => document.body.dataset.world === '3d' &&
+                                        document.getElementById('robot-pos').textContent.startsWith('x '),
+                                        null, { timeout: 10000 });
+      if (await caterpillar.$eval('#world', (c) => c.dataset.modules) !== '5') throw new Error('not five modules');
+      const first = await caterpillar.textContent('#robot-pos');
+      await caterpillar.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
+                                        { timeout: 10000 });
+      console.log(`  module m0 ${first} -> ${await caterpillar.textContent('#robot-pos')}`);
+      const pairs = await caterpillar.$eval('#topology', (e) => e.dataset.pairs);
+      if (pairs !== '4') throw new Error(`${pairs} docked pairs listed, not 4`);
+      // Painted: many pixels of the canvas are not blank.
+      const painted = await caterpillar.$eval('#world', (c) => {
+        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+        let n = 0;
+        for (let i = 3; i < d.length; i += 4) n += d[i] > 0 ? 1 : 0;
+        return n;
+      });
+      if (painted < 2000) throw new Error(`only ${painted} pixels drawn`);
+    });
+    await check('the evolution\'s fitness plot gains points', async () => {
+      await evolve.waitForFunction(() => Number(document.getElementById('fitness').dataset.points) > 0, null,
+                                   { timeout: 10000 });
+      const first = Number(await evolve.$eval('#fitness', (c) => c.dataset.points));
+      await evolve.waitForFunction((n) => Number(document.getElementById('fitness').dataset.points) > n, first,
+                                   { timeout: 10000 });
+      console.log(`  ${first} -> ${await evolve.$eval('#fitness', (c) => c.dataset.points)} points`);
+    });
+    await check('a board shows its tasks and no world', async () => {
+      await board.waitForSelector('#tasks tbody tr[data-task="controller"]', { timeout: 10000 });
+      if (await board.evaluate(() => document.body.dataset.world) !== 'none') throw new Error('a board with a world');
+      if (!await board.isVisible('#no-world')) throw new Error('the page does not say there is no world');
     });
   } finally {
     await browser.close();
