@@ -81,115 +81,131 @@ async function open(browser, url, name) {
 }
 
 (async () => {
-  const [mazeUrl, ahhsUrl, lindaUrl, caterpillarUrl, evolveUrl, boardUrl] = await Promise.all([
+  // The browser starts while the runs do.
+  const args = process.getuid && process.getuid() === 0 ? ['--no-sandbox'] : [];
+  const [browser, mazeUrl, ahhsUrl, lindaUrl, caterpillarUrl, evolveUrl, boardUrl] = await Promise.all([
+    chromium.launch({ executablePath: chromiumPath, args, headless: true }),
     startRun('maze.yaml'), startRun('ahhs_obstacle_avoidance.yaml'), startRun('linda_maze.yaml'),
     startRun('caterpillar.yaml'),
     startSymb(['evolve', path.join(scenarios, 'evolve_maze.yaml'), '--view', '0', '--speed', '30', '--quiet',
                '--checkpoint-every', '0', '--out', path.join(out, 'evolve')], 'evolve_maze.yaml'),
     startBoard()]);
-  const args = process.getuid && process.getuid() === 0 ? ['--no-sandbox'] : [];
-  const browser = await chromium.launch({ executablePath: chromiumPath, args, headless: true });
   try {
     // Every page opens at once; the checks below then find their runs well under way.
     const [maze, ahhsPage, linda, caterpillar, evolve, board] = await Promise.all([
       open(browser, mazeUrl, 'maze'), open(browser, ahhsUrl, 'ahhs'), open(browser, lindaUrl, 'linda'),
       open(browser, caterpillarUrl, 'caterpillar'), open(browser, evolveUrl, 'evolve'), open(browser, boardUrl, 'board')]);
-    await check('the maze run\'s robot moves in the page', async () => {
-      await maze.waitForFunction(() => document.getElementById('robot-pos').textContent.startsWith('x '),
-                                 null, { timeout: 10000 });
-      const first = await maze.textContent('#robot-pos');
-      await maze.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
-                                 { timeout: 10000 });
-      const second = await maze.textContent('#robot-pos');
-      console.log(`  position ${first} -> ${second}`);
-    });
-    await check('a hook typed into the page\'s shell appears in the hook table', async () => {
-      await maze.waitForSelector('#hooks tbody tr[data-hook="ir->controller"]', { timeout: 10000 });
-      // The scenario hooks ir -> controller at priority 0: rewired at priority 7, the row is new.
-      const withPriority7 = () => [...document.querySelectorAll('#hooks tbody tr[data-hook="ir->controller"]')]
-        .filter((tr) => tr.cells[3].textContent === '7').length;
-      if (await maze.evaluate(withPriority7)) throw new Error('the hook is there before it was made');
-      await maze.fill('#shell-input', 'unhook ir controller');
-      await maze.press('#shell-input', 'Enter');
-      await maze.fill('#shell-input', 'hook ir controller --priority 7');
-      await maze.press('#shell-input', 'Enter');
-      await maze.waitForFunction(withPriority7, null, { timeout: 10000 })
-        .catch(async (e) => { throw new Error(`${e.message.split('\n')[0]}; the shell said ${JSON.stringify(await maze.textContent('#shell-output'))}`); });
-      await maze.waitForFunction(() => document.getElementById('shell-output').textContent.includes('hook'), null,
-                                 { timeout: 10000 });
-      console.log(`  shell: ${JSON.stringify(await maze.textContent('#shell-output'))}`);
-    });
-    await check('pause stops the clock; resume goes on', async () => {
-      await maze.click('#pause');
-      await maze.waitForFunction(() => document.body.dataset.paused === 'true', null, { timeout: 10000 });
-      const t0 = await maze.textContent('#clock');
-      await maze.waitForTimeout(400);
-      const t1 = await maze.textContent('#clock');
-      if (t0 !== t1) throw new Error(`the clock went on while paused: ${t0} -> ${t1}`);
-      await maze.click('#pause');
-      await maze.waitForFunction((t) => document.getElementById('clock').textContent !== t, t1, { timeout: 10000 });
-    });
-    await check('a wrong token is refused', async () => {
-      const bad = await browser.newPage();
-      await bad.goto(mazeUrl.replace(/token=[^&]*/, 'token=0123456789abcdef'));
-      await bad.waitForFunction(() => document.getElementById('conn').textContent.startsWith('refused'), null,
-                                { timeout: 10000 });
-      if (await bad.$('#tasks tbody tr')) throw new Error('a refused page shows tasks');
-    });
-    await check('the AHHS run\'s hormone levels appear among the probes', async () => {
-      const ahhs = ahhsPage;
-      const probe = await ahhs.waitForSelector('#probes .probe', { timeout: 10000 });
-      const label = await probe.getAttribute('data-probe');
-      const values = await probe.$eval('.values', (e) => e.textContent);
-      console.log(`  ${label}: ${values}`);
-      if (!/hormone/.test(label)) throw new Error(`the first probe is ${label}, not hormone levels`);
-      if (!values.split(' ').some((v) => Number(v) > 0)) throw new Error(`no hormone level above 0: ${values}`);
-      // Its plot over time gains points.
-      const key = label;
-      await ahhs.waitForFunction((k) => Number(document.querySelector(`#probes .probe[data-probe="${k}"]`).dataset.points) >= 3,
-                                 key, { timeout: 10000 });
-    });
-    await check('the spiking network\'s raster gains spikes', async () => {
-      await linda.waitForSelector('#spikes .raster', { timeout: 10000 });
-      const spikes = () => Number(document.querySelector('#spikes .raster').dataset.spikes);
-      const first = await linda.evaluate(spikes);
-      await linda.waitForFunction((n) => Number(document.querySelector('#spikes .raster').dataset.spikes) > n, first,
-                                  { timeout: 10000 });
-      console.log(`  ${first} -> ${await linda.evaluate(spikes)} spikes`);
-    });
-    await check('the 3D organism\'s modules are drawn and move', async () => {
-      await caterpillar.waitForFunction(() => document.body.dataset.world === '3d' &&
-                                        document.getElementById('robot-pos').textContent.startsWith('x '),
-                                        null, { timeout: 10000 });
-      if (await caterpillar.$eval('#world', (c) => c.dataset.modules) !== '5') throw new Error('not five modules');
-      const first = await caterpillar.textContent('#robot-pos');
-      await caterpillar.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
-                                        { timeout: 10000 });
-      console.log(`  module m0 ${first} -> ${await caterpillar.textContent('#robot-pos')}`);
-      const pairs = await caterpillar.$eval('#topology', (e) => e.dataset.pairs);
-      if (pairs !== '4') throw new Error(`${pairs} docked pairs listed, not 4`);
-      // Painted: many pixels of the canvas are not blank.
-      const painted = await caterpillar.$eval('#world', (c) => {
-        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-        let n = 0;
-        for (let i = 3; i < d.length; i += 4) n += d[i] > 0 ? 1 : 0;
-        return n;
-      });
-      if (painted < 2000) throw new Error(`only ${painted} pixels drawn`);
-    });
-    await check('the evolution\'s fitness plot gains points', async () => {
-      await evolve.waitForFunction(() => Number(document.getElementById('fitness').dataset.points) > 0, null,
-                                   { timeout: 10000 });
-      const first = Number(await evolve.$eval('#fitness', (c) => c.dataset.points));
-      await evolve.waitForFunction((n) => Number(document.getElementById('fitness').dataset.points) > n, first,
-                                   { timeout: 10000 });
-      console.log(`  ${first} -> ${await evolve.$eval('#fitness', (c) => c.dataset.points)} points`);
-    });
-    await check('a board shows its tasks and no world', async () => {
-      await board.waitForSelector('#tasks tbody tr[data-task="controller"]', { timeout: 10000 });
-      if (await board.evaluate(() => document.body.dataset.world) !== 'none') throw new Error('a board with a world');
-      if (!await board.isVisible('#no-world')) throw new Error('the page does not say there is no world');
-    });
+    // The maze's checks one after the other (they share its page); the other pages' at the same time.
+    await Promise.all([
+      (async () => {
+        await check('the maze run\'s robot moves in the page', async () => {
+          await maze.waitForFunction(() => document.getElementById('robot-pos').textContent.startsWith('x '),
+                                     null, { timeout: 10000 });
+          const first = await maze.textContent('#robot-pos');
+          await maze.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
+                                     { timeout: 10000 });
+          const second = await maze.textContent('#robot-pos');
+          console.log(`  position ${first} -> ${second}`);
+        });
+        await check('a hook typed into the page\'s shell appears in the hook table', async () => {
+          await maze.waitForSelector('#hooks tbody tr[data-hook="ir->controller"]', { timeout: 10000 });
+          // The scenario hooks ir -> controller at priority 0: rewired at priority 7, the row is new.
+          const withPriority7 = () => [...document.querySelectorAll('#hooks tbody tr[data-hook="ir->controller"]')]
+            .filter((tr) => tr.cells[3].textContent === '7').length;
+          if (await maze.evaluate(withPriority7)) throw new Error('the hook is there before it was made');
+          await maze.fill('#shell-input', 'unhook ir controller');
+          await maze.press('#shell-input', 'Enter');
+          await maze.fill('#shell-input', 'hook ir controller --priority 7');
+          await maze.press('#shell-input', 'Enter');
+          await maze.waitForFunction(withPriority7, null, { timeout: 10000 })
+            .catch(async (e) => { throw new Error(`${e.message.split('\n')[0]}; the shell said ${JSON.stringify(await maze.textContent('#shell-output'))}`); });
+          await maze.waitForFunction(() => document.getElementById('shell-output').textContent.includes('hook'), null,
+                                     { timeout: 10000 });
+          console.log(`  shell: ${JSON.stringify(await maze.textContent('#shell-output'))}`);
+        });
+        await check('pause stops the clock; resume goes on', async () => {
+          await maze.click('#pause');
+          await maze.waitForFunction(() => document.body.dataset.paused === 'true', null, { timeout: 10000 });
+          const t0 = await maze.textContent('#clock');
+          await maze.waitForTimeout(400);
+          const t1 = await maze.textContent('#clock');
+          if (t0 !== t1) throw new Error(`the clock went on while paused: ${t0} -> ${t1}`);
+          await maze.click('#pause');
+          await maze.waitForFunction((t) => document.getElementById('clock').textContent !== t, t1, { timeout: 10000 });
+        });
+        await check('a wrong token is refused', async () => {
+          const bad = await browser.newPage();
+          await bad.goto(mazeUrl.replace(/token=[^&]*/, 'token=0123456789abcdef'));
+          await bad.waitForFunction(() => document.getElementById('conn').textContent.startsWith('refused'), null,
+                                    { timeout: 10000 });
+          if (await bad.$('#tasks tbody tr')) throw new Error('a refused page shows tasks');
+        });
+      })(),
+      (async () => {
+        await check('the AHHS run\'s hormone levels appear among the probes', async () => {
+          const ahhs = ahhsPage;
+          const probe = await ahhs.waitForSelector('#probes .probe', { timeout: 10000 });
+          const label = await probe.getAttribute('data-probe');
+          const values = await probe.$eval('.values', (e) => e.textContent);
+          console.log(`  ${label}: ${values}`);
+          if (!/hormone/.test(label)) throw new Error(`the first probe is ${label}, not hormone levels`);
+          if (!values.split(' ').some((v) => Number(v) > 0)) throw new Error(`no hormone level above 0: ${values}`);
+          // Its plot over time gains points.
+          const key = label;
+          await ahhs.waitForFunction((k) => Number(document.querySelector(`#probes .probe[data-probe="${k}"]`).dataset.points) >= 3,
+                                     key, { timeout: 10000 });
+        });
+      })(),
+      (async () => {
+        await check('the spiking network\'s raster gains spikes', async () => {
+          await linda.waitForSelector('#spikes .raster', { timeout: 10000 });
+          const spikes = () => Number(document.querySelector('#spikes .raster').dataset.spikes);
+          const first = await linda.evaluate(spikes);
+          await linda.waitForFunction((n) => Number(document.querySelector('#spikes .raster').dataset.spikes) > n, first,
+                                      { timeout: 10000 });
+          console.log(`  ${first} -> ${await linda.evaluate(spikes)} spikes`);
+        });
+      })(),
+      (async () => {
+        await check('the 3D organism\'s modules are drawn and move', async () => {
+          await caterpillar.waitForFunction(() => document.body.dataset.world === '3d' &&
+                                            document.getElementById('robot-pos').textContent.startsWith('x '),
+                                            null, { timeout: 10000 });
+          if (await caterpillar.$eval('#world', (c) => c.dataset.modules) !== '5') throw new Error('not five modules');
+          const first = await caterpillar.textContent('#robot-pos');
+          await caterpillar.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
+                                            { timeout: 10000 });
+          console.log(`  module m0 ${first} -> ${await caterpillar.textContent('#robot-pos')}`);
+          const pairs = await caterpillar.$eval('#topology', (e) => e.dataset.pairs);
+          if (pairs !== '4') throw new Error(`${pairs} docked pairs listed, not 4`);
+          // Painted: many pixels of the canvas are not blank.
+          const painted = await caterpillar.$eval('#world', (c) => {
+            const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+            let n = 0;
+            for (let i = 3; i < d.length; i += 4) n += d[i] > 0 ? 1 : 0;
+            return n;
+          });
+          if (painted < 2000) throw new Error(`only ${painted} pixels drawn`);
+        });
+      })(),
+      (async () => {
+        await check('the evolution\'s fitness plot gains points', async () => {
+          await evolve.waitForFunction(() => Number(document.getElementById('fitness').dataset.points) > 0, null,
+                                       { timeout: 10000 });
+          const first = Number(await evolve.$eval('#fitness', (c) => c.dataset.points));
+          await evolve.waitForFunction((n) => Number(document.getElementById('fitness').dataset.points) > n, first,
+                                       { timeout: 10000 });
+          console.log(`  ${first} -> ${await evolve.$eval('#fitness', (c) => c.dataset.points)} points`);
+        });
+      })(),
+      (async () => {
+        await check('a board shows its tasks and no world', async () => {
+          await board.waitForSelector('#tasks tbody tr[data-task="controller"]', { timeout: 10000 });
+          if (await board.evaluate(() => document.body.dataset.world) !== 'none') throw new Error('a board with a world');
+          if (!await board.isVisible('#no-world')) throw new Error('the page does not say there is no world');
+        });
+      })(),
+    ]);
   } finally {
     await browser.close();
     for (const c of children) c.kill('SIGTERM');

@@ -519,8 +519,8 @@ TEST(ViewRun, ASpikingNetworkRunSendsSpikesAndProbeSeriesOverTime) {
 TEST(ViewRun, AnOrganismIsShownInThreeDimensionsAndRunsTheSame) {
   symb::apps::run::RunOptions o;
   o.scenario_path = std::string(SYMB_SCENARIO_DIR) + "/caterpillar.yaml";
-  o.duration = 2s;
-  o.speed = 4;
+  o.duration = 1s;
+  o.speed = 2;  // at least 0.5 s of wall clock: ten poses frames
   o.view.on = true;
   ViewTestReader reader;
   o.on_notice = [&](const std::string& line) { reader.on_notice(line); };
