@@ -215,6 +215,93 @@ TEST(ViewServer, AStalledClientGetsFramesDroppedAndNeverHoldsTheSender) {
   EXPECT_EQ(st.frames.pushed, st.frames.sent + st.frames.dropped + st.frames.queued);
 }
 
+// Reads a view's frames as a browser would, from the moment the run announces its URL ("view:
+// http://127.0.0.1:PORT/?token=T") until the server says goodbye.
+class ViewTestReader {
+ public:
+  ~ViewTestReader() { join(); }
+  void on_notice(const std::string& line) {
+    const auto at = line.find("view: ");
+    if (at == std::string::npos) return;
+    const auto port = line.find(":", line.find("127.0.0.1", at)) + 1;
+    const auto slash = line.find('/', port);
+    const auto token = line.find("?token=", slash);
+    const auto end = line.find_first_of(" \r\n", token);
+    client_.open(static_cast<std::uint16_t>(std::stoi(line.substr(port, slash - port))),
+                 "/ws" + line.substr(token, end == std::string::npos ? std::string::npos : end - token));
+    reader_ = std::thread([this] {
+      for (auto f = client_.read_frame(5000ms); f; f = client_.read_frame(5000ms)) {
+        std::lock_guard lock(mu_);
+        frames_.push_back(*f);
+      }
+      client_.close();
+    });
+  }
+  void join() {
+    if (reader_.joinable()) reader_.join();
+  }
+  bool upgraded() const { return client_.upgraded(); }
+  WsTestClient& client() { return client_; }
+  // The frames of `type` that hold `part`.
+  std::vector<std::string> frames(const std::string& type, const std::string& part = "") {
+    std::lock_guard lock(mu_);
+    std::vector<std::string> out;
+    for (const auto& f : frames_)
+      if (f.find("{\"type\":\"" + type + "\"") == 0 && f.find(part) != std::string::npos) out.push_back(f);
+    return out;
+  }
+  std::size_t size() {
+    std::lock_guard lock(mu_);
+    return frames_.size();
+  }
+
+ private:
+  WsTestClient client_;
+  std::mutex mu_;
+  std::vector<std::string> frames_;
+  std::thread reader_;
+};
+
+// The numbers of a flat JSON array `"key":[...]` in a frame (null as NaN).
+std::vector<double> view_test_numbers(const std::string& frame, const std::string& key) {
+  std::vector<double> out;
+  auto at = frame.find("\"" + key + "\":[");
+  if (at == std::string::npos) return out;
+  at += key.size() + 4;
+  const auto end = frame.find(']', at);
+  std::stringstream s(frame.substr(at, end - at));
+  for (std::string cell; std::getline(s, cell, ',');) out.push_back(cell == "null" ? std::nan("") : std::stod(cell));
+  return out;
+}
+
+// The view only looks: the run `viewed` made with the view is the one without it, bit for bit.
+void expect_the_run_without_the_view(const symb::apps::run::RunOptions& viewed,
+                                     const symb::apps::run::RunResult& result) {
+  symb::apps::run::RunOptions plain;
+  plain.scenario_path = viewed.scenario_path;
+  plain.duration = viewed.duration;
+  auto unseen = symb::apps::run::run_scenario(plain);
+  ASSERT_TRUE(unseen) << unseen.error();
+  EXPECT_EQ(result.trajectory_hash, unseen->trajectory_hash);
+  EXPECT_EQ(result.steps, unseen->steps);
+}
+
+// `symb run SCENARIO --view 0` for `duration` at `speed`, in-process, read by `reader` (`o` keeps
+// the options, for the run without the view).
+symb::kernel::Result<symb::apps::run::RunResult> view_test_run(symb::apps::run::RunOptions& o,
+                                                               const std::string& scenario,
+                                                               symb::kernel::Duration duration, double speed,
+                                                               ViewTestReader& reader) {
+  o.scenario_path = std::string(SYMB_SCENARIO_DIR) + "/" + scenario;
+  o.duration = duration;
+  o.speed = speed;
+  o.view.on = true;
+  o.on_notice = [&reader](const std::string& line) { reader.on_notice(line); };
+  auto result = symb::apps::run::run_scenario(o);
+  reader.join();
+  return result;
+}
+
 // `symb run --view` in-process: a client connects as the URL is announced (before the run
 // starts), asks the page's shell for the robot's hooks and reads what a page would.
 TEST(ViewRun, AClientSeesTheWorldTheRobotTheGraphAndItsShellReplies) {
@@ -225,42 +312,21 @@ TEST(ViewRun, AClientSeesTheWorldTheRobotTheGraphAndItsShellReplies) {
   o.view.on = true;
   // The client reads as a browser would, on its own thread, and closes when the server says
   // goodbye at the end of the run.
-  WsTestClient client;
-  std::vector<std::string> frames;
-  std::thread reader;
+  ViewTestReader reader;
   o.on_notice = [&](const std::string& line) {
-    const auto port = line.find(":", line.find("127.0.0.1")) + 1;
-    const auto slash = line.find('/', port);
-    client.open(static_cast<std::uint16_t>(std::stoi(line.substr(port, slash - port))),
-                "/ws" + line.substr(line.find("?token=")));
-    client.send_text("shell hooks");
-    reader = std::thread([&] {
-      for (auto f = client.read_frame(5000ms); f; f = client.read_frame(5000ms)) frames.push_back(*f);
-      client.close();
-    });
+    reader.on_notice(line);
+    reader.client().send_text("shell hooks");
   };
   auto result = symb::apps::run::run_scenario(o);
-  if (reader.joinable()) reader.join();
+  reader.join();
   ASSERT_TRUE(result) << result.error();
-  ASSERT_TRUE(client.upgraded());
-  const auto has = [&](const std::string& type, const std::string& part) {
-    for (const auto& f : frames)
-      if (f.find("{\"type\":\"" + type + "\"") == 0 && f.find(part) != std::string::npos) return true;
-    return false;
-  };
-  EXPECT_TRUE(has("hello", "\"walls\":[[50,0,50,100,2]")) << frames.size() << " frames";
-  EXPECT_TRUE(has("step", "\"xy\":[25,"));
-  EXPECT_TRUE(has("graph", "\"sender\":\"ir\",\"receiver\":\"controller\""));
-  EXPECT_TRUE(has("shell", "controller")) << "the shell's `hooks` reply";
-  EXPECT_TRUE(has("status", "\"finished\":true"));
-  // The view only looks: the run is the one without it, bit for bit.
-  symb::apps::run::RunOptions plain;
-  plain.scenario_path = o.scenario_path;
-  plain.duration = o.duration;
-  auto unseen = symb::apps::run::run_scenario(plain);
-  ASSERT_TRUE(unseen) << unseen.error();
-  EXPECT_EQ(result->trajectory_hash, unseen->trajectory_hash);
-  EXPECT_EQ(result->steps, unseen->steps);
+  ASSERT_TRUE(reader.upgraded());
+  EXPECT_FALSE(reader.frames("hello", "\"walls\":[[50,0,50,100,2]").empty()) << reader.size() << " frames";
+  EXPECT_FALSE(reader.frames("step", "\"xy\":[25,").empty());
+  EXPECT_FALSE(reader.frames("graph", "\"sender\":\"ir\",\"receiver\":\"controller\"").empty());
+  EXPECT_FALSE(reader.frames("shell", "controller").empty()) << "the shell's `hooks` reply";
+  EXPECT_FALSE(reader.frames("status", "\"finished\":true").empty());
+  expect_the_run_without_the_view(o, *result);
 }
 
 // `symb evolve --view`: the same page on an evolution run, the evolving robot shown first, and
@@ -276,41 +342,24 @@ TEST(ViewRun, AnEvolutionRunIsShownWithItsEvolvingRobotAndRunsTheSame) {
   symb::apps::evolve::EvolveOptions viewed = plain;
   viewed.out_dir = out / "viewed";
   viewed.view.on = true;
-  WsTestClient client;
-  std::vector<std::string> frames;
-  std::thread reader;
-  viewed.on_notice = [&](const std::string& line) {
-    const auto port = line.find(":", line.find("127.0.0.1")) + 1;
-    const auto slash = line.find('/', port);
-    client.open(static_cast<std::uint16_t>(std::stoi(line.substr(port, slash - port))),
-                "/ws" + line.substr(line.find("?token=")));
-    reader = std::thread([&] {
-      for (auto f = client.read_frame(5000ms); f; f = client.read_frame(5000ms)) frames.push_back(*f);
-      client.close();
-    });
-  };
+  ViewTestReader reader;
+  viewed.on_notice = [&](const std::string& line) { reader.on_notice(line); };
   auto a = symb::apps::evolve::run_evolution(plain);
   auto b = symb::apps::evolve::run_evolution(viewed);
-  if (reader.joinable()) reader.join();
+  reader.join();
   std::filesystem::remove_all(out);
   ASSERT_TRUE(a) << a.error();
   ASSERT_TRUE(b) << b.error();
   EXPECT_GT(a->evaluations, 0u);
   EXPECT_EQ(a->evaluations, b->evaluations);
   EXPECT_EQ(a->history_hash, b->history_hash);
-  ASSERT_TRUE(client.upgraded());
-  const auto has = [&](const std::string& type, const std::string& part) {
-    for (const auto& f : frames)
-      if (f.find("{\"type\":\"" + type + "\"") == 0 && f.find(part) != std::string::npos) return true;
-    return false;
-  };
-  EXPECT_TRUE(has("hello", "\"scenario\":\"evolve_maze\"")) << frames.size() << " frames";
-  EXPECT_TRUE(has("graph", "{\"name\":\"evolution\",\"type\":\"one_plus_one\""));
+  ASSERT_TRUE(reader.upgraded());
+  EXPECT_FALSE(reader.frames("hello", "\"scenario\":\"evolve_maze\"").empty()) << reader.size() << " frames";
+  EXPECT_FALSE(reader.frames("graph", "{\"name\":\"evolution\",\"type\":\"one_plus_one\"").empty());
   // The fitness plot's series: every evaluation's fitness, one point per evaluation (far fewer
   // than the plot keeps), however many frames they came in (the browser test sees them grow).
   std::size_t fitness_points = 0, frames_with_points = 0;
-  for (const auto& f : frames) {
-    if (f.find("{\"type\":\"fitness\"") != 0) continue;
+  for (const auto& f : reader.frames("fitness")) {
     const auto at = f.find("{\"channel\":\"fitness\"");
     if (at == std::string::npos) continue;
     const auto from = f.find("\"points\":[", at) + 10;
@@ -322,7 +371,7 @@ TEST(ViewRun, AnEvolutionRunIsShownWithItsEvolvingRobotAndRunsTheSame) {
   }
   EXPECT_GE(frames_with_points, 1u);
   EXPECT_EQ(fitness_points, b->evaluations) << "a point per evaluation";
-  EXPECT_TRUE(has("status", "\"finished\":true"));
+  EXPECT_FALSE(reader.frames("status", "\"finished\":true").empty());
 }
 
 TEST(ViewProbeHistory, KeepsTheWholeRunInBoundedPointsAndHandsOnOnlyWhatIsNew) {
@@ -408,77 +457,12 @@ TEST(ViewJson, ProbeAndFitnessFramesCarryTheirPointsAtAFloatsPrecision) {
       std::string::npos);
 }
 
-// Reads a view's frames as a browser would, from the moment the run announces its URL ("view:
-// http://127.0.0.1:PORT/?token=T") until the server says goodbye.
-class ViewTestReader {
- public:
-  ~ViewTestReader() { join(); }
-  void on_notice(const std::string& line) {
-    const auto at = line.find("view: ");
-    if (at == std::string::npos) return;
-    const auto port = line.find(":", line.find("127.0.0.1", at)) + 1;
-    const auto slash = line.find('/', port);
-    const auto token = line.find("?token=", slash);
-    const auto end = line.find_first_of(" \r\n", token);
-    client_.open(static_cast<std::uint16_t>(std::stoi(line.substr(port, slash - port))),
-                 "/ws" + line.substr(token, end == std::string::npos ? std::string::npos : end - token));
-    reader_ = std::thread([this] {
-      for (auto f = client_.read_frame(5000ms); f; f = client_.read_frame(5000ms)) {
-        std::lock_guard lock(mu_);
-        frames_.push_back(*f);
-      }
-      client_.close();
-    });
-  }
-  void join() {
-    if (reader_.joinable()) reader_.join();
-  }
-  bool upgraded() const { return client_.upgraded(); }
-  WsTestClient& client() { return client_; }
-  // The frames of `type` that hold `part`.
-  std::vector<std::string> frames(const std::string& type, const std::string& part = "") {
-    std::lock_guard lock(mu_);
-    std::vector<std::string> out;
-    for (const auto& f : frames_)
-      if (f.find("{\"type\":\"" + type + "\"") == 0 && f.find(part) != std::string::npos) out.push_back(f);
-    return out;
-  }
-  std::size_t size() {
-    std::lock_guard lock(mu_);
-    return frames_.size();
-  }
-
- private:
-  WsTestClient client_;
-  std::mutex mu_;
-  std::vector<std::string> frames_;
-  std::thread reader_;
-};
-
-// The numbers of a flat JSON array `"key":[...]` in a frame (null as NaN).
-std::vector<double> view_test_numbers(const std::string& frame, const std::string& key) {
-  std::vector<double> out;
-  auto at = frame.find("\"" + key + "\":[");
-  if (at == std::string::npos) return out;
-  at += key.size() + 4;
-  const auto end = frame.find(']', at);
-  std::stringstream s(frame.substr(at, end - at));
-  for (std::string cell; std::getline(s, cell, ',');) out.push_back(cell == "null" ? std::nan("") : std::stod(cell));
-  return out;
-}
-
 // A spiking network's run (linda_maze): the page gets the network's spikes for its raster, and
 // each probe series (the spike rate, ...) with a history that grows frame by frame.
 TEST(ViewRun, ASpikingNetworkRunSendsSpikesAndProbeSeriesOverTime) {
   symb::apps::run::RunOptions o;
-  o.scenario_path = std::string(SYMB_SCENARIO_DIR) + "/linda_maze.yaml";
-  o.duration = 2s;
-  o.speed = 4;  // 0.5 s of wall clock: several detail frames
-  o.view.on = true;
   ViewTestReader reader;
-  o.on_notice = [&](const std::string& line) { reader.on_notice(line); };
-  auto result = symb::apps::run::run_scenario(o);
-  reader.join();
+  auto result = view_test_run(o, "linda_maze.yaml", 2s, 4, reader);  // 0.5 s of wall clock: several frames
   ASSERT_TRUE(result) << result.error();
   ASSERT_TRUE(reader.upgraded());
   const auto spikes = reader.frames("spikes", "\"dots\":[");
@@ -518,14 +502,8 @@ TEST(ViewRun, ASpikingNetworkRunSendsSpikesAndProbeSeriesOverTime) {
 // run is the same as without the view, bit for bit.
 TEST(ViewRun, AnOrganismIsShownInThreeDimensionsAndRunsTheSame) {
   symb::apps::run::RunOptions o;
-  o.scenario_path = std::string(SYMB_SCENARIO_DIR) + "/caterpillar.yaml";
-  o.duration = 1s;
-  o.speed = 2;  // at least 0.5 s of wall clock: ten poses frames
-  o.view.on = true;
   ViewTestReader reader;
-  o.on_notice = [&](const std::string& line) { reader.on_notice(line); };
-  auto result = symb::apps::run::run_scenario(o);
-  reader.join();
+  auto result = view_test_run(o, "caterpillar.yaml", 1s, 2, reader);  // 0.5 s of wall clock: ten poses frames
   ASSERT_TRUE(result) << result.error();
   ASSERT_TRUE(reader.upgraded());
   EXPECT_EQ(reader.frames("hello", "\"world\":{\"kind\":\"organism\",\"modules\":[{\"name\":\"m0\",\"size\":[").size(),
@@ -550,13 +528,7 @@ TEST(ViewRun, AnOrganismIsShownInThreeDimensionsAndRunsTheSame) {
   EXPECT_FALSE(reader.frames("graph", "{\"name\":\"osc\",\"type\":\"oscillator\"").empty());
   EXPECT_FALSE(reader.frames("probes", "\"channel\":\"oscillator\"").empty());
   EXPECT_FALSE(reader.frames("status", "\"finished\":true").empty());
-  symb::apps::run::RunOptions plain;
-  plain.scenario_path = o.scenario_path;
-  plain.duration = o.duration;
-  auto unseen = symb::apps::run::run_scenario(plain);
-  ASSERT_TRUE(unseen) << unseen.error();
-  EXPECT_EQ(result->trajectory_hash, unseen->trajectory_hash);
-  EXPECT_EQ(result->steps, unseen->steps);
+  expect_the_run_without_the_view(o, *result);
 }
 
 // `symb board --view`: a board has a robot's node and no world. The page gets the board's task
