@@ -22,7 +22,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr std::string_view kCommand = "symb board";
+constexpr std::string_view kAsebaBoardCommand = "symb board";
 
 std::string describe(const robot::thymio::AsebaThymioStats& s) {
   return "aseba: node " + std::to_string(s.node) + " '" + s.node_name + "' " + (s.up ? "up" : "DOWN") + "; " +
@@ -60,14 +60,14 @@ std::variant<AsebaTarget, UsageError> parse_aseba_target(std::string_view text) 
 int write_playground(const sim::Scenario& sc, const std::string& out, std::uint16_t port, const CliContext& ctx) {
   auto text = sim::playground_world(sc, port);
   if (!text) {
-    ctx.err << kCommand << ": --playground: " << text.error() << "\n";
+    ctx.err << kAsebaBoardCommand << ": --playground: " << text.error() << "\n";
     return kExitFailure;
   }
   std::ofstream f(out, std::ios::binary | std::ios::trunc);
   f << *text;
   f.close();
   if (!f) {
-    ctx.err << kCommand << ": --playground: cannot write '" << out << "'\n";
+    ctx.err << kAsebaBoardCommand << ": --playground: cannot write '" << out << "'\n";
     return kExitFailure;
   }
   ctx.out << "playground: wrote " << out << " (" << sc.world.walls.size() << " walls, " << sc.robots.size()
@@ -78,7 +78,8 @@ int write_playground(const sim::Scenario& sc, const std::string& out, std::uint1
 
 int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliContext& ctx) {
   if (sc.world_kind != sim::WorldKind::kEnki || sc.robots.empty()) {
-    ctx.err << kCommand << ": " << sc.file << ": an Aseba robot runs a 2D scenario's first robot, and it has none\n";
+    ctx.err << kAsebaBoardCommand << ": " << sc.file
+            << ": an Aseba robot runs a 2D scenario's first robot, and it has none\n";
     return kExitFailure;
   }
   const sim::RobotSpec& spec = sc.robots.front();
@@ -92,7 +93,7 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
       speed_scale = robot::thymio::kPlaygroundCmPerSecondPerUnit / robot::thymio::kRealCmPerSecondPerUnit;
     auto port = std::make_shared<io::SerialPort>("thymio", a.target.serial_path);
     if (auto st = port->open(); !st) {
-      ctx.err << kCommand << ": " << st.error() << "\n";
+      ctx.err << kAsebaBoardCommand << ": " << st.error() << "\n";
       return kExitFailure;
     }
     stream = port;
@@ -100,7 +101,7 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
     where = a.target.host + ":" + std::to_string(a.target.port);
     auto s = io::TcpStream::connect(a.target.host, a.target.port, 2s);
     if (!s) {
-      ctx.err << kCommand << ": " << s.error() << "\n";
+      ctx.err << kAsebaBoardCommand << ": " << s.error() << "\n";
       return kExitFailure;
     }
     stream = std::shared_ptr<io::IOStream>(std::move(s).value());
@@ -112,7 +113,7 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
   if (!a.target.serial_path.empty()) o.cm_per_unit = robot::thymio::kRealCmPerSecondPerUnit;
   auto thymio = robot::thymio::AsebaThymio::create(stream, o);
   if (auto st = thymio->connect(); !st) {
-    ctx.err << kCommand << ": " << where << ": " << st.error() << "\n";
+    ctx.err << kAsebaBoardCommand << ": " << where << ": " << st.error() << "\n";
     return kExitFailure;
   }
 
@@ -127,7 +128,7 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
   devices.ground = thymio->ground();
   auto built = sim::RobotSystem::build(executor, spec, devices, ro);
   if (!built) {
-    ctx.err << kCommand << ": " << built.error() << "\n";
+    ctx.err << kAsebaBoardCommand << ": " << built.error() << "\n";
     return kExitFailure;
   }
   std::unique_ptr<sim::RobotSystem> system = std::move(built).value();
@@ -142,7 +143,7 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
   if (!a.shell.empty()) {
     shell_port = std::make_shared<io::SerialPort>("uart1", a.shell);
     if (auto st = shell_port->open(); !st) {
-      ctx.err << kCommand << ": " << st.error() << "\n";
+      ctx.err << kAsebaBoardCommand << ": " << st.error() << "\n";
       return kExitFailure;
     }
     auto table = std::make_shared<shell::DeviceTable>();
@@ -151,13 +152,13 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
     shell::ShellOptions so;
     so.devices = table;
     if (auto attached = shell::attach_shell(system->node(), shell_port, so); !attached) {
-      ctx.err << kCommand << ": shell: " << attached.error() << "\n";
+      ctx.err << kAsebaBoardCommand << ": shell: " << attached.error() << "\n";
       return kExitFailure;
     }
   }
   auto view_started = BoardView::start(a.view, spec.name, system->node(), sc.name, ctx.err);
   if (!view_started) {
-    ctx.err << kCommand << ": " << view_started.error() << "\n";
+    ctx.err << kAsebaBoardCommand << ": " << view_started.error() << "\n";
     return kExitFailure;
   }
   BoardView board_view = std::move(view_started).value();
@@ -196,11 +197,11 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
   stream->close();
   if (shell_port) shell_port->close();
   if (!cycle.empty()) {
-    ctx.err << kCommand << ": " << cycle << "\n";
+    ctx.err << kAsebaBoardCommand << ": " << cycle << "\n";
     return kExitFailure;
   }
   if (!s.up) {
-    ctx.err << kCommand << ": the Aseba link to " << where << " was down when the board stopped (" << s.losses
+    ctx.err << kAsebaBoardCommand << ": the Aseba link to " << where << " was down when the board stopped (" << s.losses
             << " loss(es), " << s.reconnects << " reconnect(s))\n";
     return kExitFailure;
   }
