@@ -128,6 +128,7 @@ const handlers = {
         const label = document.createElement('span');
         label.className = 'label';
         label.textContent = key;
+        label.title = key;
         const plot = document.createElement('canvas');
         plot.className = 'plot';
         plot.width = 180;
