@@ -22,6 +22,9 @@ const path = require('path');
 const [symb, scenarios, playwrightDir, chromiumPath] = process.argv.slice(2);
 const { chromium } = require(path.join(playwrightDir, 'node_modules', 'playwright-core'));
 
+// How long a page may take to show what is checked: generous, for a loaded CI box (a passing run
+// takes a fraction of it).
+const kWait = 20000;
 const out = fs.mkdtempSync(path.join(os.tmpdir(), 'symb-view-'));
 const children = [];
 
@@ -87,7 +90,7 @@ async function open(browser, url, name) {
     chromium.launch({ executablePath: chromiumPath, args, headless: true }),
     startRun('maze.yaml'), startRun('ahhs_obstacle_avoidance.yaml'), startRun('linda_maze.yaml'),
     startRun('caterpillar.yaml'),
-    startSymb(['evolve', path.join(scenarios, 'evolve_maze.yaml'), '--view', '0', '--speed', '30', '--quiet',
+    startSymb(['evolve', path.join(scenarios, 'evolve_maze.yaml'), '--view', '0', '--speed', '100', '--quiet',
                '--checkpoint-every', '0', '--out', path.join(out, 'evolve')], 'evolve_maze.yaml'),
     startBoard()]);
   try {
@@ -100,15 +103,15 @@ async function open(browser, url, name) {
       (async () => {
         await check('the maze run\'s robot moves in the page', async () => {
           await maze.waitForFunction(() => document.getElementById('robot-pos').textContent.startsWith('x '),
-                                     null, { timeout: 10000 });
+                                     null, { timeout: kWait });
           const first = await maze.textContent('#robot-pos');
           await maze.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
-                                     { timeout: 10000 });
+                                     { timeout: kWait });
           const second = await maze.textContent('#robot-pos');
           console.log(`  position ${first} -> ${second}`);
         });
         await check('a hook typed into the page\'s shell appears in the hook table', async () => {
-          await maze.waitForSelector('#hooks tbody tr[data-hook="ir->controller"]', { timeout: 10000 });
+          await maze.waitForSelector('#hooks tbody tr[data-hook="ir->controller"]', { timeout: kWait });
           // The scenario hooks ir -> controller at priority 0: rewired at priority 7, the row is new.
           const withPriority7 = () => [...document.querySelectorAll('#hooks tbody tr[data-hook="ir->controller"]')]
             .filter((tr) => tr.cells[3].textContent === '7').length;
@@ -117,21 +120,22 @@ async function open(browser, url, name) {
           await maze.press('#shell-input', 'Enter');
           await maze.fill('#shell-input', 'hook ir controller --priority 7');
           await maze.press('#shell-input', 'Enter');
-          await maze.waitForFunction(withPriority7, null, { timeout: 10000 })
+          await maze.waitForFunction(withPriority7, null, { timeout: kWait })
             .catch(async (e) => { throw new Error(`${e.message.split('\n')[0]}; the shell said ${JSON.stringify(await maze.textContent('#shell-output'))}`); });
           await maze.waitForFunction(() => document.getElementById('shell-output').textContent.includes('hook'), null,
-                                     { timeout: 10000 });
+                                     { timeout: kWait });
           console.log(`  shell: ${JSON.stringify(await maze.textContent('#shell-output'))}`);
         });
         await check('pause stops the clock; resume goes on', async () => {
           await maze.click('#pause');
-          await maze.waitForFunction(() => document.body.dataset.paused === 'true', null, { timeout: 10000 });
+          await maze.waitForFunction(() => document.body.dataset.paused === 'true', null, { timeout: kWait });
+          await maze.waitForTimeout(200);  // a frame made before the pause took hold may still come
           const t0 = await maze.textContent('#clock');
           await maze.waitForTimeout(400);
           const t1 = await maze.textContent('#clock');
           if (t0 !== t1) throw new Error(`the clock went on while paused: ${t0} -> ${t1}`);
           await maze.click('#pause');
-          await maze.waitForFunction((t) => document.getElementById('clock').textContent !== t, t1, { timeout: 10000 });
+          await maze.waitForFunction((t) => document.getElementById('clock').textContent !== t, t1, { timeout: kWait });
         });
       })(),
       (async () => {
@@ -139,14 +143,14 @@ async function open(browser, url, name) {
           const bad = await browser.newPage();
           await bad.goto(mazeUrl.replace(/token=[^&]*/, 'token=0123456789abcdef'));
           await bad.waitForFunction(() => document.getElementById('conn').textContent.startsWith('refused'), null,
-                                    { timeout: 10000 });
+                                    { timeout: kWait });
           if (await bad.$('#tasks tbody tr')) throw new Error('a refused page shows tasks');
         });
       })(),
       (async () => {
         await check('the AHHS run\'s hormone levels appear among the probes', async () => {
           const ahhs = ahhsPage;
-          const probe = await ahhs.waitForSelector('#probes .probe', { timeout: 10000 });
+          const probe = await ahhs.waitForSelector('#probes .probe', { timeout: kWait });
           const label = await probe.getAttribute('data-probe');
           const values = await probe.$eval('.values', (e) => e.textContent);
           console.log(`  ${label}: ${values}`);
@@ -155,16 +159,16 @@ async function open(browser, url, name) {
           // Its plot over time gains points.
           const key = label;
           await ahhs.waitForFunction((k) => Number(document.querySelector(`#probes .probe[data-probe="${k}"]`).dataset.points) >= 3,
-                                     key, { timeout: 10000 });
+                                     key, { timeout: kWait });
         });
       })(),
       (async () => {
         await check('the spiking network\'s raster gains spikes', async () => {
-          await linda.waitForSelector('#spikes .raster', { timeout: 10000 });
+          await linda.waitForSelector('#spikes .raster', { timeout: kWait });
           const spikes = () => Number(document.querySelector('#spikes .raster').dataset.spikes);
           const first = await linda.evaluate(spikes);
           await linda.waitForFunction((n) => Number(document.querySelector('#spikes .raster').dataset.spikes) > n, first,
-                                      { timeout: 10000 });
+                                      { timeout: kWait });
           console.log(`  ${first} -> ${await linda.evaluate(spikes)} spikes`);
         });
       })(),
@@ -172,11 +176,11 @@ async function open(browser, url, name) {
         await check('the 3D organism\'s modules are drawn and move', async () => {
           await caterpillar.waitForFunction(() => document.body.dataset.world === '3d' &&
                                             document.getElementById('robot-pos').textContent.startsWith('x '),
-                                            null, { timeout: 10000 });
+                                            null, { timeout: kWait });
           if (await caterpillar.$eval('#world', (c) => c.dataset.modules) !== '5') throw new Error('not five modules');
           const first = await caterpillar.textContent('#robot-pos');
           await caterpillar.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
-                                            { timeout: 10000 });
+                                            { timeout: kWait });
           console.log(`  module m0 ${first} -> ${await caterpillar.textContent('#robot-pos')}`);
           const pairs = await caterpillar.$eval('#topology', (e) => e.dataset.pairs);
           if (pairs !== '4') throw new Error(`${pairs} docked pairs listed, not 4`);
@@ -193,16 +197,16 @@ async function open(browser, url, name) {
       (async () => {
         await check('the evolution\'s fitness plot gains points', async () => {
           await evolve.waitForFunction(() => Number(document.getElementById('fitness').dataset.points) > 0, null,
-                                       { timeout: 10000 });
+                                       { timeout: kWait });
           const first = Number(await evolve.$eval('#fitness', (c) => c.dataset.points));
           await evolve.waitForFunction((n) => Number(document.getElementById('fitness').dataset.points) > n, first,
-                                       { timeout: 10000 });
+                                       { timeout: kWait });
           console.log(`  ${first} -> ${await evolve.$eval('#fitness', (c) => c.dataset.points)} points`);
         });
       })(),
       (async () => {
         await check('a board shows its tasks and no world', async () => {
-          await board.waitForSelector('#tasks tbody tr[data-task="controller"]', { timeout: 10000 });
+          await board.waitForSelector('#tasks tbody tr[data-task="controller"]', { timeout: kWait });
           if (await board.evaluate(() => document.body.dataset.world) !== 'none') throw new Error('a board with a world');
           if (!await board.isVisible('#no-world')) throw new Error('the page does not say there is no world');
         });
