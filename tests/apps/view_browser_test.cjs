@@ -53,7 +53,8 @@ function startSymb(args, what) {
       if (m) resolve(m[1]);
     });
     child.on('exit', (code) => reject(new Error(`symb ${scenario} ended (${code}) before its view: ${err}`)));
-    setTimeout(() => reject(new Error(`no view URL from symb ${scenario}: ${err}`)), 10000);
+    // unref: a pending timer would keep the test alive after its last check.
+    setTimeout(() => reject(new Error(`no view URL from symb ${scenario}: ${err}`)), kWait).unref();
   });
 }
 
