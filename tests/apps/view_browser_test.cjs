@@ -1,8 +1,14 @@
-// The web view in a real browser (`symb run --view`): Debian's chromium driven headless by npm's
-// playwright-core (both installed by scripts/setup). Two runs at real-time speed, side by side:
+// The web view in a real browser (`symb run --view`, `symb evolve --view`, `symb board --view`):
+// Debian's chromium driven headless by npm's playwright-core (both installed by scripts/setup).
+// Six runs side by side, paced to the wall clock:
 //   maze:  the robot moves (its position in the page changes); a `hook` typed into the page's
 //          shell appears in the page's hook table, with its priority; a wrong token is refused
-//   ahhs:  the hormone controller's levels appear among the probes
+//   ahhs:  the hormone controller's levels appear among the probes, with a plot over time
+//   linda: the spiking network's raster gains spikes
+//   caterpillar: the 3D organism's five modules are drawn and move; four docked pairs are listed
+//   evolve: the fitness plot gains points as evaluations end
+//   board: a board (over `symb link`'s lines, no simulator) shows its tasks and no world
+// No page may throw.
 // Run by ctest through view_browser_test.sh, which skips (77) when node, chromium or
 // playwright-core is missing.
 //   node view_browser_test.cjs SYMB_BINARY SCENARIO_DIR PLAYWRIGHT_DIR CHROMIUM
@@ -16,6 +22,9 @@ const path = require('path');
 const [symb, scenarios, playwrightDir, chromiumPath] = process.argv.slice(2);
 const { chromium } = require(path.join(playwrightDir, 'node_modules', 'playwright-core'));
 
+// How long a page may take to show what is checked: generous, for a loaded CI box (a passing run
+// takes a fraction of it).
+const kWait = 20000;
 const out = fs.mkdtempSync(path.join(os.tmpdir(), 'symb-view-'));
 const children = [];
 
@@ -26,19 +35,26 @@ function fail(message) {
 
 // Starts `symb run SCENARIO --view 0` and resolves with the URL it prints.
 function startRun(scenario, extra = []) {
-  const child = spawn(symb, ['run', path.join(scenarios, scenario), '--view', '0', '--speed', '1', '--duration', '60s',
-                             '--quiet', '--out', path.join(out, scenario), ...extra],
-                      { stdio: ['ignore', 'ignore', 'pipe'] });
+  return startSymb(['run', path.join(scenarios, scenario), '--view', '0', '--speed', '1', '--duration', '60s',
+                    '--quiet', '--out', path.join(out, scenario), ...extra], scenario);
+}
+
+// Starts `symb ARGS` and resolves with the view URL it prints (on stderr or stdout).
+function startSymb(args, what) {
+  const child = spawn(symb, args, { stdio: ['ignore', 'pipe', 'pipe'] });
   children.push(child);
+  const scenario = what;
   return new Promise((resolve, reject) => {
     let err = '';
+    child.stdout.on('data', (d) => { err += d; });
     child.stderr.on('data', (d) => {
       err += d;
       const m = err.match(/view: (http:\/\/\S+)/);
       if (m) resolve(m[1]);
     });
-    child.on('exit', (code) => reject(new Error(`symb run ${scenario} ended (${code}) before its view: ${err}`)));
-    setTimeout(() => reject(new Error(`no view URL from symb run ${scenario}: ${err}`)), 5000);
+    child.on('exit', (code) => reject(new Error(`symb ${scenario} ended (${code}) before its view: ${err}`)));
+    // unref: a pending timer would keep the test alive after its last check.
+    setTimeout(() => reject(new Error(`no view URL from symb ${scenario}: ${err}`)), kWait).unref();
   });
 }
 
@@ -51,71 +67,158 @@ async function check(name, fn) {
   }
 }
 
+// `symb link` (two pseudo-terminal lines) and `symb board` on the board's line, with its view.
+async function startBoard() {
+  const tty = path.join(out, 'tty');
+  children.push(spawn(symb, ['link', '--dir', tty], { stdio: 'ignore' }));
+  for (let i = 0; i < 250 && !fs.existsSync(path.join(tty, 'shell')); ++i) await new Promise((r) => setTimeout(r, 20));
+  return startSymb(['board', path.join(scenarios, 'maze.yaml'), '--serial', path.join(tty, 'board'), '--view', '0',
+                    '--duration', '60s', '--quiet'], 'board');
+}
+
+// A page that fails the test when its script throws.
+async function open(browser, url, name) {
+  const page = await browser.newPage();
+  page.on('pageerror', (e) => fail(`${name}'s page threw: ${e.message}`));
+  await page.goto(url);
+  return page;
+}
+
 (async () => {
-  const [mazeUrl, ahhsUrl] = await Promise.all([startRun('maze.yaml'), startRun('ahhs_obstacle_avoidance.yaml')]);
+  // The browser starts while the runs do.
   const args = process.getuid && process.getuid() === 0 ? ['--no-sandbox'] : [];
-  const browser = await chromium.launch({ executablePath: chromiumPath, args, headless: true });
+  const [browser, mazeUrl, ahhsUrl, lindaUrl, caterpillarUrl, evolveUrl, boardUrl] = await Promise.all([
+    chromium.launch({ executablePath: chromiumPath, args, headless: true }),
+    startRun('maze.yaml'), startRun('ahhs_obstacle_avoidance.yaml'), startRun('linda_maze.yaml'),
+    startRun('caterpillar.yaml'),
+    startSymb(['evolve', path.join(scenarios, 'evolve_maze.yaml'), '--view', '0', '--speed', '100', '--quiet',
+               '--checkpoint-every', '0', '--out', path.join(out, 'evolve')], 'evolve_maze.yaml'),
+    startBoard()]);
   try {
-    const maze = await browser.newPage();
-    await maze.goto(mazeUrl);
-    await check('the maze run\'s robot moves in the page', async () => {
-      await maze.waitForFunction(() => document.getElementById('robot-pos').textContent.startsWith('x '),
-                                 null, { timeout: 10000 });
-      const first = await maze.textContent('#robot-pos');
-      await maze.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
-                                 { timeout: 10000 });
-      const second = await maze.textContent('#robot-pos');
-      console.log(`  position ${first} -> ${second}`);
-    });
-    await check('a hook typed into the page\'s shell appears in the hook table', async () => {
-      await maze.waitForSelector('#hooks tbody tr[data-hook="ir->controller"]', { timeout: 10000 });
-      // The scenario hooks ir -> controller at priority 0: rewired at priority 7, the row is new.
-      const withPriority7 = () => [...document.querySelectorAll('#hooks tbody tr[data-hook="ir->controller"]')]
-        .filter((tr) => tr.cells[3].textContent === '7').length;
-      if (await maze.evaluate(withPriority7)) throw new Error('the hook is there before it was made');
-      await maze.fill('#shell-input', 'unhook ir controller');
-      await maze.press('#shell-input', 'Enter');
-      await maze.fill('#shell-input', 'hook ir controller --priority 7');
-      await maze.press('#shell-input', 'Enter');
-      await maze.waitForFunction(withPriority7, null, { timeout: 10000 })
-        .catch(async (e) => { throw new Error(`${e.message.split('\n')[0]}; the shell said ${JSON.stringify(await maze.textContent('#shell-output'))}`); });
-      await maze.waitForFunction(() => document.getElementById('shell-output').textContent.includes('hook'), null,
-                                 { timeout: 10000 });
-      console.log(`  shell: ${JSON.stringify(await maze.textContent('#shell-output'))}`);
-    });
-    await check('pause stops the clock; resume goes on', async () => {
-      await maze.click('#pause');
-      await maze.waitForFunction(() => document.body.dataset.paused === 'true', null, { timeout: 10000 });
-      const t0 = await maze.textContent('#clock');
-      await maze.waitForTimeout(400);
-      const t1 = await maze.textContent('#clock');
-      if (t0 !== t1) throw new Error(`the clock went on while paused: ${t0} -> ${t1}`);
-      await maze.click('#pause');
-      await maze.waitForFunction((t) => document.getElementById('clock').textContent !== t, t1, { timeout: 10000 });
-    });
-    await check('a wrong token is refused', async () => {
-      const bad = await browser.newPage();
-      await bad.goto(mazeUrl.replace(/token=[^&]*/, 'token=0123456789abcdef'));
-      await bad.waitForFunction(() => document.getElementById('conn').textContent.startsWith('refused'), null,
-                                { timeout: 10000 });
-      if (await bad.$('#tasks tbody tr')) throw new Error('a refused page shows tasks');
-    });
-    await check('the AHHS run\'s hormone levels appear among the probes', async () => {
-      const ahhs = await browser.newPage();
-      await ahhs.goto(ahhsUrl);
-      const probe = await ahhs.waitForSelector('#probes .probe', { timeout: 10000 });
-      const label = await probe.getAttribute('data-probe');
-      const values = await probe.$eval('.values', (e) => e.textContent);
-      console.log(`  ${label}: ${values}`);
-      if (!/hormone/.test(label)) throw new Error(`the first probe is ${label}, not hormone levels`);
-      if (!values.split(' ').some((v) => Number(v) > 0)) throw new Error(`no hormone level above 0: ${values}`);
-    });
+    // Every page opens at once; the checks below then find their runs well under way.
+    const [maze, ahhsPage, linda, caterpillar, evolve, board] = await Promise.all([
+      open(browser, mazeUrl, 'maze'), open(browser, ahhsUrl, 'ahhs'), open(browser, lindaUrl, 'linda'),
+      open(browser, caterpillarUrl, 'caterpillar'), open(browser, evolveUrl, 'evolve'), open(browser, boardUrl, 'board')]);
+    // The maze's checks one after the other (they share its page); the other pages' at the same time.
+    await Promise.all([
+      (async () => {
+        await check('the maze run\'s robot moves in the page', async () => {
+          await maze.waitForFunction(() => document.getElementById('robot-pos').textContent.startsWith('x '),
+                                     null, { timeout: kWait });
+          const first = await maze.textContent('#robot-pos');
+          await maze.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
+                                     { timeout: kWait });
+          const second = await maze.textContent('#robot-pos');
+          console.log(`  position ${first} -> ${second}`);
+        });
+        await check('a hook typed into the page\'s shell appears in the hook table', async () => {
+          await maze.waitForSelector('#hooks tbody tr[data-hook="ir->controller"]', { timeout: kWait });
+          // The scenario hooks ir -> controller at priority 0: rewired at priority 7, the row is new.
+          const withPriority7 = () => [...document.querySelectorAll('#hooks tbody tr[data-hook="ir->controller"]')]
+            .filter((tr) => tr.cells[3].textContent === '7').length;
+          if (await maze.evaluate(withPriority7)) throw new Error('the hook is there before it was made');
+          await maze.fill('#shell-input', 'unhook ir controller');
+          await maze.press('#shell-input', 'Enter');
+          await maze.fill('#shell-input', 'hook ir controller --priority 7');
+          await maze.press('#shell-input', 'Enter');
+          await maze.waitForFunction(withPriority7, null, { timeout: kWait })
+            .catch(async (e) => { throw new Error(`${e.message.split('\n')[0]}; the shell said ${JSON.stringify(await maze.textContent('#shell-output'))}`); });
+          await maze.waitForFunction(() => document.getElementById('shell-output').textContent.includes('hook'), null,
+                                     { timeout: kWait });
+          console.log(`  shell: ${JSON.stringify(await maze.textContent('#shell-output'))}`);
+        });
+        await check('pause stops the clock; resume goes on', async () => {
+          await maze.click('#pause');
+          await maze.waitForFunction(() => document.body.dataset.paused === 'true', null, { timeout: kWait });
+          await maze.waitForTimeout(200);  // a frame made before the pause took hold may still come
+          const t0 = await maze.textContent('#clock');
+          await maze.waitForTimeout(400);
+          const t1 = await maze.textContent('#clock');
+          if (t0 !== t1) throw new Error(`the clock went on while paused: ${t0} -> ${t1}`);
+          await maze.click('#pause');
+          await maze.waitForFunction((t) => document.getElementById('clock').textContent !== t, t1, { timeout: kWait });
+        });
+      })(),
+      (async () => {
+        await check('a wrong token is refused', async () => {
+          const bad = await browser.newPage();
+          await bad.goto(mazeUrl.replace(/token=[^&]*/, 'token=0123456789abcdef'));
+          await bad.waitForFunction(() => document.getElementById('conn').textContent.startsWith('refused'), null,
+                                    { timeout: kWait });
+          if (await bad.$('#tasks tbody tr')) throw new Error('a refused page shows tasks');
+        });
+      })(),
+      (async () => {
+        await check('the AHHS run\'s hormone levels appear among the probes', async () => {
+          const ahhs = ahhsPage;
+          const probe = await ahhs.waitForSelector('#probes .probe', { timeout: kWait });
+          const label = await probe.getAttribute('data-probe');
+          const values = await probe.$eval('.values', (e) => e.textContent);
+          console.log(`  ${label}: ${values}`);
+          if (!/hormone/.test(label)) throw new Error(`the first probe is ${label}, not hormone levels`);
+          if (!values.split(' ').some((v) => Number(v) > 0)) throw new Error(`no hormone level above 0: ${values}`);
+          // Its plot over time gains points.
+          const key = label;
+          await ahhs.waitForFunction((k) => Number(document.querySelector(`#probes .probe[data-probe="${k}"]`).dataset.points) >= 3,
+                                     key, { timeout: kWait });
+        });
+      })(),
+      (async () => {
+        await check('the spiking network\'s raster gains spikes', async () => {
+          await linda.waitForSelector('#spikes .raster', { timeout: kWait });
+          const spikes = () => Number(document.querySelector('#spikes .raster').dataset.spikes);
+          const first = await linda.evaluate(spikes);
+          await linda.waitForFunction((n) => Number(document.querySelector('#spikes .raster').dataset.spikes) > n, first,
+                                      { timeout: kWait });
+          console.log(`  ${first} -> ${await linda.evaluate(spikes)} spikes`);
+        });
+      })(),
+      (async () => {
+        await check('the 3D organism\'s modules are drawn and move', async () => {
+          await caterpillar.waitForFunction(() => document.body.dataset.world === '3d' &&
+                                            document.getElementById('robot-pos').textContent.startsWith('x '),
+                                            null, { timeout: kWait });
+          if (await caterpillar.$eval('#world', (c) => c.dataset.modules) !== '5') throw new Error('not five modules');
+          const first = await caterpillar.textContent('#robot-pos');
+          await caterpillar.waitForFunction((p) => document.getElementById('robot-pos').textContent !== p, first,
+                                            { timeout: kWait });
+          console.log(`  module m0 ${first} -> ${await caterpillar.textContent('#robot-pos')}`);
+          const pairs = await caterpillar.$eval('#topology', (e) => e.dataset.pairs);
+          if (pairs !== '4') throw new Error(`${pairs} docked pairs listed, not 4`);
+          // Painted: many pixels of the canvas are not blank.
+          const painted = await caterpillar.$eval('#world', (c) => {
+            const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+            let n = 0;
+            for (let i = 3; i < d.length; i += 4) n += d[i] > 0 ? 1 : 0;
+            return n;
+          });
+          if (painted < 2000) throw new Error(`only ${painted} pixels drawn`);
+        });
+      })(),
+      (async () => {
+        await check('the evolution\'s fitness plot gains points', async () => {
+          await evolve.waitForFunction(() => Number(document.getElementById('fitness').dataset.points) > 0, null,
+                                       { timeout: kWait });
+          const first = Number(await evolve.$eval('#fitness', (c) => c.dataset.points));
+          await evolve.waitForFunction((n) => Number(document.getElementById('fitness').dataset.points) > n, first,
+                                       { timeout: kWait });
+          console.log(`  ${first} -> ${await evolve.$eval('#fitness', (c) => c.dataset.points)} points`);
+        });
+      })(),
+      (async () => {
+        await check('a board shows its tasks and no world', async () => {
+          await board.waitForSelector('#tasks tbody tr[data-task="controller"]', { timeout: kWait });
+          if (await board.evaluate(() => document.body.dataset.world) !== 'none') throw new Error('a board with a world');
+          if (!await board.isVisible('#no-world')) throw new Error('the page does not say there is no world');
+        });
+      })(),
+    ]);
   } finally {
     await browser.close();
-    for (const c of children) c.kill('SIGTERM');
+    for (const c of children) c.kill('SIGKILL');  // their files are not wanted: no need to wait for them
     fs.rmSync(out, { recursive: true, force: true });
   }
 })().catch((e) => {
   fail(e.message);
-  for (const c of children) c.kill('SIGTERM');
+  for (const c of children) c.kill('SIGKILL');
 });

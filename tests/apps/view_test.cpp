@@ -1,11 +1,16 @@
 // The web view's parts (apps/view/): the bounded frame queue (drops counted, the producer never
-// waits), the JSON frames, the server (token, refusal, a stalled client) and `symb run --view`
-// end to end in-process with a WebSocket client (the page's protocol without a browser; the
-// browser itself is view_browser_test.cjs).
+// waits), the bounded probe history, the JSON frames, the server (token, refusal, a stalled
+// client) and `symb run --view` (2D, a spiking network, a 3D organism), `symb evolve --view` and
+// `symb board --view` end to end with a WebSocket client (the page's protocol without a browser;
+// the browser itself is view_browser_test.cjs).
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <filesystem>
+#include <mutex>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -15,9 +20,11 @@
 #include "symb/apps/evolve/evolve_run.hpp"
 #include "symb/apps/run/scenario_run.hpp"
 #include "symb/apps/view/frame_queue.hpp"
+#include "symb/apps/view/probe_history.hpp"
 #include "symb/apps/view/view_json.hpp"
 #include "symb/apps/view/view_server.hpp"
 
+#include "support/symb_child.hpp"
 #include "support/ws_test_client.hpp"
 
 namespace {
@@ -208,6 +215,93 @@ TEST(ViewServer, AStalledClientGetsFramesDroppedAndNeverHoldsTheSender) {
   EXPECT_EQ(st.frames.pushed, st.frames.sent + st.frames.dropped + st.frames.queued);
 }
 
+// Reads a view's frames as a browser would, from the moment the run announces its URL ("view:
+// http://127.0.0.1:PORT/?token=T") until the server says goodbye.
+class ViewTestReader {
+ public:
+  ~ViewTestReader() { join(); }
+  void on_notice(const std::string& line) {
+    const auto at = line.find("view: ");
+    if (at == std::string::npos) return;
+    const auto port = line.find(":", line.find("127.0.0.1", at)) + 1;
+    const auto slash = line.find('/', port);
+    const auto token = line.find("?token=", slash);
+    const auto end = line.find_first_of(" \r\n", token);
+    client_.open(static_cast<std::uint16_t>(std::stoi(line.substr(port, slash - port))),
+                 "/ws" + line.substr(token, end == std::string::npos ? std::string::npos : end - token));
+    reader_ = std::thread([this] {
+      for (auto f = client_.read_frame(5000ms); f; f = client_.read_frame(5000ms)) {
+        std::lock_guard lock(mu_);
+        frames_.push_back(*f);
+      }
+      client_.close();
+    });
+  }
+  void join() {
+    if (reader_.joinable()) reader_.join();
+  }
+  bool upgraded() const { return client_.upgraded(); }
+  WsTestClient& client() { return client_; }
+  // The frames of `type` that hold `part`.
+  std::vector<std::string> frames(const std::string& type, const std::string& part = "") {
+    std::lock_guard lock(mu_);
+    std::vector<std::string> out;
+    for (const auto& f : frames_)
+      if (f.find("{\"type\":\"" + type + "\"") == 0 && f.find(part) != std::string::npos) out.push_back(f);
+    return out;
+  }
+  std::size_t size() {
+    std::lock_guard lock(mu_);
+    return frames_.size();
+  }
+
+ private:
+  WsTestClient client_;
+  std::mutex mu_;
+  std::vector<std::string> frames_;
+  std::thread reader_;
+};
+
+// The numbers of a flat JSON array `"key":[...]` in a frame (null as NaN).
+std::vector<double> view_test_numbers(const std::string& frame, const std::string& key) {
+  std::vector<double> out;
+  auto at = frame.find("\"" + key + "\":[");
+  if (at == std::string::npos) return out;
+  at += key.size() + 4;
+  const auto end = frame.find(']', at);
+  std::stringstream s(frame.substr(at, end - at));
+  for (std::string cell; std::getline(s, cell, ',');) out.push_back(cell == "null" ? std::nan("") : std::stod(cell));
+  return out;
+}
+
+// The view only looks: the run `viewed` made with the view is the one without it, bit for bit.
+void expect_the_run_without_the_view(const symb::apps::run::RunOptions& viewed,
+                                     const symb::apps::run::RunResult& result) {
+  symb::apps::run::RunOptions plain;
+  plain.scenario_path = viewed.scenario_path;
+  plain.duration = viewed.duration;
+  auto unseen = symb::apps::run::run_scenario(plain);
+  ASSERT_TRUE(unseen) << unseen.error();
+  EXPECT_EQ(result.trajectory_hash, unseen->trajectory_hash);
+  EXPECT_EQ(result.steps, unseen->steps);
+}
+
+// `symb run SCENARIO --view 0` for `duration` at `speed`, in-process, read by `reader` (`o` keeps
+// the options, for the run without the view).
+symb::kernel::Result<symb::apps::run::RunResult> view_test_run(symb::apps::run::RunOptions& o,
+                                                               const std::string& scenario,
+                                                               symb::kernel::Duration duration, double speed,
+                                                               ViewTestReader& reader) {
+  o.scenario_path = std::string(SYMB_SCENARIO_DIR) + "/" + scenario;
+  o.duration = duration;
+  o.speed = speed;
+  o.view.on = true;
+  o.on_notice = [&reader](const std::string& line) { reader.on_notice(line); };
+  auto result = symb::apps::run::run_scenario(o);
+  reader.join();
+  return result;
+}
+
 // `symb run --view` in-process: a client connects as the URL is announced (before the run
 // starts), asks the page's shell for the robot's hooks and reads what a page would.
 TEST(ViewRun, AClientSeesTheWorldTheRobotTheGraphAndItsShellReplies) {
@@ -218,42 +312,21 @@ TEST(ViewRun, AClientSeesTheWorldTheRobotTheGraphAndItsShellReplies) {
   o.view.on = true;
   // The client reads as a browser would, on its own thread, and closes when the server says
   // goodbye at the end of the run.
-  WsTestClient client;
-  std::vector<std::string> frames;
-  std::thread reader;
+  ViewTestReader reader;
   o.on_notice = [&](const std::string& line) {
-    const auto port = line.find(":", line.find("127.0.0.1")) + 1;
-    const auto slash = line.find('/', port);
-    client.open(static_cast<std::uint16_t>(std::stoi(line.substr(port, slash - port))),
-                "/ws" + line.substr(line.find("?token=")));
-    client.send_text("shell hooks");
-    reader = std::thread([&] {
-      for (auto f = client.read_frame(5000ms); f; f = client.read_frame(5000ms)) frames.push_back(*f);
-      client.close();
-    });
+    reader.on_notice(line);
+    reader.client().send_text("shell hooks");
   };
   auto result = symb::apps::run::run_scenario(o);
-  if (reader.joinable()) reader.join();
+  reader.join();
   ASSERT_TRUE(result) << result.error();
-  ASSERT_TRUE(client.upgraded());
-  const auto has = [&](const std::string& type, const std::string& part) {
-    for (const auto& f : frames)
-      if (f.find("{\"type\":\"" + type + "\"") == 0 && f.find(part) != std::string::npos) return true;
-    return false;
-  };
-  EXPECT_TRUE(has("hello", "\"walls\":[[50,0,50,100,2]")) << frames.size() << " frames";
-  EXPECT_TRUE(has("step", "\"xy\":[25,"));
-  EXPECT_TRUE(has("graph", "\"sender\":\"ir\",\"receiver\":\"controller\""));
-  EXPECT_TRUE(has("shell", "controller")) << "the shell's `hooks` reply";
-  EXPECT_TRUE(has("status", "\"finished\":true"));
-  // The view only looks: the run is the one without it, bit for bit.
-  symb::apps::run::RunOptions plain;
-  plain.scenario_path = o.scenario_path;
-  plain.duration = o.duration;
-  auto unseen = symb::apps::run::run_scenario(plain);
-  ASSERT_TRUE(unseen) << unseen.error();
-  EXPECT_EQ(result->trajectory_hash, unseen->trajectory_hash);
-  EXPECT_EQ(result->steps, unseen->steps);
+  ASSERT_TRUE(reader.upgraded());
+  EXPECT_FALSE(reader.frames("hello", "\"walls\":[[50,0,50,100,2]").empty()) << reader.size() << " frames";
+  EXPECT_FALSE(reader.frames("step", "\"xy\":[25,").empty());
+  EXPECT_FALSE(reader.frames("graph", "\"sender\":\"ir\",\"receiver\":\"controller\"").empty());
+  EXPECT_FALSE(reader.frames("shell", "controller").empty()) << "the shell's `hooks` reply";
+  EXPECT_FALSE(reader.frames("status", "\"finished\":true").empty());
+  expect_the_run_without_the_view(o, *result);
 }
 
 // `symb evolve --view`: the same page on an evolution run, the evolving robot shown first, and
@@ -269,37 +342,228 @@ TEST(ViewRun, AnEvolutionRunIsShownWithItsEvolvingRobotAndRunsTheSame) {
   symb::apps::evolve::EvolveOptions viewed = plain;
   viewed.out_dir = out / "viewed";
   viewed.view.on = true;
-  WsTestClient client;
-  std::vector<std::string> frames;
-  std::thread reader;
-  viewed.on_notice = [&](const std::string& line) {
-    const auto port = line.find(":", line.find("127.0.0.1")) + 1;
-    const auto slash = line.find('/', port);
-    client.open(static_cast<std::uint16_t>(std::stoi(line.substr(port, slash - port))),
-                "/ws" + line.substr(line.find("?token=")));
-    reader = std::thread([&] {
-      for (auto f = client.read_frame(5000ms); f; f = client.read_frame(5000ms)) frames.push_back(*f);
-      client.close();
-    });
-  };
+  ViewTestReader reader;
+  viewed.on_notice = [&](const std::string& line) { reader.on_notice(line); };
   auto a = symb::apps::evolve::run_evolution(plain);
   auto b = symb::apps::evolve::run_evolution(viewed);
-  if (reader.joinable()) reader.join();
+  reader.join();
   std::filesystem::remove_all(out);
   ASSERT_TRUE(a) << a.error();
   ASSERT_TRUE(b) << b.error();
   EXPECT_GT(a->evaluations, 0u);
   EXPECT_EQ(a->evaluations, b->evaluations);
   EXPECT_EQ(a->history_hash, b->history_hash);
-  ASSERT_TRUE(client.upgraded());
-  const auto has = [&](const std::string& type, const std::string& part) {
-    for (const auto& f : frames)
-      if (f.find("{\"type\":\"" + type + "\"") == 0 && f.find(part) != std::string::npos) return true;
-    return false;
-  };
-  EXPECT_TRUE(has("hello", "\"scenario\":\"evolve_maze\"")) << frames.size() << " frames";
-  EXPECT_TRUE(has("graph", "{\"name\":\"evolution\",\"type\":\"one_plus_one\""));
-  EXPECT_TRUE(has("status", "\"finished\":true"));
+  ASSERT_TRUE(reader.upgraded());
+  EXPECT_FALSE(reader.frames("hello", "\"scenario\":\"evolve_maze\"").empty()) << reader.size() << " frames";
+  EXPECT_FALSE(reader.frames("graph", "{\"name\":\"evolution\",\"type\":\"one_plus_one\"").empty());
+  // The fitness plot's series: every evaluation's fitness, one point per evaluation (far fewer
+  // than the plot keeps), however many frames they came in (the browser test sees them grow).
+  std::size_t fitness_points = 0, frames_with_points = 0;
+  for (const auto& f : reader.frames("fitness")) {
+    const auto at = f.find("{\"channel\":\"fitness\"");
+    if (at == std::string::npos) continue;
+    const auto from = f.find("\"points\":[", at) + 10;
+    const std::string points = f.substr(from, f.find(']', from) - from);
+    if (f.find("\"full\":true") != std::string::npos) fitness_points = 0;  // all again: the page starts over
+    if (points.empty()) continue;
+    ++frames_with_points;
+    fitness_points += static_cast<std::size_t>(std::count(points.begin(), points.end(), ',') + 1) / 2;
+  }
+  EXPECT_GE(frames_with_points, 1u);
+  EXPECT_EQ(fitness_points, b->evaluations) << "a point per evaluation";
+  EXPECT_FALSE(reader.frames("status", "\"finished\":true").empty());
+}
+
+TEST(ViewProbeHistory, KeepsTheWholeRunInBoundedPointsAndHandsOnOnlyWhatIsNew) {
+  view::ProbeHistory h(view::ProbeHistoryOptions{.capacity = 8, .width = 2, .max_series = 2, .max_latest = 3});
+  const float v[] = {1, 2, 3, 4};
+  h.record("ahhs", "hormones", 0.0, v);
+  h.record("ahhs", "hormones", 0.1, v);
+  auto first = h.take(false);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(first[0].width, 2u);
+  EXPECT_EQ(first[0].latest, (std::vector<float>{1, 2, 3}));  // max_latest values of the sample
+  EXPECT_EQ(first[0].points, (std::vector<double>{0.0, 1, 2, 0.1, 1, 2}));
+  EXPECT_TRUE(h.take(false)[0].points.empty()) << "nothing new since the last take";
+  // 100 samples in all: the series halves its points as it fills, never above the capacity, and
+  // still starts at the run's first instant.
+  for (int i = 2; i < 100; ++i) {
+    h.record("ahhs", "hormones", 0.1 * i, v);
+    ASSERT_LE(h.points("ahhs", "hormones"), 8u) << i;
+  }
+  auto all = h.take(true);
+  ASSERT_EQ(all[0].points.size() % 3, 0u);
+  EXPECT_GE(all[0].points.size() / 3, 4u);
+  EXPECT_EQ(all[0].points.front(), 0.0);
+  EXPECT_GE(all[0].points[all[0].points.size() - 3], 8.0) << "the points reach the latest tenth of the run";
+  EXPECT_EQ(all[0].stride, 16u);  // 100 samples in at most 8 points: every 16th kept
+  for (std::size_t k = 3; k < all[0].points.size(); k += 3) EXPECT_GT(all[0].points[k], all[0].points[k - 3]);
+  // A sample narrower than the series: the missing value is NaN. A third series is refused.
+  const float one[] = {5};
+  h.record("net", "outputs", 1, one);
+  h.record("net", "outputs", 2, v);
+  h.record("schema", "vector", 1, v);
+  EXPECT_EQ(h.series(), 2u);
+  EXPECT_EQ(h.refused_series(), 1u);
+  const auto net = h.take(false)[1];
+  EXPECT_EQ(net.width, 1u) << "the first sample's width";
+  EXPECT_EQ(net.points, (std::vector<double>{1, 5, 2, 1}));
+  EXPECT_THROW(
+      view::ProbeHistory(view::ProbeHistoryOptions{.capacity = 7, .width = 1, .max_series = 1, .max_latest = 1}),
+      std::invalid_argument);
+}
+
+TEST(ViewJson, AnOrganismFrameHasPosesHingesAndDockedPairs) {
+  const view::ModulePose poses[] = {{{0.1, 0.02, 0.04}, {1, 0, 0, 0}, 0.25},
+                                    {{-0.0001, 0, 0.04}, {0.7071, 0, 0, 0.7071}, -1}};
+  const view::DockedPair docked[] = {{0, 1, 1, 0}};
+  EXPECT_EQ(view::organism_json(12, 0.24, poses, docked),
+            "{\"type\":\"organism\",\"step\":12,\"t\":0.24,\"m\":[0.1,0.02,0.04,1,0,0,0,0.25,-0.0001,0,0.04,0.7071,0,0,"
+            "0.7071,-1],\"docked\":[[0,1,1,0]]}\n");
+  std::vector<view::ModuleShape> shapes(1);
+  shapes[0].name = "m0";
+  shapes[0].size = {0.1, 0.1, 0.08};
+  shapes[0].hinge_axis = {0, 1, 0};
+  shapes[0].wheels = true;
+  shapes[0].connectors = {{"front", {0.05, 0, 0}}};
+  view::HelloInfo h;
+  h.scenario = "caterpillar";
+  h.organism = &shapes;
+  h.robots = {"m0"};
+  EXPECT_NE(
+      view::hello_json(h).find("\"world\":{\"kind\":\"organism\",\"modules\":[{\"name\":\"m0\",\"size\":[0.1,0.1,"
+                               "0.08],\"hinge\":[0,1,0],\"wheels\":true,\"connectors\":[[\"front\",0.05,0,0]]}]}"),
+      std::string::npos)
+      << view::hello_json(h);
+  h.organism = nullptr;  // a board: no world
+  EXPECT_NE(view::hello_json(h).find("\"world\":null"), std::string::npos);
+}
+
+TEST(ViewJson, ProbeAndFitnessFramesCarryTheirPointsAtAFloatsPrecision) {
+  view::ProbeHistory h(view::ProbeHistoryOptions{.capacity = 8, .width = 2, .max_series = 4, .max_latest = 8});
+  const float v[] = {0.3f, -1.5f};
+  h.record("ahhs", "hormones/a", 1.23456, v);
+  const auto s = h.take(true);
+  EXPECT_EQ(
+      view::probes_json("thymio", s, true),
+      "{\"type\":\"probes\",\"robot\":\"thymio\",\"full\":true,\"probes\":[{\"t\":1.23456,\"task\":\"ahhs\","
+      "\"channel\":\"hormones/a\",\"values\":[0.3,-1.5],\"width\":2,\"stride\":1,\"points\":[1.235,0.3,-1.5]}]}\n");
+  const float spikes[] = {0.5f, 3, 0.501f, 7};
+  EXPECT_EQ(view::spikes_json("thymio", "snn", spikes, 2),
+            "{\"type\":\"spikes\",\"robot\":\"thymio\",\"task\":\"snn\",\"dropped\":2,\"dots\":[0.5,3,0.501,7]}\n");
+  EXPECT_NE(
+      view::fitness_json("thymio", "evolution", s, false)
+          .find("\"full\":false,\"series\":[{\"channel\":\"hormones/a\",\"width\":2,\"points\":[1.235,0.3,-1.5]}]"),
+      std::string::npos);
+}
+
+// A spiking network's run (linda_maze): the page gets the network's spikes for its raster, and
+// each probe series (the spike rate, ...) with a history that grows frame by frame.
+TEST(ViewRun, ASpikingNetworkRunSendsSpikesAndProbeSeriesOverTime) {
+  symb::apps::run::RunOptions o;
+  ViewTestReader reader;
+  auto result = view_test_run(o, "linda_maze.yaml", 2s, 4, reader);  // 0.5 s of wall clock: several frames
+  ASSERT_TRUE(result) << result.error();
+  ASSERT_TRUE(reader.upgraded());
+  const auto spikes = reader.frames("spikes", "\"dots\":[");
+  ASSERT_FALSE(spikes.empty()) << reader.size() << " frames";
+  std::size_t dots = 0;
+  double last = 0;
+  for (const auto& f : spikes) {
+    const auto d = view_test_numbers(f, "dots");
+    ASSERT_EQ(d.size() % 2, 0u);
+    for (std::size_t k = 0; k < d.size(); k += 2) {
+      EXPECT_GE(d[k], 0);
+      EXPECT_LE(d[k], 2.0) << "spike times are the run's seconds";
+      EXPECT_GE(d[k + 1], 0) << "a neuron";
+      last = std::max(last, d[k]);
+    }
+    dots += d.size() / 2;
+  }
+  EXPECT_GT(dots, 100u) << "a spiking network fires";
+  EXPECT_GT(last, 1.0) << "spikes keep coming through the run";
+  // The rate series: points in more than one frame, each frame's after the one before.
+  const auto rates = reader.frames("probes", "\"channel\":\"rate\"");
+  std::size_t with_points = 0;
+  double before = -1;
+  for (const auto& f : rates) {
+    const auto p = view_test_numbers(f.substr(f.find("\"channel\":\"rate\"")), "points");
+    if (f.find("\"full\":true") != std::string::npos) before = -1;  // all again: the page starts over
+    if (p.empty()) continue;
+    ++with_points;
+    EXPECT_GT(p[0], before) << "new points only";
+    before = p[p.size() - 2];
+  }
+  EXPECT_GE(with_points, 2u) << rates.size() << " probe frames with the rate";
+}
+
+// A 3D organism (the caterpillar's five docked modules): the page gets their shapes, their poses
+// frame by frame with the hinges waving, the docked pairs, a module's task graph and probes; the
+// run is the same as without the view, bit for bit.
+TEST(ViewRun, AnOrganismIsShownInThreeDimensionsAndRunsTheSame) {
+  symb::apps::run::RunOptions o;
+  ViewTestReader reader;
+  auto result = view_test_run(o, "caterpillar.yaml", 1s, 2, reader);  // 0.5 s of wall clock: ten poses frames
+  ASSERT_TRUE(result) << result.error();
+  ASSERT_TRUE(reader.upgraded());
+  EXPECT_EQ(reader.frames("hello", "\"world\":{\"kind\":\"organism\",\"modules\":[{\"name\":\"m0\",\"size\":[").size(),
+            1u);
+  const auto poses = reader.frames("organism");
+  ASSERT_GE(poses.size(), 3u) << reader.size() << " frames";
+  const auto first = view_test_numbers(poses.front(), "m");
+  ASSERT_EQ(first.size(), 5u * 8u) << poses.front();
+  double hinge_change = 0;  // the most any hinge moved from its first angle
+  for (const auto& f : poses) {
+    const auto m = view_test_numbers(f, "m");
+    ASSERT_EQ(m.size(), first.size()) << f;
+    for (std::size_t k = 0; k < 5; ++k)
+      hinge_change = std::max(hinge_change, std::abs(m[8 * k + 7] - first[8 * k + 7]));
+  }
+  EXPECT_GT(hinge_change, 0.1) << "the hinges wave (amplitude 0.6 rad)";
+  // The chain's four docked pairs, each once, the first m0.back (connector 1) to m1.front (0).
+  const std::string& end = poses.back();
+  const std::string docked = end.substr(end.find("\"docked\":"));
+  EXPECT_EQ(std::count(docked.begin(), docked.end(), '['), 5) << docked;
+  EXPECT_NE(docked.find("[0,1,1,0]"), std::string::npos) << docked;
+  EXPECT_FALSE(reader.frames("graph", "{\"name\":\"osc\",\"type\":\"oscillator\"").empty());
+  EXPECT_FALSE(reader.frames("probes", "\"channel\":\"oscillator\"").empty());
+  EXPECT_FALSE(reader.frames("status", "\"finished\":true").empty());
+  expect_the_run_without_the_view(o, *result);
+}
+
+// `symb board --view`: a board has a robot's node and no world. The page gets the board's task
+// graph (its link tasks and the scenario's controller), a null world, and a shell on the board's
+// node. The link is silent (no simulator): the board runs anyway.
+TEST(ViewBoard, ABoardIsShownWithItsTasksAndNoWorld) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("symb_view_board_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  symb::test_support::SymbChild link(SYMB_BINARY, "link --dir '" + (dir / "tty").string() + "'", dir / "link.log");
+  for (int i = 0; i < 200 && !fs::exists(dir / "tty" / "shell"); ++i) std::this_thread::sleep_for(20ms);
+  ASSERT_TRUE(fs::exists(dir / "tty" / "board")) << link.output();
+  symb::test_support::SymbChild board(SYMB_BINARY,
+                                      "board '" + std::string(SYMB_SCENARIO_DIR) + "/maze.yaml' --serial '" +
+                                          (dir / "tty" / "board").string() + "' --view 0 --duration 2s --quiet",
+                                      dir / "board.log");
+  std::string out;
+  for (int i = 0; i < 250 && (out = board.output()).find("?token=") == std::string::npos; ++i)
+    std::this_thread::sleep_for(20ms);
+  ViewTestReader reader;
+  reader.on_notice(out);
+  ASSERT_TRUE(reader.upgraded()) << out;
+  ASSERT_TRUE(reader.client().send_text("shell tasks"));
+  EXPECT_EQ(board.wait(), 0) << board.output();
+  reader.join();
+  link.interrupt();
+  link.wait();
+  fs::remove_all(dir);
+  EXPECT_EQ(reader.frames("hello", "\"world\":null").size(), 1u) << reader.size() << " frames";
+  EXPECT_TRUE(reader.frames("step").empty()) << "no world, no poses";
+  EXPECT_FALSE(reader.frames("graph", "{\"name\":\"controller\",").empty());
+  EXPECT_FALSE(reader.frames("graph", "{\"name\":\"ir\",").empty());
+  EXPECT_FALSE(reader.frames("shell", "controller").empty()) << "the page's shell runs on the board's node";
+  EXPECT_FALSE(reader.frames("status", "\"virtual\":false").empty());
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // The web view's page: reads the run's JSON frames (src/symb/apps/view/view_json.hpp says what
 // each holds) from /ws and sends one-line commands back (live_view.hpp lists them). Plain
-// JavaScript, no build step, nothing fetched from elsewhere: it works offline.
+// JavaScript, no build step, nothing fetched from elsewhere: it works offline. The world is 2D
+// (drawn here), 3D (organism.js) or none (a board: the world is the simulator's); plots over
+// time are plots.js's.
 'use strict';
 
 const $ = (id) => document.getElementById(id);
@@ -12,7 +14,8 @@ const kMaxTrail = 2000;          // points per robot
 const kMaxTrailRobots = 200;     // bigger swarms: no trails, dots only
 const palette = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2', '#7f7f7f'];
 
-const view = { world: null, robots: [], selected: 0, poses: null, stride: 1, trails: [], paused: false, virtual: true };
+const view = { world: null, kind: 'none', robots: [], selected: 0, poses: null, stride: 1, trails: [], paused: false,
+               virtual: true, organism: Organism.state(), probes: new Map(), spikes: new Map(), fitness: new Map() };
 let opened = false;
 
 function send(line) { if (ws.readyState === WebSocket.OPEN) ws.send(line); }
@@ -33,6 +36,10 @@ ws.onmessage = (ev) => {
 const handlers = {
   hello(m) {
     view.world = m.world;
+    view.kind = !m.world ? 'none' : m.world.kind === 'organism' ? '3d' : '2d';
+    document.body.dataset.world = view.kind;
+    if (view.kind === '3d') Organism.hello(view.organism, m.world);
+    canvas.dataset.modules = view.kind === '3d' ? m.world.modules.length : 0;
     view.robots = m.robots;
     view.selected = m.selected;
     view.virtual = m.virtual;
@@ -61,6 +68,19 @@ const handlers = {
     const k = view.selected / m.stride;
     if (Number.isInteger(k) && 3 * k + 2 < m.xy.length)
       $('robot-pos').textContent = `x ${m.xy[3 * k].toFixed(1)} y ${m.xy[3 * k + 1].toFixed(1)} cm, ${m.xy[3 * k + 2]}°`;
+    draw();
+  },
+  organism(m) {
+    const o = view.organism;
+    Organism.frame(o, m);
+    $('clock').textContent = `t = ${m.t.toFixed(1)} s`;
+    const p = o.poses[view.selected];
+    if (p) $('robot-pos').textContent =
+      `x ${(100 * p.p[0]).toFixed(1)} y ${(100 * p.p[1]).toFixed(1)} z ${(100 * p.p[2]).toFixed(1)} cm, ` +
+      `hinge ${(p.hinge * 180 / Math.PI).toFixed(0)}\u00b0`;
+    const links = Organism.topology(o);
+    $('topology').textContent = links.length ? `docked: ${links.join(', ')}` : 'docked: none';
+    $('topology').dataset.pairs = links.length;
     draw();
   },
   graph(m) {
@@ -97,29 +117,93 @@ const handlers = {
   },
   probes(m) {
     const box = $('probes');
-    box.innerHTML = '';
+    if (m.full) { view.probes.clear(); box.innerHTML = ''; }
     for (const p of m.probes) {
-      const row = document.createElement('div');
-      row.className = 'probe';
-      row.dataset.probe = `${p.task}/${p.channel}`;
-      const label = document.createElement('span');
-      label.textContent = `${p.task}/${p.channel}`;
-      const bars = document.createElement('span');
-      bars.className = 'bars';
+      const key = `${p.task}/${p.channel}`;
+      let e = view.probes.get(key);
+      if (!e) {
+        const row = document.createElement('div');
+        row.className = 'probe';
+        row.dataset.probe = key;
+        const label = document.createElement('span');
+        label.className = 'label';
+        label.textContent = key;
+        label.title = key;
+        const plot = document.createElement('canvas');
+        plot.className = 'plot';
+        plot.width = 180;
+        plot.height = 32;
+        const bars = document.createElement('span');
+        bars.className = 'bars';
+        const values = document.createElement('span');
+        values.className = 'values';
+        row.append(label, plot, bars, values);
+        box.append(row);
+        e = { row, plot, bars, values, series: Plots.series(p.width) };
+        view.probes.set(key, e);
+      }
+      Plots.append(e.series, p.points);
+      e.row.dataset.points = e.series.t.length;
+      Plots.drawSeries(e.plot, [e.series]);
       const top = Math.max(1e-9, ...p.values.map((v) => Math.abs(v ?? 0)));
-      for (const v of p.values) {
+      e.bars.innerHTML = '';
+      for (const v of p.values.slice(0, 32)) {
         const bar = document.createElement('span');
         bar.style.height = `${Math.round(28 * Math.abs(v ?? 0) / top)}px`;
-        bars.append(bar);
+        e.bars.append(bar);
       }
-      const values = document.createElement('span');
-      values.className = 'values';
-      values.textContent = p.values.map((v) => (v === null ? 'NaN' : v.toPrecision(3))).join(' ');
-      row.append(label, bars, values);
-      box.append(row);
+      e.values.textContent = p.values.map((v) => (v === null ? 'NaN' : v.toPrecision(3))).join(' ');
     }
   },
-  status(m) { showStatus(m); if (m.finished) setConn('run finished', 'closed'); },
+  spikes(m) {
+    $('spikes-pane').hidden = false;
+    let e = view.spikes.get(m.task);
+    if (!e) {
+      const row = document.createElement('div');
+      row.className = 'raster';
+      row.dataset.task = m.task;
+      const label = document.createElement('div');
+      const plot = document.createElement('canvas');
+      plot.width = 360;
+      plot.height = 90;
+      row.append(label, plot);
+      $('spikes').append(row);
+      e = { row, label, plot, raster: Plots.raster() };
+      view.spikes.set(m.task, e);
+    }
+    Plots.addSpikes(e.raster, m.dots);
+    e.row.dataset.spikes = e.raster.total;
+    e.label.textContent = `${m.task}: ${e.raster.total} spikes, the last 5 s` + (m.dropped ? ` (${m.dropped} not shown)` : '');
+    Plots.drawRaster(e.plot, e.raster);
+  },
+  fitness(m) {
+    $('fitness-pane').hidden = false;
+    if (m.full) view.fitness.clear();
+    for (const s of m.series) {
+      if (!view.fitness.has(s.channel)) view.fitness.set(s.channel, Plots.series(s.width));
+      Plots.append(view.fitness.get(s.channel), s.points);
+    }
+    const names = [...view.fitness.keys()];
+    const list = names.map((n) => view.fitness.get(n));
+    const points = list.reduce((a, s) => a + s.t.length, 0);
+    const plot = $('fitness');
+    plot.dataset.points = points;
+    // Each evaluation's fitness as dots, the champion's (best, mean) as lines.
+    Plots.drawSeries(plot, list, { axes: true, pad: 16, dots: (j) => names[j] === 'fitness' });
+    $('fitness-legend').innerHTML = '';
+    names.forEach((n, j) => {
+      const item = document.createElement('span');
+      item.style.color = Plots.colours[j % Plots.colours.length];
+      item.textContent = `${n} (${view.fitness.get(n).t.length}) `;
+      $('fitness-legend').append(item);
+    });
+    $('fitness-title').textContent = `Fitness of ${m.robot} (${m.task})`;
+  },
+  status(m) {
+    showStatus(m);
+    if (view.kind === 'none') $('clock').textContent = `t = ${m.t.toFixed(1)} s`;  // no world frames to tell
+    if (m.finished) setConn('run finished', 'closed');
+  },
   shell(m) {
     const out = $('shell-output');
     out.textContent += m.text;
@@ -137,12 +221,17 @@ function showStatus(m) {
 }
 
 function fitCanvas() {
-  if (!view.world) return;
-  canvas.width = 800;
-  canvas.height = Math.round(800 * view.world.height / view.world.width);
+  if (view.kind === '2d') {
+    canvas.width = 800;
+    canvas.height = Math.round(800 * view.world.height / view.world.width);
+  } else if (view.kind === '3d') {
+    canvas.width = 800;
+    canvas.height = 560;
+  }
 }
 
 function draw() {
+  if (view.kind === '3d') return Organism.draw(view.organism, canvas, ctx, view.selected, palette);
   const w = view.world;
   if (!w) return;
   const s = canvas.width / w.width;
@@ -199,18 +288,50 @@ function choose(name) {
   view.selected = view.robots.indexOf(name);
   $('robot').value = name;
   $('log').textContent = '';
+  view.probes.clear();
+  $('probes').innerHTML = '';
+  view.spikes.clear();
+  $('spikes').innerHTML = '';
+  $('spikes-pane').hidden = true;
   send(`robot ${name}`);
   draw();
 }
 $('robot').onchange = (e) => choose(e.target.value);
-// A click on the world chooses the robot nearest to it.
+// A click on the world chooses the robot nearest to it; in 3D a drag turns the camera and the
+// wheel zooms.
+let drag = null;
+canvas.onmousedown = (e) => { drag = { x: e.clientX, y: e.clientY, moved: false }; };
+window.addEventListener('mouseup', () => { setTimeout(() => { drag = null; }, 0); });
+canvas.onmousemove = (e) => {
+  if (!drag || view.kind !== '3d') return;
+  const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
+  if (Math.abs(dx) + Math.abs(dy) > 2) drag.moved = true;
+  Organism.orbit(dx, dy);
+  drag.x = e.clientX;
+  drag.y = e.clientY;
+  draw();
+};
+canvas.addEventListener('wheel', (e) => {
+  if (view.kind !== '3d') return;
+  e.preventDefault();
+  Organism.zoom(e.deltaY > 0 ? 1.1 : 1 / 1.1);
+  draw();
+}, { passive: false });
 canvas.onclick = (e) => {
+  if (drag && drag.moved) return;
+  const rect = canvas.getBoundingClientRect();
+  const cx = (e.clientX - rect.left) * canvas.width / rect.width;
+  const cy = (e.clientY - rect.top) * canvas.height / rect.height;
+  if (view.kind === '3d') {
+    const best = Organism.pick(view.organism, canvas, cx, cy);
+    if (best >= 0) choose(view.robots[best]);
+    return;
+  }
   const p = view.poses;
   if (!p || !view.world) return;
-  const rect = canvas.getBoundingClientRect();
   const s = canvas.width / view.world.width;
-  const x = (e.clientX - rect.left) * canvas.width / rect.width / s;
-  const y = (canvas.height - (e.clientY - rect.top) * canvas.height / rect.height) / s;
+  const x = cx / s;
+  const y = (canvas.height - cy) / s;
   let best = -1, bestD = Infinity;
   for (let k = 0; k < p.length / 3; ++k) {
     const d = (p[3 * k] - x) ** 2 + (p[3 * k + 1] - y) ** 2;

@@ -214,8 +214,10 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   run::RunControl control(options.speed, scenario.control_period);
   std::unique_ptr<view::LiveView> live;
   if (options.view.on) {
-    auto started = view::LiveView::start(*session, scenario.name, seconds(scenario.duration), &control,
-                                         view::live_view_options(options.view, robot_name));
+    view::LiveViewOptions vo = view::live_view_options(options.view, robot_name);
+    vo.fitness_robot = robot_name;  // its fitness plotted over the whole run, whoever is shown
+    vo.fitness_task = task_name;
+    auto started = view::LiveView::start(*session, scenario.name, seconds(scenario.duration), &control, std::move(vo));
     if (!started) return Error{started.error()};
     live = std::move(started).value();
     if (options.on_notice) options.on_notice("view: " + live->url());

@@ -156,6 +156,12 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
       return kExitFailure;
     }
   }
+  auto view_started = BoardView::start(a.view, spec.name, system->node(), sc.name, ctx.err);
+  if (!view_started) {
+    ctx.err << kAsebaBoardCommand << ": " << view_started.error() << "\n";
+    return kExitFailure;
+  }
+  BoardView board_view = std::move(view_started).value();
   const robot::thymio::AsebaThymioStats first = thymio->stats();
   ctx.out << "board: robot " << spec.name << " of " << sc.name << " on Aseba node " << first.node << " '"
           << first.node_name << "' at " << where << (shell_port ? ", shell on " + a.shell : std::string()) << "; "
@@ -169,6 +175,7 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
   std::string cycle;
   while (!interrupt.raised() && (!a.duration || std::chrono::steady_clock::now() - start < *a.duration)) {
     std::this_thread::sleep_for(20ms);
+    board_view.between();
     if (cycle = system->node().cycle_error(); !cycle.empty()) break;
     if (std::chrono::steady_clock::now() >= next_stats) {
       next_stats += a.stats_every;
@@ -176,6 +183,7 @@ int run_board_aseba(const sim::Scenario& sc, const BoardAsebaArgs& a, const CliC
     }
   }
   log.remove_sink(log_sink);
+  board_view.stop();
   // First the Thymio's thread (it reports into the node's log) and its wheels (refused from now
   // on, zero targets written when the robot can be reached), then the node.
   thymio->stop();

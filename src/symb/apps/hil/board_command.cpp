@@ -6,6 +6,7 @@
 
 #include "symb/apps/hil/hil_commands.hpp"
 #include "symb/apps/hil/hil_common.hpp"
+#include "symb/apps/view/view_request.hpp"
 #include "symb/io/serial_port.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/shell/shell_task.hpp"
@@ -33,6 +34,8 @@ constexpr OptionSpec kBoardOptions[] = {
     {"--seed", "S", "the run's seed, for the node's random streams (default: the scenario's)"},
     {"--stats-every", "D", "print the link statistics this often (default 5s)"},
     {"--quiet", "", "print only the final statistics, not the robot's log"},
+    {"--view", "[ADDR:]PORT", "watch the robot's task graph, probes, log and shell in a browser (docs/view.md)"},
+    {"--token", "T", "the web view's token (default: a random one, printed)"},
     {"--help", "", "this help"},
 };
 
@@ -67,6 +70,8 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   std::string playground;
   std::uint16_t playground_port = sim::kPlaygroundFirstPort;
   std::optional<double> speed_scale;
+  view::ViewRequest view_request;
+  std::optional<std::string> token;
   for (const ParsedOption& o : a.options) {
     if (o.name == "--serial" || o.name == "--shell" || o.name == "--robot") {
       if (o.value.empty()) return usage_error(ctx, kBoardCommand, UsageError{std::string(o.name) + ": empty value"});
@@ -84,6 +89,13 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
       seed = std::get<std::uint64_t>(v);
     } else if (o.name == "--quiet") {
       quiet = true;
+    } else if (o.name == "--view") {
+      auto v = view::parse_view(o.value);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kBoardCommand, *e);
+      view_request = std::get<view::ViewRequest>(v);
+    } else if (o.name == "--token") {
+      if (o.value.empty()) return usage_error(ctx, kBoardCommand, UsageError{"--token: empty value"});
+      token = o.value;
     } else if (o.name == "--playground") {
       if (o.value.empty()) return usage_error(ctx, kBoardCommand, UsageError{"--playground: empty value"});
       playground = o.value;
@@ -106,6 +118,10 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     if (auto* e = std::get_if<UsageError>(&t)) return usage_error(ctx, kBoardCommand, *e);
     aseba_target = std::get<AsebaTarget>(t);
   }
+  if (token && !view_request.on) return usage_error(ctx, kBoardCommand, UsageError{"--token is for --view"});
+  if (token) view_request.token = *token;
+  if (view_request.on && !playground.empty())
+    return usage_error(ctx, kBoardCommand, UsageError{"--view: --playground writes a file and exits"});
   if (serial.empty() && !aseba && playground.empty())
     return usage_error(ctx, kBoardCommand, UsageError{"missing --serial PATH (the data line)"});
 
@@ -125,10 +141,12 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     ba.stats_every = stats_every;
     ba.speed_scale = speed_scale;
     ba.quiet = quiet;
+    ba.view = view_request;
     return run_board_aseba(sc, ba, ctx);
   }
   if (sc.world_kind == sim::WorldKind::kMujoco) {
     BoardOrganismArgs oa;
+    oa.view = view_request;
     oa.serial = serial;
     oa.shell = shell_path;
     oa.robot = robot_name;
@@ -203,6 +221,12 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
       return kExitFailure;
     }
   }
+  auto view_started = BoardView::start(view_request, spec.name, system->node(), sc.name, ctx.err);
+  if (!view_started) {
+    ctx.err << kBoardCommand << ": " << view_started.error() << "\n";
+    return kExitFailure;
+  }
+  BoardView board_view = std::move(view_started).value();
   ctx.out << "board: robot " << spec.name << " of " << sc.name << " on " << serial
           << (shell_port ? ", shell on " + shell_path : std::string()) << "; " << system->node().task_count()
           << " tasks; Ctrl-C to stop\n"
@@ -214,6 +238,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   std::string cycle;
   while (!interrupt.raised() && (!duration || std::chrono::steady_clock::now() - start < *duration)) {
     std::this_thread::sleep_for(20ms);
+    board_view.between();
     if (cycle = system->node().cycle_error(); !cycle.empty()) break;
     if (std::chrono::steady_clock::now() >= next_stats) {
       next_stats += stats_every;
@@ -221,6 +246,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     }
   }
   system->node().log().remove_sink(log_sink);
+  board_view.stop();
   system.reset();  // every task stopped: the link's counters are final
   const sim::BoardLinkStats s = link->stats();
   ctx.out << "board: " << sim::describe(s) << "\n"

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "symb/apps/cli_args.hpp"
+#include "symb/apps/view/view_request.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/sim/scenario.hpp"
 
@@ -48,6 +49,7 @@ struct BoardOrganismArgs {
   std::optional<kernel::Duration> duration;
   kernel::Duration stats_every = std::chrono::seconds(5);
   bool quiet = false;
+  view::ViewRequest view;  // --view: the module's task graph, probes, log and shell in a browser
 };
 int run_board_organism(const sim::Scenario& scenario, const BoardOrganismArgs& args, const CliContext& ctx);
 
@@ -68,6 +70,7 @@ struct BoardAsebaArgs {
   kernel::Duration stats_every = std::chrono::seconds(5);
   std::optional<double> speed_scale;  // default: 1 over TCP (Playground), 16.6/20 on serial (a real robot)
   bool quiet = false;
+  view::ViewRequest view;  // --view: the robot's task graph, probes, log and shell in a browser
 };
 // Runs the scenario's first robot on the Thymio until Ctrl-C or the duration.
 int run_board_aseba(const sim::Scenario& scenario, const BoardAsebaArgs& args, const CliContext& ctx);

@@ -10,4 +10,26 @@ void PrefixedLogSink::write(const os::LogEntry& e) {
   out_ << prefix_ << os::format_log_entry(e) << '\n' << std::flush;
 }
 
+kernel::Result<BoardView> BoardView::start(const view::ViewRequest& request, const std::string& robot, os::Node& node,
+                                           const std::string& scenario, std::ostream& notice) {
+  BoardView b;
+  if (!request.on) return kernel::Result<BoardView>(std::move(b));
+  auto started = view::LiveView::start(view::nodes_view_target({robot}, {&node}), scenario, 0, nullptr,
+                                       view::live_view_options(request));
+  if (!started) return kernel::Error{started.error()};
+  b.live_ = std::move(started).value();
+  b.node_ = &node;
+  view::LiveView* v = b.live_.get();
+  node.set_probe_sink([v](const os::ProbeSample& s) { v->on_probe(s); });
+  notice << "view: " << b.live_->url() << "\n" << std::flush;
+  return kernel::Result<BoardView>(std::move(b));
+}
+
+void BoardView::stop() {
+  if (!live_) return;
+  live_->finish();
+  node_->set_probe_sink({});
+  live_.reset();
+}
+
 }  // namespace symb::apps::hil

@@ -226,6 +226,13 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
     ctx.err << kCommand << ": " << st.error() << "\n";
     return kExitFailure;
   }
+  // The web view reads the module's node between two frames, where none of its tasks runs.
+  auto view_started = BoardView::start(args.view, spec.name, system->node(), sc.name, ctx.err);
+  if (!view_started) {
+    ctx.err << kCommand << ": " << view_started.error() << "\n";
+    return kExitFailure;
+  }
+  BoardView board_view = std::move(view_started).value();
   ctx.out << "board: module " << spec.name << " of " << sc.name << " on " << args.serial
           << (shell_port ? ", shell on " + args.shell : std::string()) << "; " << system->node().task_count()
           << " tasks; its clock follows the simulator's frames; Ctrl-C to stop\n"
@@ -260,6 +267,7 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
       ctx.err << "board " << spec.name << ": " << served.error() << ": reopening it with backoff\n" << std::flush;
     }
     ex.run_injected();  // the shell's input, between frames
+    board_view.between();
     if (cycle = system->node().cycle_error(); !cycle.empty()) break;
     if (std::chrono::steady_clock::now() >= next_stats) {
       next_stats += args.stats_every;
@@ -267,6 +275,7 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
     }
   }
   system->node().log().remove_sink(log_sink);
+  board_view.stop();
   const auto s = board.stats();
   ctx.out << "board: " << sim::mujoco::describe(s) << "\n"
           << "board-stats: good=" << s.frames << " bad=" << s.bad_frames() << " missed=" << s.missed

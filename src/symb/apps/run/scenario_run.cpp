@@ -187,7 +187,6 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
       return Error{"--record: a 3D run records CSV (poses.csv, joints.csv), not " +
                    std::string(record_format_name(options.record.format))};
     if (!options.record.robots.empty()) return Error{"--record-robots: a 3D run records every module"};
-    if (options.view.on) return Error{"--view: the web view shows 2D runs; a 3D organism is not shown yet"};
     return run_organism(**organism, virtual_time, scenario, options, std::move(result));
   }
   auto created = sim::ScenarioSession::create(scenario, *executor, session_options);

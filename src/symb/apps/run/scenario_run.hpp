@@ -42,7 +42,7 @@ struct ShellRequest {
   std::string token;       // kTcp: empty makes one up
 };
 
-// `symb run --view`: the web view (apps/view/live_view.hpp), 2D runs.
+// `symb run --view`: the web view (apps/view/live_view.hpp), 2D and 3D runs.
 using view::ViewRequest;
 
 struct RunProgress {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <string_view>
 #include <thread>
 
 #include "symb/io/loopback_stream.hpp"
@@ -22,7 +23,10 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr std::size_t kMaxProbeSeries = 32;      // per robot shown
+constexpr std::size_t kMaxSpikesPerFrame = 4000;  // per detail frame, all spiking tasks together
+constexpr std::size_t kMaxSpikingTasks = 8;       // of the robot shown
+// Channels of an evolution task that are its fitness (one_plus_one, mu_plus_one).
+constexpr std::string_view kFitnessChannels[] = {"fitness", "champion_fitness", "best_fitness", "mean_fitness"};
 constexpr std::size_t kMaxLogLines = 200;        // per frame; the rest in the next
 constexpr std::size_t kLogBacklog = 50;          // lines shown from before a robot was chosen
 constexpr std::size_t kMaxLineBytes = 4096;      // a shell line from the page
@@ -46,19 +50,61 @@ struct LiveView::ShellLink {
   std::shared_ptr<Tasks> tasks = std::make_shared<Tasks>();
 };
 
+ViewTarget scenario_view_target(sim::ScenarioSession& session, std::size_t max_pose_robots) {
+  ViewTarget t;
+  for (std::size_t i = 0; i < session.robot_count(); ++i) {
+    t.robots.push_back(session.robot(i).name());
+    t.nodes.push_back(&session.robot(i).node());
+  }
+  t.world = &session.world().spec();
+  auto states = std::make_shared<std::vector<sim::RobotState>>();
+  t.poses = [&session, states, max_pose_robots] {
+    std::uint64_t step = 0;
+    double seconds = 0;
+    session.runner().with_world([&](sim::World& w) {
+      states->resize(w.robot_count());
+      for (std::size_t i = 0; i < states->size(); ++i) (*states)[i] = w.state(i);
+      step = w.steps();
+      seconds = w.time();
+    });
+    return step_json(step, seconds, *states, max_pose_robots);
+  };
+  t.seconds = [&session] { return session.runner().with_world([](sim::World& w) { return w.time(); }); };
+  return t;
+}
+
+ViewTarget nodes_view_target(std::vector<std::string> robots, std::vector<os::Node*> nodes) {
+  ViewTarget t;
+  t.robots = std::move(robots);
+  t.nodes = std::move(nodes);
+  if (!t.nodes.empty()) t.seconds = [n = t.nodes.front()] { return view_seconds(n->now()); };
+  return t;
+}
+
 kernel::Result<std::unique_ptr<LiveView>> LiveView::start(sim::ScenarioSession& session, std::string scenario_name,
                                                           double duration_seconds, run::RunControl* control,
                                                           LiveViewOptions options) {
+  ViewTarget target = scenario_view_target(session, options.max_pose_robots);
+  return start(std::move(target), std::move(scenario_name), duration_seconds, control, std::move(options));
+}
+
+kernel::Result<std::unique_ptr<LiveView>> LiveView::start(ViewTarget target, std::string scenario_name,
+                                                          double duration_seconds, run::RunControl* control,
+                                                          LiveViewOptions options) {
+  if (target.robots.empty() || target.robots.size() != target.nodes.size())
+    return kernel::Error{"--view: the run has no robot to show"};
   std::size_t selected = 0;
   if (!options.robot.empty()) {
-    std::size_t i = 0;
-    while (i < session.robot_count() && session.robot(i).name() != options.robot) ++i;
-    if (i == session.robot_count())
+    const auto it = std::find(target.robots.begin(), target.robots.end(), options.robot);
+    if (it == target.robots.end())
       return kernel::Error{"--view-robot: the scenario has no robot '" + options.robot + "'"};
-    selected = i;
+    selected = static_cast<std::size_t>(it - target.robots.begin());
   }
+  if (!options.fitness_robot.empty() &&
+      std::find(target.robots.begin(), target.robots.end(), options.fitness_robot) == target.robots.end())
+    return kernel::Error{"--view: the scenario has no robot '" + options.fitness_robot + "' to follow the fitness of"};
   auto view = std::unique_ptr<LiveView>(
-      new LiveView(session, std::move(scenario_name), duration_seconds, control, std::move(options)));
+      new LiveView(std::move(target), std::move(scenario_name), duration_seconds, control, std::move(options)));
   view->selected_ = selected;
   LiveView* v = view.get();
   ViewServerHandlers handlers;
@@ -73,16 +119,17 @@ kernel::Result<std::unique_ptr<LiveView>> LiveView::start(sim::ScenarioSession& 
   return view;
 }
 
-LiveView::LiveView(sim::ScenarioSession& session, std::string scenario, double duration, run::RunControl* control,
+LiveView::LiveView(ViewTarget target, std::string scenario, double duration, run::RunControl* control,
                    LiveViewOptions options)
-    : session_(session),
+    : target_(std::move(target)),
       scenario_(std::move(scenario)),
       duration_(duration),
       control_(control),
-      options_(std::move(options)) {
-  for (std::size_t i = 0; i < session_.robot_count(); ++i) {
-    robots_.push_back(session_.robot(i).name());
-    nodes_.push_back(session_.robot(i).node().name());
+      options_(std::move(options)),
+      fitness_(ProbeHistoryOptions{.capacity = 512, .width = 1, .max_series = 4, .max_latest = 1}) {
+  for (std::size_t i = 0; i < target_.nodes.size(); ++i) {
+    nodes_.push_back(target_.nodes[i]->name());
+    if (target_.robots[i] == options_.fitness_robot) fitness_node_ = nodes_.back();
   }
 }
 
@@ -101,8 +148,9 @@ void LiveView::send(ClientId client, std::string frame) {
 std::string LiveView::hello() const {
   HelloInfo h;
   h.scenario = scenario_;
-  h.world = &session_.world().spec();
-  h.robots = robots_;
+  h.world = target_.world;
+  h.organism = target_.organism.empty() ? nullptr : &target_.organism;
+  h.robots = target_.robots;
   h.selected = selected_.load();
   h.virtual_time = control_ != nullptr;
   h.paused = control_ && control_->paused();
@@ -113,6 +161,10 @@ std::string LiveView::hello() const {
 
 void LiveView::on_open(ClientId client) {
   send(client, hello());
+  {
+    std::lock_guard lock(probes_mu_);
+    send_all_ = true;  // the kept points, once more for every page (this one needs them)
+  }
   selection_changed_ = true;  // the next details go to every client, this one included
 }
 
@@ -124,9 +176,9 @@ void LiveView::on_message(ClientId client, std::string_view text) {
   const auto refuse = [&](const std::string& why) { send(client, shell_json("view: " + why + "\n")); };
   if (word == "shell") return shell_line(client, rest);
   if (word == "robot") {
-    const auto it = std::find(robots_.begin(), robots_.end(), rest);
-    if (it == robots_.end()) return refuse("no robot '" + std::string(rest.substr(0, 64)) + "'");
-    selected_ = static_cast<std::size_t>(it - robots_.begin());
+    const auto it = std::find(target_.robots.begin(), target_.robots.end(), rest);
+    if (it == target_.robots.end()) return refuse("no robot '" + std::string(rest.substr(0, 64)) + "'");
+    selected_ = static_cast<std::size_t>(it - target_.robots.begin());
     selection_changed_ = true;
     return;
   }
@@ -168,7 +220,7 @@ void LiveView::shell_line(ClientId client, std::string_view line) {
     auto [ours, theirs] = io::make_loopback_pair(name);
     link->ours = std::move(ours);
     std::shared_ptr<io::IOStream> stream = std::move(theirs);
-    os::Node* node = &session_.robot(robot).node();
+    os::Node* node = target_.nodes[robot];
     // As the TCP shell opens its sessions: on the node's own context, where node calls are made.
     node->inject([node, stream, tasks = link->tasks, name] {
       std::lock_guard tl(tasks->mu);
@@ -199,7 +251,7 @@ void LiveView::close_shell(ShellLink& link) {
   std::lock_guard tl(link.tasks->mu);
   link.tasks->cancelled = true;
   if (!link.tasks->attached) return;
-  os::Node* node = &session_.robot(link.robot).node();
+  os::Node* node = target_.nodes[link.robot];
   node->inject([node, io = link.tasks->io, shell = link.tasks->shell] {
     (void)node->remove(shell);
     (void)node->remove(io);
@@ -225,33 +277,51 @@ std::optional<std::string> LiveView::poll(ClientId client) {
 }
 
 void LiveView::on_probe(const os::ProbeSample& s) {
+  const bool fitness =
+      !fitness_node_.empty() && s.node == fitness_node_ && s.task == options_.fitness_task &&
+      std::find(std::begin(kFitnessChannels), std::end(kFitnessChannels), s.channel) != std::end(kFitnessChannels);
   const std::size_t sel = selected_.load();
-  if (sel >= nodes_.size() || s.node != nodes_[sel]) return;
+  const bool shown = sel < nodes_.size() && s.node == nodes_[sel];
+  if (!fitness && !shown) return;
+  const double t = view_seconds(s.time);
   std::lock_guard lock(probes_mu_);
-  auto it = std::find_if(probes_.begin(), probes_.end(),
-                         [&](const ProbeValue& p) { return p.task == s.task && p.channel == s.channel; });
-  if (it == probes_.end()) {
-    if (probes_.size() >= kMaxProbeSeries) return;
-    it = probes_.insert(probes_.end(), ProbeValue{0, std::string(s.task), std::string(s.channel), {}});
+  if (fitness) fitness_.record(s.task, s.channel, t, s.values);
+  if (!shown || s.channel == "layout") return;  // a grown network's layout is no series
+  if (s.channel != "spikes") {
+    probes_.record(s.task, s.channel, t, s.values);
+    return;
   }
-  it->seconds = view_seconds(s.time);
-  it->values.assign(s.values.begin(), s.values.end());
+  // Spikes are passed on, not kept: none while no page looks.
+  const ViewServer* server = handlers_server_.load(std::memory_order_acquire);
+  if (!server || server->client_count() == 0) return;
+  auto it = std::find_if(spikes_.begin(), spikes_.end(), [&](const auto& p) { return p.first == s.task; });
+  if (it == spikes_.end()) {
+    if (spikes_.size() >= kMaxSpikingTasks) return;
+    it = spikes_.insert(spikes_.end(), {std::string(s.task), {}});
+  }
+  // (time ms, neuron) pairs; passed on as (time s, neuron).
+  for (std::size_t i = 0; i + 1 < s.values.size(); i += 2) {
+    if (spikes_pending_ >= kMaxSpikesPerFrame) {
+      spikes_dropped_ += (s.values.size() - i) / 2;
+      break;
+    }
+    it->second.push_back(s.values[i] / 1000.0f);
+    it->second.push_back(s.values[i + 1]);
+    ++spikes_pending_;
+  }
+}
+
+std::uint64_t LiveView::spikes_dropped() const {
+  std::lock_guard lock(probes_mu_);
+  return spikes_dropped_;
 }
 
 void LiveView::between_slices() {
   if (server_->client_count() == 0) return;
   const auto now = std::chrono::steady_clock::now();
-  if (now - last_pose_ >= options_.pose_every) {
+  if (target_.poses && now - last_pose_ >= options_.pose_every) {
     last_pose_ = now;
-    std::uint64_t step = 0;
-    double t = 0;
-    session_.runner().with_world([&](sim::World& w) {
-      states_.resize(w.robot_count());
-      for (std::size_t i = 0; i < states_.size(); ++i) states_[i] = w.state(i);
-      step = w.steps();
-      t = w.time();
-    });
-    server_->broadcast(step_json(step, t, states_, options_.max_pose_robots));
+    server_->broadcast(target_.poses());
   }
   if (now - last_detail_ >= options_.detail_every || selection_changed_.load()) {
     last_detail_ = now;
@@ -261,34 +331,51 @@ void LiveView::between_slices() {
 
 void LiveView::send_details(bool finished) {
   const std::size_t sel = selected_.load();
+  bool all = false;
   if (sel != shown_) {
     shown_ = sel;
-    const std::uint64_t last = session_.robot(sel).node().log().last_seq();
+    const std::uint64_t last = node(sel).log().last_seq();
     log_seq_ = last > kLogBacklog ? last - kLogBacklog : 0;
     std::lock_guard lock(probes_mu_);
     probes_.clear();
+    spikes_.clear();
+    spikes_pending_ = 0;
+    all = true;
   }
   selection_changed_ = false;
-  os::Node& node = session_.robot(sel).node();
-  const auto tasks = node.tasks();
-  const auto hooks = node.hooks();
-  server_->broadcast(graph_json(robots_[sel], tasks, hooks, node.now()));
-  const auto entries = node.log().since(log_seq_, kMaxLogLines);
+  os::Node& n = node(sel);
+  const std::string& robot = target_.robots[sel];
+  const auto tasks = n.tasks();
+  const auto hooks = n.hooks();
+  server_->broadcast(graph_json(robot, tasks, hooks, n.now()));
+  const auto entries = n.log().since(log_seq_, kMaxLogLines);
   if (!entries.empty()) {
     log_seq_ = entries.back().seq;
-    server_->broadcast(log_json(robots_[sel], entries));
+    server_->broadcast(log_json(robot, entries));
   }
-  std::vector<ProbeValue> probes;
+  std::vector<ProbeSeriesView> probes, fitness;
+  std::vector<std::pair<std::string, std::vector<float>>> spikes;
+  std::uint64_t spikes_dropped = 0;
   {
     std::lock_guard lock(probes_mu_);
-    probes = probes_;
+    all = all || send_all_;
+    send_all_ = false;
+    probes = probes_.take(all);
+    fitness = fitness_.take(all);
+    spikes.swap(spikes_);
+    for (auto& [task, dots] : spikes) spikes_.emplace_back(task, std::vector<float>{});
+    spikes_pending_ = 0;
+    spikes_dropped = spikes_dropped_;
   }
-  if (!probes.empty()) server_->broadcast(probes_json(robots_[sel], probes));
+  if (!probes.empty() || all) server_->broadcast(probes_json(robot, probes, all));
+  for (const auto& [task, dots] : spikes)
+    if (!dots.empty()) server_->broadcast(spikes_json(robot, task, dots, spikes_dropped));
+  if (!fitness.empty()) server_->broadcast(fitness_json(options_.fitness_robot, options_.fitness_task, fitness, all));
   StatusInfo st;
   st.virtual_time = control_ != nullptr;
   st.paused = control_ && control_->paused();
   st.speed = control_ ? control_->speed() : 1.0;
-  st.seconds = session_.runner().with_world([](sim::World& w) { return w.time(); });
+  st.seconds = target_.seconds ? target_.seconds() : view_seconds(n.now());
   st.frames_dropped = server_->stats().frames.dropped;
   st.finished = finished;
   server_->broadcast(status_json(st));

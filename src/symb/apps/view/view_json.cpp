@@ -48,6 +48,19 @@ std::string hello_json(const HelloInfo& h) {
       j.end_object();
     }
     j.end_array().end_object();
+  } else if (h.organism) {
+    j.begin_object().field("kind", "organism").key("modules").begin_array();
+    for (const ModuleShape& m : *h.organism) {
+      j.begin_object().field("name", m.name).key("size").begin_array();
+      for (double v : m.size) j.value(v);
+      j.end_array().key("hinge").begin_array();
+      for (double v : m.hinge_axis) j.value(v);
+      j.end_array().field("wheels", m.wheels).key("connectors").begin_array();
+      for (const auto& [name, p] : m.connectors)
+        j.begin_array().value(name).value(p[0]).value(p[1]).value(p[2]).end_array();
+      j.end_array().end_object();
+    }
+    j.end_array().end_object();
   } else {
     j.null();
   }
@@ -145,18 +158,113 @@ std::string log_json(std::string_view robot, std::span<const os::LogEntry> entri
   return j.str();
 }
 
-std::string probes_json(std::string_view robot, std::span<const ProbeValue> probes) {
+std::string organism_json(std::uint64_t step, double seconds, std::span<const ModulePose> modules,
+                          std::span<const DockedPair> docked) {
+  std::string out;
+  out.reserve(96 + modules.size() * 64 + docked.size() * 16);
+  out += R"({"type":"organism","step":)";
+  out += std::to_string(step);
+  out += ",\"t\":";
+  append_number(out, seconds, 3);
+  out += ",\"m\":[";
+  bool first = true;
+  const auto put = [&](double v, int decimals) {
+    if (!first) out += ',';
+    first = false;
+    append_number(out, v, decimals);
+  };
+  for (const ModulePose& m : modules) {
+    for (double v : m.position) put(v, 4);  // 0.1 mm
+    for (double v : m.quaternion) put(v, 4);
+    put(m.hinge, 3);
+  }
+  out += "],\"docked\":[";
+  for (std::size_t i = 0; i < docked.size(); ++i) {
+    if (i) out += ',';
+    out += '[';
+    for (std::size_t k = 0; k < 4; ++k) {
+      if (k) out += ',';
+      out += std::to_string(docked[i][k]);
+    }
+    out += ']';
+  }
+  out += "]}\n";
+  return out;
+}
+
+namespace {
+
+// A probe's value with a float's precision ("0.3", not 0.30000001192092896): the shortest text of
+// the float, read back as a double, has a short text of its own.
+double short_value(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, static_cast<float>(v));
+  double d = v;
+  (void)std::from_chars(buf, r.ptr, d);
+  return d;
+}
+
+// Flat (time, width values) per point: times to the millisecond, values to a float's precision.
+void series_points(JsonWriter& j, const ProbeSeriesView& p) {
+  j.key("points").begin_array();
+  const std::size_t row = p.width + 1;
+  for (std::size_t i = 0; i < p.points.size(); ++i) {
+    const double v = p.points[i];
+    j.value(i % row == 0 ? std::round(v * 1000) / 1000 : std::isfinite(v) ? short_value(v) : v);
+  }
+  j.end_array();
+}
+
+}  // namespace
+
+std::string probes_json(std::string_view robot, std::span<const ProbeSeriesView> probes, bool full) {
   JsonWriter j;
-  j.begin_object().field("type", "probes").field("robot", robot).key("probes").begin_array();
-  for (const ProbeValue& p : probes) {
+  j.begin_object().field("type", "probes").field("robot", robot).field("full", full).key("probes").begin_array();
+  for (const ProbeSeriesView& p : probes) {
     j.begin_object()
-        .field("t", p.seconds)
+        .field("t", p.latest_time)
         .field("task", p.task)
         .field("channel", p.channel)
         .key("values")
         .begin_array();
-    for (float v : p.values) j.value(static_cast<double>(v));
-    j.end_array().end_object();
+    for (float v : p.latest) j.value(short_value(v));
+    j.end_array().field("width", static_cast<std::uint64_t>(p.width)).field("stride", p.stride);
+    series_points(j, p);
+    j.end_object();
+  }
+  j.end_array().end_object();
+  return j.str();
+}
+
+std::string spikes_json(std::string_view robot, std::string_view task, std::span<const float> dots,
+                        std::uint64_t dropped) {
+  JsonWriter j;
+  j.begin_object()
+      .field("type", "spikes")
+      .field("robot", robot)
+      .field("task", task)
+      .field("dropped", dropped)
+      .key("dots")
+      .begin_array();
+  for (float v : dots) j.value(short_value(v));
+  j.end_array().end_object();
+  return j.str();
+}
+
+std::string fitness_json(std::string_view robot, std::string_view task, std::span<const ProbeSeriesView> series,
+                         bool full) {
+  JsonWriter j;
+  j.begin_object()
+      .field("type", "fitness")
+      .field("robot", robot)
+      .field("task", task)
+      .field("full", full)
+      .key("series")
+      .begin_array();
+  for (const ProbeSeriesView& p : series) {
+    j.begin_object().field("channel", p.channel).field("width", static_cast<std::uint64_t>(p.width));
+    series_points(j, p);
+    j.end_object();
   }
   j.end_array().end_object();
   return j.str();
