@@ -134,9 +134,13 @@ TEST(ThymioAseba, ALostLinkStopsTheWheelsAndComesBackOnTheSamePort) {
   EXPECT_LE(st.last_stop_delay, 2 * o.control_period);
   EXPECT_FALSE(t->wheels()->set(std::vector<float>{300, 300}));  // refused while down
   EXPECT_GE(t->stats().wheel_refused, 1u);
+  // The loss is counted before it is reported (on the driver's thread): wait for the report.
+  ASSERT_TRUE(eventually([&] {
+    std::lock_guard lock(mu);
+    return !reports.empty();
+  }));
   {
     std::lock_guard lock(mu);
-    ASSERT_FALSE(reports.empty());
     EXPECT_NE(reports.front().find("lost"), std::string::npos) << reports.front();
     EXPECT_NE(reports.front().find("wheels stopped"), std::string::npos) << reports.front();
   }
@@ -149,8 +153,10 @@ TEST(ThymioAseba, ALostLinkStopsTheWheelsAndComesBackOnTheSamePort) {
   ASSERT_TRUE(eventually([&] { return t->stats().samples > samples + 3; }));
   ASSERT_TRUE(t->wheels()->set(std::vector<float>{-100, 100}));
   ASSERT_TRUE(eventually([&] { return node.peek(57) == -100; }));
-  std::lock_guard lock(mu);
-  EXPECT_NE(reports.back().find("link back"), std::string::npos) << reports.back();
+  EXPECT_TRUE(eventually([&] {
+    std::lock_guard lock(mu);
+    return reports.back().find("link back") != std::string::npos;
+  }));
 }
 
 TEST(ThymioAseba, ANodeThatStopsAnsweringIsLostAndToldToStop) {
