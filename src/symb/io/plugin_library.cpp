@@ -30,12 +30,19 @@ kernel::Result<std::shared_ptr<const PluginLibrary>> PluginLibrary::open(const s
     return kernel::Error{where + ": no entry point '" + std::string(os::kPluginEntryName) +
                          "' (a plugin defines it with SYMB_PLUGIN; docs/plugins.md)"};
   }
-  os::TaskTypeRegistry scratch;
-  if (auto st = lib->register_all(scratch); !st) {
-    dlclose(handle);
-    return kernel::Error{st.error()};
+  kernel::Status probed;
+  {
+    // Gone before any dlclose: what a registration that failed halfway did add runs the plugin's
+    // code when it is destroyed.
+    os::TaskTypeRegistry scratch;
+    probed = lib->register_all(scratch);
+    if (probed)
+      for (const os::TaskType* t : scratch.list()) lib->type_names_.push_back(t->name);
   }
-  for (const os::TaskType* t : scratch.list()) lib->type_names_.push_back(t->name);
+  if (!probed) {
+    dlclose(handle);
+    return kernel::Error{probed.error()};
+  }
   // Pinned for the rest of the process (see the header): a second open of the same file with
   // RTLD_NODELETE makes the first one's dlclose, and every later one, a no-op.
   if (dlopen(absolute.c_str(), RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE) == nullptr)
