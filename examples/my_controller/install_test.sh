@@ -27,5 +27,10 @@ cmake --build "$tmp/build"
 distance=$(awk -F, '$1 == "thymio" { print $2 }' "$tmp/out/summary.txt")
 echo "distance: $distance m"
 awk -v d="$distance" 'BEGIN { exit !(d > 0.5) }'
+# The installed Python module imports from the prefix (its RPATH finds the libraries there).
+if [[ -d "$tmp/prefix/lib/python3/dist-packages" ]]; then
+  PYTHONPATH="$tmp/prefix/lib/python3/dist-packages" /usr/bin/python3 -c \
+    'import symbricator, sys; sys.exit(0 if symbricator.__file__.startswith(sys.argv[1]) else 1)' "$tmp/prefix"
+fi
 # pkg-config gives the same libraries.
 PKG_CONFIG_PATH="$tmp/prefix/lib/pkgconfig" pkg-config --exists symbricator
