@@ -14,6 +14,7 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/shell/shell.hpp"
+#include "symb/sim/scenario_session.hpp"
 
 namespace {
 
@@ -136,6 +137,32 @@ TEST(PluginLibraryTest, RunPluginOptionGivesTheSameRunAsTheScenarioList) {
   auto none = symb::apps::run::run_scenario(given);
   ASSERT_FALSE(none);
   EXPECT_NE(none.error().find("test_drive"), std::string::npos) << none.error();
+}
+
+TEST(PluginLibraryTest, EveryRobotCreatesThePluginsTypesAtRuntime) {
+  SKIP_WITHOUT_PLUGINS();
+  // What a genome's development, an evolution task's controller swap and the shell do: create a
+  // task by type name on a running robot's node, whose registry is over the session's shared types.
+  const fs::path dir = scratch_dir("runtime");
+  auto scenario = symb::sim::load_scenario(
+      write(dir / "s.yaml", drive_scenario("test_drive", "plugins: [" + plugin("good") + "]\n")).string());
+  ASSERT_TRUE(scenario) << scenario.error();
+  scenario->robots.push_back(scenario->robots[0]);
+  scenario->robots[1].name = "second";
+  scenario->robots[1].start.y = 120;
+  symb::kernel::VirtualTimeExecutor executor;
+  auto session = symb::sim::ScenarioSession::create(*scenario, executor);
+  ASSERT_TRUE(session) << session.error();
+  (*session)->start();
+  executor.run_for(std::chrono::milliseconds(300));
+  for (std::size_t i = 0; i < (*session)->robot_count(); ++i) {
+    symb::os::Node& node = (*session)->robot(i).node();
+    auto id = node.create("test_drive", "spare", std::vector<symb::os::ParamAssignment>{{"speed", "-100", 1}});
+    ASSERT_TRUE(id) << id.error();
+    EXPECT_EQ(node.info(*id)->type, "test_drive");
+  }
+  executor.run_for(std::chrono::milliseconds(300));
+  (*session)->stop();
 }
 
 TEST(PluginLibraryTest, ShellLoadLeavesTheRunningNodeAloneWhenAPluginIsBad) {
