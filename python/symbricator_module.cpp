@@ -148,8 +148,6 @@ os::TaskType python_task_type(const std::string& name, py::object factory) {
                                      return kernel::Error{std::string("Python: ") + e.what()};
                                    }
                                  });
-  // The factory's last reference goes under the GIL, whenever the registry goes.
-  t.make = [shared, make = std::move(t.make)](const os::ParamSet& p) { return make(p); };
   if (period) t.defaults.period = duration_of(*period);
   return t;
 }
@@ -319,6 +317,8 @@ class Simulation {
   }
 
   sim::Scenario scenario_;
+  // The Python types' factories: held here too, so that their last reference (and the Python
+  // object's) goes with the Simulation, under the GIL, not with a registry inside the session.
   std::vector<std::shared_ptr<os::TaskType>> python_types_;
   std::unique_ptr<kernel::LockstepExecutor> executor_;
   std::unique_ptr<sim::ScenarioSession> session_;

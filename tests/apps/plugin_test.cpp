@@ -144,14 +144,15 @@ TEST(PluginLibraryTest, EveryRobotCreatesThePluginsTypesAtRuntime) {
   // What a genome's development, an evolution task's controller swap and the shell do: create a
   // task by type name on a running robot's node, whose registry is over the session's shared types.
   const fs::path dir = scratch_dir("runtime");
-  auto scenario = symb::sim::load_scenario(
+  auto loaded = symb::sim::load_scenario(
       write(dir / "s.yaml", drive_scenario("test_drive", "plugins: [" + plugin("good") + "]\n")).string());
-  ASSERT_TRUE(scenario) << scenario.error();
-  scenario->robots.push_back(scenario->robots[0]);
-  scenario->robots[1].name = "second";
-  scenario->robots[1].start.y = 120;
+  ASSERT_TRUE(loaded) << loaded.error();
+  symb::sim::Scenario scenario = std::move(loaded).value();
+  scenario.robots.push_back(scenario.robots[0]);
+  scenario.robots[1].name = "second";
+  scenario.robots[1].start.y = 120;
   symb::kernel::VirtualTimeExecutor executor;
-  auto session = symb::sim::ScenarioSession::create(*scenario, executor);
+  auto session = symb::sim::ScenarioSession::create(scenario, executor);
   ASSERT_TRUE(session) << session.error();
   (*session)->start();
   executor.run_for(std::chrono::milliseconds(300));
