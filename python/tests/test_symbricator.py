@@ -60,6 +60,17 @@ def test_probes_arrive_as_arrays():
         assert np.all(np.diff(times) >= 0)
 
 
+def test_spikes_arrive_as_arrays():
+    sim = symb.Simulation(str(SCENARIOS / "linda_maze.yaml"), duration=3)
+    sim.run()
+    spikes = sim.spikes()
+    assert set(spikes) == {("thymio", "controller", "spikes")}
+    times, values = spikes["thymio", "controller", "spikes"]
+    assert times.shape[0] > 10 and values.shape[0] == times.shape[0]
+    # The same samples as among all probes.
+    np.testing.assert_array_equal(sim.probes()["thymio", "controller", "spikes"][1], values)
+
+
 def test_a_live_node_is_rewired_from_python():
     sim = symb.Simulation(MAZE, duration=20)
     robot = sim.robot("thymio")
