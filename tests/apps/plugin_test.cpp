@@ -181,10 +181,11 @@ TEST(PluginLibraryTest, ShellLoadLeavesTheRunningNodeAloneWhenAPluginIsBad) {
   ASSERT_TRUE(shell.execute("load " + plugin("good")).ok);
   ASSERT_TRUE(shell.execute("create test_drive d1").ok);
   executor.run_for(std::chrono::milliseconds(100));
-  for (const std::string bad : {"bad_abi", "throws", "no_entry"}) {
-    const auto reply = shell.execute("load " + plugin(bad));
+  const std::string not_a_library = write(scratch_dir("shell") / "notes.so", "not an ELF file\n").string();
+  for (const std::string& bad : {plugin("bad_abi"), plugin("throws"), plugin("no_entry"), not_a_library}) {
+    const auto reply = shell.execute("load " + bad);
     EXPECT_FALSE(reply.ok) << bad;
-    EXPECT_NE(reply.text.find("error: column 6: plugin " + plugin(bad)), std::string::npos) << reply.text;
+    EXPECT_NE(reply.text.find("error: column 6: plugin " + bad + ": "), std::string::npos) << reply.text;
   }
   executor.run_for(std::chrono::milliseconds(100));
   ASSERT_EQ(node.tasks().size(), 1u);
