@@ -20,6 +20,7 @@
 #include <pybind11/stl.h>
 
 #include "symb/apps/run/run_recorder.hpp"
+#include "symb/evo/mu_plus_one/mu_plus_one.hpp"
 #include "symb/evo/one_plus_one/one_plus_one.hpp"
 #include "symb/io/plugin_library.hpp"
 #include "symb/kernel/lockstep_executor.hpp"
@@ -342,10 +343,19 @@ std::string param_text(const py::handle& v) {
   return py::str(v).cast<std::string>();
 }
 
-// The (1+1)-ONLINE algorithm for a Python loop: ask next(), run it, report(fitness).
+// The algorithms of `symb evolve` for a Python loop: ask next(), run it, report(fitness).
 struct PyOnePlusOne {
   std::optional<evo::OnePlusOne> algorithm;
 };
+struct PyMuPlusOne {
+  std::optional<evo::MuPlusOne> algorithm;
+};
+
+py::array_t<double> genes_array(const evo::RealGenome& g) {
+  py::array_t<double> a(static_cast<py::ssize_t>(g.values.size()));
+  std::copy(g.values.begin(), g.values.end(), a.mutable_data());
+  return a;
+}
 
 }  // namespace
 
@@ -490,16 +500,44 @@ PYBIND11_MODULE(symbricator, m) {
            }),
            py::arg("genes"), py::arg("lo") = -4.0, py::arg("hi") = 4.0, py::arg("sigma") = 1.0,
            py::arg("sigma_min") = 1e-4, py::arg("sigma_max") = 4.0, py::arg("reevaluation") = 0.2, py::arg("seed") = 1)
-      .def("next",
-           [](const PyOnePlusOne& p) {
-             const auto& g = p.algorithm->next().values;
-             py::array_t<double> a(static_cast<py::ssize_t>(g.size()));
-             std::copy(g.begin(), g.end(), a.mutable_data());
-             return a;
-           })
+      .def("next", [](const PyOnePlusOne& p) { return genes_array(p.algorithm->next()); })
+      .def_property_readonly("champion", [](const PyOnePlusOne& p) { return genes_array(p.algorithm->champion()); })
       .def("report", [](PyOnePlusOne& p, double fitness) { p.algorithm->report(fitness); })
       .def_property_readonly("champion_fitness", [](const PyOnePlusOne& p) { return p.algorithm->champion_fitness(); })
       .def_property_readonly("sigma", [](const PyOnePlusOne& p) { return p.algorithm->sigma(); })
       .def_property_readonly("candidate",
                              [](const PyOnePlusOne& p) { return evo::to_string(p.algorithm->candidate_kind()); });
+
+  py::class_<PyMuPlusOne>(m, "MuPlusOne", "(mu+1)-ONLINE, the other algorithm of `symb evolve`, for a Python loop")
+      .def(py::init([](std::size_t genes, double lo, double hi, std::size_t mu, double rho, double sigma,
+                       double crossover, std::uint64_t seed) {
+             evo::MuPlusOneOptions o;
+             o.genes = genes;
+             o.lo = lo;
+             o.hi = hi;
+             o.mu = mu;
+             o.rho = rho;
+             o.sigma = sigma;
+             o.crossover = crossover;
+             PyMuPlusOne p;
+             p.algorithm.emplace(value_or_raise(evo::MuPlusOne::create(o, kernel::RandomStream(seed))));
+             return p;
+           }),
+           py::arg("genes"), py::arg("lo") = -4.0, py::arg("hi") = 4.0, py::arg("mu") = 10, py::arg("rho") = 0.2,
+           py::arg("sigma") = 1.0, py::arg("crossover") = 0.5, py::arg("seed") = 1)
+      .def("next", [](const PyMuPlusOne& p) { return genes_array(p.algorithm->next()); })
+      .def("report", [](PyMuPlusOne& p, double fitness) { p.algorithm->report(fitness); })
+      .def_property_readonly("best_fitness",
+                             [](const PyMuPlusOne& p) {
+                               if (!p.algorithm->has_best()) throw SymbError("no report yet");
+                               return p.algorithm->best().fitness;
+                             })
+      .def_property_readonly("best",
+                             [](const PyMuPlusOne& p) {
+                               if (!p.algorithm->has_best()) throw SymbError("no report yet");
+                               return genes_array(p.algorithm->best().genome);
+                             })
+      .def_property_readonly("mean_fitness", [](const PyMuPlusOne& p) { return p.algorithm->mean_fitness(); })
+      .def_property_readonly("candidate",
+                             [](const PyMuPlusOne& p) { return evo::to_string(p.algorithm->candidate_kind()); });
 }

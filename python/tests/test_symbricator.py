@@ -223,3 +223,18 @@ def test_one_plus_one_from_a_python_loop():
     first, best = evolve(3)
     assert best > first
     assert evolve(3) == (first, best)  # same seed, same run
+
+
+def test_mu_plus_one_from_a_python_loop():
+    target = np.linspace(-1, 1, 4)
+    es = symb.MuPlusOne(genes=4, lo=-2, hi=2, mu=5, sigma=0.3, seed=2)
+    with pytest.raises(symb.Error, match="no report yet"):
+        es.best_fitness
+    firsts = []
+    for i in range(400):
+        fitness = -float(np.sum((es.next() - target) ** 2))
+        if i < 5:
+            firsts.append(fitness)
+        es.report(fitness)
+    assert es.best_fitness > max(firsts)
+    assert es.best_fitness == -float(np.sum((es.best - target) ** 2))
