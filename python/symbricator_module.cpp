@@ -155,10 +155,11 @@ os::TaskType python_task_type(const std::string& name, py::object factory) {
 
 // ---- a run --------------------------------------------------------------------------------------
 
-// One row per robot and step, the columns below (float64): what steps.csv holds, in one block.
-constexpr const char* kStepColumns[] = {"time_s",     "robot",      "x_cm", "y_cm",       "theta_rad", "left_cm_s",
-                                        "right_cm_s", "in_contact", "ir0",  "ir1",        "ir2",       "ir3",
-                                        "ir4",        "ir5",        "ir6",  "distance_cm"};
+// One row per robot and step, the columns below (float64): steps.csv's columns in its order (the
+// robot as its index), then the distance travelled.
+constexpr const char* kStepColumns[] = {"time_s",    "robot",      "x_cm",    "y_cm",       "heading_rad", "ir0",
+                                        "ir1",       "ir2",        "ir3",     "ir4",        "ir5",         "ir6",
+                                        "left_cm_s", "right_cm_s", "contact", "distance_cm"};
 constexpr std::size_t kStepCols = std::size(kStepColumns);
 
 struct ProbeSeries {
@@ -197,8 +198,8 @@ class Simulation {
       so.task_types.push_back([type](os::TaskTypeRegistry& r) { return r.add(*type); });
     }
     session_ = value_or_raise(sim::ScenarioSession::create(scenario_, *executor_, so));
-    const double dt = std::chrono::duration<double>(scenario_.control_period).count();
-    recorder_ = std::make_unique<apps::run::RunRecorder>(session_->world(), nullptr, 1, dt);
+    dt_ = std::chrono::duration<double>(scenario_.control_period).count();
+    recorder_ = std::make_unique<apps::run::RunRecorder>(session_->world(), nullptr, 1, dt_);
     session_->runner().add_observer([this](const sim::StepRecord& r) { on_step(r); });
     for (std::size_t i = 0; i < session_->robot_count(); ++i)
       session_->robot(i).node().set_probe_sink([this, i](const os::ProbeSample& s) { on_probe(i, s); });
@@ -234,7 +235,7 @@ class Simulation {
     if (!rows_.empty()) std::memcpy(a.mutable_data(), rows_.data(), rows_.size() * sizeof(double));
     return a;
   }
-  // Robot i's poses, steps x [x, y, theta]: one strided pass over the block.
+  // Robot i's poses, steps x [x, y, heading]: one strided pass over the block.
   py::array_t<double> trajectory(std::size_t robot) const {
     const std::size_t robots = session_->robot_count();
     if (robot >= robots) throw py::index_error("no robot " + std::to_string(robot));
@@ -282,7 +283,7 @@ class Simulation {
 
   void on_step(const sim::StepRecord& r) {
     recorder_->on_step(r);
-    const double t = seconds(r.time);
+    const double t = static_cast<double>(r.step) * dt_;  // as steps.csv's time_s
     for (std::size_t i = 0; i < r.robots.size(); ++i) {
       const sim::RobotStep& s = r.robots[i];
       const double row[kStepCols] = {t,
@@ -290,9 +291,6 @@ class Simulation {
                                      s.state.pose.x,
                                      s.state.pose.y,
                                      s.state.pose.theta,
-                                     s.state.left_speed,
-                                     s.state.right_speed,
-                                     s.state.in_contact ? 1.0 : 0.0,
                                      s.ir[0],
                                      s.ir[1],
                                      s.ir[2],
@@ -300,6 +298,9 @@ class Simulation {
                                      s.ir[4],
                                      s.ir[5],
                                      s.ir[6],
+                                     s.state.left_speed,
+                                     s.state.right_speed,
+                                     s.state.in_contact ? 1.0 : 0.0,
                                      s.state.distance};
       rows_.insert(rows_.end(), std::begin(row), std::end(row));
     }
@@ -324,6 +325,7 @@ class Simulation {
   std::unique_ptr<kernel::LockstepExecutor> executor_;
   std::unique_ptr<sim::ScenarioSession> session_;
   std::unique_ptr<apps::run::RunRecorder> recorder_;
+  double dt_ = 0;  // the control period, s
   std::vector<double> rows_;
   std::vector<ProbeSeries> series_;
 };

@@ -15,6 +15,7 @@ import symbricator as symb
 
 SCENARIOS = pathlib.Path(os.environ.get("SYMB_SCENARIO_DIR", pathlib.Path(__file__).parents[2] / "scenarios"))
 MAZE = str(SCENARIOS / "maze.yaml")
+WHEELS = [symb.STEP_COLUMNS.index("left_cm_s"), symb.STEP_COLUMNS.index("right_cm_s")]
 
 
 def symb_run_hash(scenario, *args):
@@ -37,7 +38,9 @@ def test_maze_from_python_has_symb_runs_trajectory_hash():
     assert sliced.time == pytest.approx(60.0)
 
 
-def test_results_are_numpy_blocks():
+def test_results_are_numpy_blocks(tmp_path):
+    subprocess.run([os.environ["SYMB_BINARY"], "run", MAZE, "--duration", "30s", "--quiet", "--out",
+                    str(tmp_path / "out")], check=True)
     sim = symb.Simulation(MAZE, duration=30)
     sim.run()
     steps = sim.steps()
@@ -45,6 +48,12 @@ def test_results_are_numpy_blocks():
     assert steps.flags["C_CONTIGUOUS"] and steps.flags["OWNDATA"]
     t = sim.trajectory(0)
     np.testing.assert_array_equal(t, steps[:, 2:5])
+    # steps.csv's columns, in its order, and its values (to its printed decimals).
+    csv_columns = (tmp_path / "out" / "steps.csv").read_text().splitlines()[0].split(",")
+    assert symb.STEP_COLUMNS[:len(csv_columns)] == csv_columns
+    csv = np.loadtxt(tmp_path / "out" / "steps.csv", delimiter=",", skiprows=1,
+                     converters={1: lambda s: 0.0}, encoding="utf-8")
+    np.testing.assert_allclose(steps[:, :len(csv_columns)], csv, rtol=0, atol=0.051)
     # The robot drove: time column is the control period's multiples, distance grows.
     np.testing.assert_allclose(steps[:, 0], 0.03 * np.arange(1, 1001), rtol=0, atol=1e-9)
     assert steps[-1, symb.STEP_COLUMNS.index("distance_cm")] > 100
@@ -78,7 +87,7 @@ def test_a_live_node_is_rewired_from_python():
     robot.suspend("controller")
     sim.run(seconds=2)
     # The wheels' watchdog stopped the robot 45 ms after the last command.
-    assert np.all(sim.steps()[-10:, 5:7] == 0)
+    assert np.all(sim.steps()[-10:, WHEELS] == 0)
     robot.resume("controller")
     # A second controller of a registered type, hooked in, its parameter changed while it runs.
     robot.create("mdl2e", "c2", program="mdl2e/obstacle_avoidance.mdl2e")
@@ -152,7 +161,7 @@ def test_a_python_exception_faults_that_task_only():
     assert states["controller"] == "running"
     assert sim.time == pytest.approx(10.0)
     # The robot drove on to the end: the last second's steps still move.
-    assert np.any(sim.steps()[-30:, 5:7] != 0)
+    assert np.any(sim.steps()[-30:, WHEELS] != 0)
     log = robot.shell("log")
     assert "third tick" in log and "ValueError" in log
 
