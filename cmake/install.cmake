@@ -51,6 +51,8 @@ foreach(layer IN LISTS symb_exported)
   set_target_properties(symb_${layer} PROPERTIES EXPORT_NAME ${layer})
   list(APPEND symb_exported_targets symb_${layer})
 endforeach()
+# Users' code that includes the headers is C++20 too: the requirement travels with the targets.
+target_compile_features(symb_kernel PUBLIC cxx_std_20)
 install(TARGETS ${symb_exported_targets} EXPORT SymbricatorTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
