@@ -279,6 +279,13 @@ std::span<const Shell::Command> Shell::table() {
        1,
        1,
        {}},
+      {{"load", "load PATH", "load a task-type plugin (a shared library) into the node's registry",
+        "Its types are then created like any other (create TYPE NAME ...). A plugin of another ABI\n"
+        "version, or whose registration fails, is refused and changes nothing (docs/plugins.md)."},
+       &Shell::cmd_load,
+       1,
+       1,
+       {}},
       {{"time", "time [--json]", "show the node's clock", "Columns: NODE TIME (seconds) NS."},
        &Shell::cmd_time,
        0,
@@ -925,6 +932,13 @@ Reply Shell::cmd_ioctl(const Call& c) {
   auto answer = (*device)->ioctl(command.text, arg != nullptr ? std::string_view(arg->text) : std::string_view());
   if (!answer) return fail(at_column(known && arg != nullptr ? arg->column : command.column, answer.error()));
   return ok(answer->empty() ? std::string("ok") : *answer);
+}
+
+Reply Shell::cmd_load(const Call& c) {
+  const Token& path = c.pos()[0];
+  if (!options_.load_plugin) return fail(at_column(path.column, "this shell cannot load plugins"));
+  if (auto st = options_.load_plugin(path.text); !st) return fail(at_column(path.column, st.error()));
+  return ok("loaded " + path.text + "\n");
 }
 
 Reply Shell::cmd_run(const Call& c) {

@@ -71,6 +71,9 @@ class Shell {
                                               const os::HookOptions& options)>
         remote_hook;
     std::function<std::string()> remote_hooks;
+    // `load PATH`: adds a task-type plugin's types (os/plugin.hpp) to the node's registry; whoever
+    // owns the registry sets it (symb run: the robot's own). Unset: `load` says it cannot.
+    std::function<kernel::Status(const std::string& path)> load_plugin;
   };
   static constexpr std::size_t kMaxScriptBytes = 1 << 20;
 
@@ -109,6 +112,7 @@ class Shell {
   Reply cmd_help(const Call& c);
   Reply cmd_tasks(const Call& c);
   Reply cmd_types(const Call& c);
+  Reply cmd_load(const Call& c);
   Reply cmd_create(const Call& c);
   Reply cmd_suspend(const Call& c);
   Reply cmd_resume(const Call& c);

@@ -42,6 +42,7 @@ void CommandShellTask::on_start() {
   Shell::Options so;
   so.devices = options_.devices;
   so.read_file = options_.read_file;
+  so.load_plugin = options_.load_plugin;
   shell_.emplace(node(), std::move(so));
   shell_->protect(id());
   if (peer_.valid()) shell_->protect(peer_);

@@ -42,6 +42,8 @@ struct ShellOptions {
   std::shared_ptr<const DeviceTable> devices;
   // How `run FILE` reads scripts (see Shell::Options::read_file).
   std::function<kernel::Result<std::string>(const std::string& path)> read_file;
+  // How `load PATH` loads a task-type plugin (see Shell::Options::load_plugin).
+  std::function<kernel::Status(const std::string& path)> load_plugin;
   // The stream task the session talks through. When invalid, the first task that sends bytes.
   os::TaskId peer;
   // Called from the task's on_stop (on its own context) however the session ended: a server

@@ -90,8 +90,15 @@ kernel::Status register_device_free_types(os::TaskTypeRegistry& registry, Progra
 }  // namespace
 
 kernel::Result<std::shared_ptr<const os::TaskTypeRegistry>> shared_scenario_task_types(ProgramReader read_program) {
+  return shared_scenario_task_types(std::move(read_program), {});
+}
+
+kernel::Result<std::shared_ptr<const os::TaskTypeRegistry>> shared_scenario_task_types(
+    ProgramReader read_program, const std::function<kernel::Status(os::TaskTypeRegistry&)>& more) {
   auto registry = std::make_shared<os::TaskTypeRegistry>();
   if (auto st = register_device_free_types(*registry, std::move(read_program)); !st) return kernel::Error{st.error()};
+  if (more)
+    if (auto st = more(*registry); !st) return kernel::Error{st.error()};
   return std::shared_ptr<const os::TaskTypeRegistry>(std::move(registry));
 }
 

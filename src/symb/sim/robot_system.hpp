@@ -102,6 +102,9 @@ kernel::Status register_scenario_task_types(os::TaskTypeRegistry& registry, Robo
 // (RobotSystemOptions::shared_types): one copy of their schemas and factories instead of one per
 // robot.
 kernel::Result<std::shared_ptr<const os::TaskTypeRegistry>> shared_scenario_task_types(ProgramReader read_program);
+// The same, with the types `more` adds (plugins: sim::SessionOptions::task_types).
+kernel::Result<std::shared_ptr<const os::TaskTypeRegistry>> shared_scenario_task_types(
+    ProgramReader read_program, const std::function<kernel::Status(os::TaskTypeRegistry&)>& more);
 
 class RobotSystem;
 // The robot named `name` among `robots`, or null; the first cycle of answers one of their nodes
@@ -120,6 +123,9 @@ class RobotSystem {
   const std::string& name() const { return name_; }
   os::Node& node() { return *node_; }
   const os::TaskTypeRegistry& types() const { return *types_; }
+  // The robot's own registry, to add types to at runtime (the shell's `load`): on the robot's
+  // own context, like any change to its node.
+  os::TaskTypeRegistry& own_types() { return *types_; }
 
  private:
   RobotSystem() = default;

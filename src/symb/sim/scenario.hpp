@@ -83,6 +83,7 @@ inline constexpr std::size_t kMaxRobots = 20000;  // after `count` expansion
 inline constexpr std::size_t kMaxWalls = 2000;
 inline constexpr std::size_t kMaxZones = 100;
 inline constexpr std::size_t kMaxEvents = 10000;
+inline constexpr std::size_t kMaxPlugins = 64;   // `plugins:` entries
 inline constexpr std::size_t kMaxDocked = 4000;  // pairs in world.docked
 // The longest run: a scenario's `duration` and the commands' --duration (symb run, sim, evolve)
 // all stop here. 168 h (a week) simulated is hours of wall clock for a swarm at full speed; and
@@ -186,6 +187,13 @@ struct EventSpec {
   SourceLocation where;
 };
 
+// A plugin named in a scenario: its path (relative ones resolved against the scenario's folder)
+// and where the file names it.
+struct PluginRef {
+  std::string path;
+  SourceLocation where;
+};
+
 struct Scenario {
   std::string name;
   std::string description;
@@ -199,6 +207,9 @@ struct Scenario {
   OrganismWorldSpec organism;     // the 3D world's docks and bus
   std::vector<RobotSpec> robots;  // `count: N` entries are expanded, names made unique
   std::vector<EventSpec> events;  // in file order (those at one time run in that order)
+  // `plugins:` task-type plugins (os/plugin.hpp) the session loads before it checks the tasks,
+  // paths resolved against base_dir, each with where it was written.
+  std::vector<PluginRef> plugins;
 };
 
 // Reads a module kind file named in a scenario (the name as written, resolved by the reader) and

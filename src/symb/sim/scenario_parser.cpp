@@ -193,7 +193,7 @@ struct Parser {
     if (!root.IsDefined() || root.IsNull())
       src.fail(SourceLocation{src.file(), 1, 1}, "the scenario is empty: it needs at least name, world and robots");
     Map m(src, root, "the scenario",
-          {"name", "description", "seed", "duration", "control_period", "world", "robots", "events"});
+          {"name", "description", "seed", "duration", "control_period", "world", "robots", "events", "plugins"});
     sc.name = rd.name(m.require("name"), "name");
     if (auto d = m.get("description"); d.IsDefined() && !d.IsNull()) sc.description = rd.text(d, "description");
     if (auto s = m.get("seed"); s.IsDefined()) sc.seed = rd.unsigned_integer(s, "seed");
@@ -209,6 +209,16 @@ struct Parser {
     }
     resolve_remote_hooks();
     events(m.get("events"));
+    plugins(m.get("plugins"));
+  }
+
+  void plugins(const YAML::Node& n) {
+    if (!n.IsDefined() || n.IsNull()) return;
+    for (const auto& item : rd.list(n, "plugins", kMaxPlugins)) {
+      std::filesystem::path p{rd.text(item, "plugin path")};
+      if (p.is_relative()) p = std::filesystem::path(sc.base_dir) / p;
+      sc.plugins.push_back({p.lexically_normal().string(), src.at(item)});
+    }
   }
 
   void world(const YAML::Node& n) {

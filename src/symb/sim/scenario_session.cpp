@@ -2,6 +2,7 @@
 
 #include <exception>
 
+#include "symb/io/plugin_library.hpp"
 #include "symb/sim/world_factory.hpp"
 
 namespace symb::sim {
@@ -15,10 +16,23 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
   s->scenario_ = scenario;
   s->seed_ = options.seed.value_or(scenario.seed);
   ProgramReader read = options.read_program ? options.read_program : file_program_reader(scenario.base_dir);
+  // The scenario's plugins, after those the caller gives: types beyond the built-in ones.
+  std::vector<RegisterTaskTypes> extra_types = options.task_types;
+  for (const PluginRef& p : scenario.plugins) {
+    auto lib = io::PluginLibrary::open(p.path);
+    if (!lib) return kernel::Error{p.where.str() + ": " + lib.error()};
+    extra_types.push_back([lib = std::move(lib).value()](os::TaskTypeRegistry& r) { return lib->register_into(r); });
+  }
+  const auto add_extra_types = [&extra_types](os::TaskTypeRegistry& r) -> kernel::Status {
+    for (const RegisterTaskTypes& add : extra_types)
+      if (auto st = add(r); !st) return st;
+    return {};
+  };
 
   {
     os::TaskTypeRegistry schemas;
     if (auto st = register_scenario_task_types(schemas, {}, read); !st) return kernel::Error{st.error()};
+    if (auto st = add_extra_types(schemas); !st) return kernel::Error{scenario.file + ": " + st.error()};
     if (auto st = check_scenario(scenario, schemas); !st) return kernel::Error{st.error()};
   }
   if (scenario.robots.empty()) return kernel::Error{scenario.file + ": the scenario has no robots"};
@@ -39,7 +53,7 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
     s->radio_->attach(*s->runner_);
   }
   // One copy of the types that hold nothing of one robot, for every robot (robot_system.hpp).
-  auto shared_types = shared_scenario_task_types(read);
+  auto shared_types = shared_scenario_task_types(read, add_extra_types);
   if (!shared_types) return kernel::Error{scenario.file + ": " + shared_types.error()};
   for (std::size_t i = 0; i < scenario.robots.size(); ++i) {
     RobotSystemOptions ro;

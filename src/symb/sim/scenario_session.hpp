@@ -13,6 +13,7 @@
 // empties every node before the world goes away, so no task touches a freed driver.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -29,10 +30,17 @@
 
 namespace symb::sim {
 
+// Adds task types to a registry (a plugin's, io/plugin_library.hpp; Python's; a test's).
+using RegisterTaskTypes = std::function<kernel::Status(os::TaskTypeRegistry&)>;
+
 struct SessionOptions {
   std::optional<std::uint64_t> seed;  // overrides the scenario's
   ProgramReader read_program;         // default: files relative to the scenario's folder
   std::size_t log_capacity = 1024;
+  // Task types beyond the built-in ones (`symb run --plugin`), added, like the plugins the
+  // scenario names (Scenario::plugins, loaded by create()), to the registry the scenario is
+  // checked against and to the types every robot shares. 2D scenarios only.
+  std::vector<RegisterTaskTypes> task_types;
 };
 
 class ScenarioSession {

@@ -44,6 +44,7 @@ constexpr OptionSpec kOptions[] = {
     {"--record", "FORMAT", "2D steps: csv, hdf5 (steps.h5), both or none (default: csv to 100 robots, hdf5 above)"},
     {"--record-every", "N", "record every N-th step (steps.csv, steps.h5; the same as --csv-every)"},
     {"--record-robots", "LIST", "2D: record only these robots' rows: names and ranges, e.g. t0..t99,t500"},
+    {"--plugin", "PATH", "load a task-type plugin (a shared library; docs/plugins.md); may be repeated"},
     {"--print-hash", "", "print 'trajectory-hash: <16 hex digits>' on stdout"},
     {"--quiet", "", "no progress line and no summary"},
     {"--help", "", "this help"},
@@ -187,6 +188,9 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
     } else if (o.name == "--record-robots") {
       if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--record-robots: empty list"});
       options.record.robots = o.value;
+    } else if (o.name == "--plugin") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--plugin: empty path"});
+      options.plugins.emplace_back(o.value);
     } else if (o.name == "--print-hash") {
       print_hash = true;
     } else if (o.name == "--quiet") {

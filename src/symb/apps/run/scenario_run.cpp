@@ -20,6 +20,7 @@
 #include "symb/apps/run/spike_recorder.hpp"
 #include "symb/apps/text_file.hpp"
 #include "symb/apps/view/live_view.hpp"
+#include "symb/io/plugin_library.hpp"
 #include "symb/io/stdio_stream.hpp"
 #include "symb/kernel/lockstep_executor.hpp"
 #include "symb/kernel/thread_executor.hpp"
@@ -180,6 +181,14 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
 
   sim::SessionOptions session_options;
   session_options.seed = options.seed;
+  for (const std::string& path : options.plugins) {
+    auto lib = io::PluginLibrary::open(path);
+    if (!lib) return Error{"--plugin: " + lib.error()};
+    session_options.task_types.push_back(
+        [lib = std::move(lib).value()](os::TaskTypeRegistry& r) { return lib->register_into(r); });
+  }
+  if (is_organism && (!options.plugins.empty() || !scenario.plugins.empty()))
+    return Error{scenario.file + ": plugins are for 2D scenarios (a 3D organism registers only the built-in types)"};
   if (is_organism) {
     auto organism = sim::mujoco::OrganismSession::create(scenario, *executor, session_options);
     if (!organism) return Error{organism.error()};
@@ -248,8 +257,15 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     sim::RobotSystem* robot =
         options.shell.robot.empty() ? &session->robot(0) : session->find_robot(options.shell.robot);
     if (!robot) return Error{"--shell-robot: the scenario has no robot '" + options.shell.robot + "'"};
+    // `load PATH`: a plugin's types into this robot's own registry (docs/plugins.md).
+    const auto load_plugin = [robot](const std::string& path) -> kernel::Status {
+      auto lib = io::PluginLibrary::open(path);
+      if (!lib) return Error{lib.error()};
+      return (*lib)->register_into(robot->own_types());
+    };
     if (options.shell.kind == ShellRequest::Kind::kTcp) {
       shell::TcpShellOptions so;
+      so.session.load_plugin = load_plugin;
       so.host = options.shell.host;
       so.port = options.shell.port;
       if (!options.shell.token.empty()) so.token = options.shell.token;
@@ -263,6 +279,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
       // End of input (a script piped in, a closed terminal) ends the session after its last line;
       // the run goes on to its end (docs/shell.md).
       shell::ShellOptions so;
+      so.load_plugin = load_plugin;
       so.on_close = [&running, notice = options.on_notice, end = seconds(scenario.duration)] {
         if (running.load() && notice)
           notice("shell: the session ended (end of input or exit); the run goes on to " + fixed(end, 1) + " s");

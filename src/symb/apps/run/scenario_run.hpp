@@ -75,6 +75,8 @@ struct RunOptions {
   // 2D: which format the steps are recorded in (steps.csv, steps.h5), and which robots' rows
   // (record_options.hpp); `csv_every` picks the steps for either.
   RecordOptions record;
+  // Task-type plugins to load before the scenario is checked (--plugin), besides its own `plugins:`.
+  std::vector<std::string> plugins;
   std::function<void(const RunProgress&)> on_progress;
   std::function<void(const std::string&)> on_notice;  // "shell: ...", "view: ..." for the person
   // Polled between slices of the run (at most 20 ms of wall clock apart while pacing, one
