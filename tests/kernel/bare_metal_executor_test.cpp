@@ -15,7 +15,8 @@ using namespace std::chrono_literals;
 
 // Records every call with the tick count at which it ran.
 struct BareRecorder final : Activity {
-  BareRecorder(std::string n, BareMetalExecutor& e, std::vector<std::string>& l) : name(std::move(n)), exec(e), log(l) {}
+  BareRecorder(std::string n, BareMetalExecutor& e, std::vector<std::string>& l)
+      : name(std::move(n)), exec(e), log(l) {}
   void on_activity_attached(ActivitySlot& s) override { slot = &s; }
   void on_activity_start() override { note("start"); }
   void on_activity_input() override {
