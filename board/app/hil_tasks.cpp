@@ -233,10 +233,10 @@ kernel::Status make_hil_tasks(os::Node& node, std::shared_ptr<io::IOStream> port
                               const HilOptions& options) {
   os::TaskOptions link_options;
   link_options.period = options.poll;
-  link_options.queue_capacity = 4;
+  link_options.queue_capacity = 2;
   os::TaskOptions device_options;
   device_options.period = options.control_period;
-  device_options.queue_capacity = 4;
+  device_options.queue_capacity = 2;
   auto link = node.create("link", std::make_unique<LinkTask>(std::move(port), stats), link_options);
   if (!link) return kernel::Error{"link: " + link.error()};
   auto ir = node.create("ir", std::make_unique<IrTask>(stats, options), device_options);

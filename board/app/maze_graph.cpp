@@ -19,9 +19,7 @@ std::uint64_t maze_node_seed(std::uint64_t seed, std::size_t index) {
   return z ^ (z >> 31);
 }
 
-kernel::Result<std::unique_ptr<MazeGraph>> build_maze_graph(kernel::Executor& executor,
-                                                            std::shared_ptr<io::IOStream> data_port,
-                                                            std::uint64_t seed) {
+kernel::Result<std::unique_ptr<MazeGraph>> build_maze_graph(kernel::Executor& executor, std::uint64_t seed) {
   auto g = std::make_unique<MazeGraph>();
   g->types = std::make_unique<os::TaskTypeRegistry>();
   control::ControlResources resources;
@@ -30,24 +28,26 @@ kernel::Result<std::unique_ptr<MazeGraph>> build_maze_graph(kernel::Executor& ex
     return kernel::Error{"the board holds no program '" + std::string(reference) + "' (it has " +
                          std::string(kMazeProgram) + ")"};
   };
-  if (auto st = control::register_mdl2e_task_types(*g->types, resources); !st) return kernel::Error{st.error()};
   // Only the maze's controller type: the AHHS and network types (compiled for the board in
   // symb_board_layers) would add 106 KB of parsers and parameter tables, past the 256 KiB flash.
+  if (auto st = control::register_mdl2e_task_types(*g->types, resources); !st) return kernel::Error{st.error()};
   g->node = std::make_unique<os::Node>(executor, os::NodeConfig{"thymio", maze_node_seed(seed, 0), 32, g->types.get()});
-  os::Node& node = *g->node;
-  // The controller first: compiling its program is the start-up's largest use of the heap, and
-  // what it frees is then reused by the tasks made after it, so the heap's high-water is the
-  // larger of the two, not their sum (3.6 KB less).
   const os::TaskType* mdl2e = g->types->find("mdl2e");
   const std::vector<os::ParamAssignment> params{{"program", std::string(kMazeProgram), 1}};
-  auto controller = node.create("mdl2e", "controller", params, mdl2e->defaults);
+  auto controller = g->node->create("mdl2e", "controller", params, mdl2e->defaults);
   if (!controller) return kernel::Error{"controller: " + controller.error()};
-  if (auto st = make_hil_tasks(node, std::move(data_port), g->stats); !st) return kernel::Error{st.error()};
-  auto ir = node.find("ir");
-  auto wheels = node.find("wheels");
+  return g;
+}
+
+kernel::Status attach_maze_link(MazeGraph& graph, std::shared_ptr<io::IOStream> data_port) {
+  os::Node& node = *graph.node;
+  if (auto st = make_hil_tasks(node, std::move(data_port), graph.stats); !st) return st;
+  const auto ir = node.find("ir");
+  const auto controller = node.find("controller");
+  const auto wheels = node.find("wheels");
   if (auto h = node.hook(*ir, *controller); !h) return kernel::Error{"hook ir -> controller: " + h.error()};
   if (auto h = node.hook(*controller, *wheels); !h) return kernel::Error{"hook controller -> wheels: " + h.error()};
-  return g;
+  return {};
 }
 
 }  // namespace symb::board

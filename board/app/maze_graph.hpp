@@ -29,9 +29,12 @@ struct MazeGraph {
   HilStats stats;
 };
 
-// Builds the graph over `data_port`; an error names the part that failed.
-kernel::Result<std::unique_ptr<MazeGraph>> build_maze_graph(kernel::Executor& executor,
-                                                            std::shared_ptr<io::IOStream> data_port,
-                                                            std::uint64_t seed);
+// Builds the node and its controller; an error names the part that failed. Compiling the program
+// is the start-up's largest use of the heap: done first, what it frees is reused by everything
+// made after it (the UARTs, the device tasks, the shell), so the heap's high-water is the larger
+// of the two, not their sum.
+kernel::Result<std::unique_ptr<MazeGraph>> build_maze_graph(kernel::Executor& executor, std::uint64_t seed);
+// Adds link, ir and wheels over `data_port` and hooks ir -> controller -> wheels.
+kernel::Status attach_maze_link(MazeGraph& graph, std::shared_ptr<io::IOStream> data_port);
 
 }  // namespace symb::board

@@ -105,11 +105,12 @@ Wheels take_wheels(MemoryLine& line, io::FrameDecoder& decoder) {
 }  // namespace
 
 int main() {
-  kernel::BareMetalExecutor executor(1ms, 16, [](const char* why) { symb_board_fatal(why); });
-  auto line = std::make_shared<MemoryLine>();
-  auto built = board::build_maze_graph(executor, line, 1);
+  kernel::BareMetalExecutor executor(1ms, 8, [](const char* why) { symb_board_fatal(why); });
+  auto built = board::build_maze_graph(executor, 1);
   if (!built) symb_board_fatal(built.error().c_str());
   std::unique_ptr<board::MazeGraph> graph = std::move(built).value();
+  auto line = std::make_shared<MemoryLine>();
+  if (auto st = board::attach_maze_link(*graph, line); !st) symb_board_fatal(st.error().c_str());
   executor.run_ready();
   io::FrameDecoder wheel_decoder(64);
 

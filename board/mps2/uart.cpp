@@ -38,15 +38,23 @@ void CmsdkUart::close() {
 void CmsdkUart::on_rx_interrupt(void* self) {
   auto& u = *static_cast<CmsdkUart*>(self);
   u.reg(kIntClear) = kRxInt;
-  while (u.reg(kState) & kRxFull) {
-    const auto b = static_cast<std::byte>(u.reg(kData) & 0xff);
-    const std::uint32_t head = u.head_.load(std::memory_order_relaxed);
-    if (head - u.tail_.load(std::memory_order_acquire) == kRing) {
-      u.overruns_.store(u.overruns_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
-      continue;
+  u.drain();
+}
+
+// Moves what the UART holds into the ring. With the ring full the byte stays in the UART and its
+// receive interrupt is turned off: the UART refuses more (QEMU's character backend then holds
+// the rest: flow control, nothing lost) until read_some() made room.
+void CmsdkUart::drain() {
+  while (reg(kState) & kRxFull) {
+    const std::uint32_t head = head_.load(std::memory_order_relaxed);
+    if (head - tail_.load(std::memory_order_acquire) == kRing) {
+      reg(kCtrl) = kTxEnable | kRxEnable;
+      held_ = true;
+      holds_ = holds_ + 1;
+      return;
     }
-    u.ring_[head % kRing] = b;
-    u.head_.store(head + 1, std::memory_order_release);
+    ring_[head % kRing] = static_cast<std::byte>(reg(kData) & 0xff);
+    head_.store(head + 1, std::memory_order_release);
   }
 }
 
@@ -58,6 +66,15 @@ kernel::Result<std::size_t> CmsdkUart::read_some(std::span<std::byte> buf, kerne
   while (tail != head && n < buf.size()) buf[n++] = ring_[tail++ % kRing];
   tail_.store(tail, std::memory_order_release);
   bytes_in_ += n;
+  if (held_ && n > 0) {
+    // Room again: take what the UART held back and let it interrupt again.
+    std::uint32_t primask;
+    __asm volatile("mrs %0, primask\n cpsid i" : "=r"(primask)::"memory");
+    held_ = false;
+    drain();
+    if (!held_) reg(kCtrl) = kTxEnable | kRxEnable | kRxIntEnable;
+    __asm volatile("msr primask, %0" ::"r"(primask) : "memory");
+  }
   return n;
 }
 

@@ -2,7 +2,8 @@
 // shell's StreamTask, the HIL link) uses it as Linux uses a serial port. The receive interrupt
 // moves each byte into a ring buffer (the UART holds one byte); read_some() takes what the ring
 // holds and never waits (the board's tasks never block). write_all() waits for each byte to be
-// taken by the transmitter. A full ring drops new bytes and counts them (rx_overruns).
+// taken by the transmitter. A full ring leaves the next byte in the UART and turns its receive
+// interrupt off until read_some() made room: the sender is held back, nothing is lost.
 #pragma once
 
 #include <array>
@@ -25,11 +26,13 @@ class CmsdkUart final : public io::IOStream {
   kernel::Status write_all(std::span<const std::byte> data) override;
 
   bool has_input() const { return head_.load(std::memory_order_acquire) != tail_.load(std::memory_order_relaxed); }
-  std::uint32_t rx_overruns() const { return overruns_.load(std::memory_order_relaxed); }
+  // Times the ring was full and the sender held back.
+  std::uint32_t rx_holds() const { return holds_; }
   std::uint64_t bytes_in() const { return bytes_in_; }
 
  private:
   static void on_rx_interrupt(void* self);
+  void drain();
   volatile std::uint32_t& reg(std::uintptr_t offset) const;
 
   std::uintptr_t base_;
@@ -39,7 +42,8 @@ class CmsdkUart final : public io::IOStream {
   std::array<std::byte, kRing> ring_{};
   std::atomic<std::uint32_t> head_{0};  // written by the interrupt
   std::atomic<std::uint32_t> tail_{0};  // written by the main context
-  std::atomic<std::uint32_t> overruns_{0};
+  volatile std::uint32_t holds_ = 0;
+  volatile bool held_ = false;  // the ring was full: the receive interrupt is off
   std::uint64_t bytes_in_ = 0;
 };
 

@@ -88,9 +88,15 @@ class StreamPollTask final : public os::Task {
 }  // namespace
 #endif
 
-// What one reader keeps between its passes.
+// What one reader keeps between its passes. A board's reader takes what its UART's ring holds
+// every few milliseconds: a small buffer does (and RAM is 32 KiB there).
+#ifdef SYMB_BOARD
+constexpr std::size_t kReadChunk = 256;
+#else
+constexpr std::size_t kReadChunk = 4096;
+#endif
 struct StreamTask::Reader {
-  explicit Reader(std::size_t max_frame) : decoder(max_frame), buf(4096) {}
+  explicit Reader(std::size_t max_frame) : decoder(max_frame), buf(kReadChunk) {}
   FrameDecoder decoder;
   std::string line;
   bool cutting = false;
@@ -105,10 +111,12 @@ void StreamTask::on_start() {
     if (auto st = stream_->open(); !st)
       log(os::LogLevel::kWarn, "cannot open '" + stream_->name() + "': " + st.error());
 #ifdef SYMB_BOARD
-  auto reader = std::make_shared<Reader>(options_.max_frame);
+  // The frame decoder's buffers only where frames come (a shell's raw line needs none).
+  auto reader = std::make_shared<Reader>(options_.mode == StreamMode::kFrames ? options_.max_frame : 0);
   os::TaskOptions o;
   o.period = options_.poll;
   o.priority = node().info(id())->priority;
+  o.queue_capacity = 1;  // it is sent nothing
   auto poller = node().create(name() + ".rx", std::make_unique<StreamPollTask>([this, reader, s = shared_] {
                                 (void)read_once(*reader, s, kernel::Duration{0});
                               }),
