@@ -21,6 +21,7 @@
 #include "symb/kernel/bare_metal_executor.hpp"
 
 #include "app/maze_graph.hpp"
+#include "app/memory_line.hpp"
 #include "mps2/mps2.hpp"
 #include "port/runtime.hpp"
 
@@ -31,31 +32,6 @@ namespace {
 using namespace symb;
 using namespace std::chrono_literals;
 
-// A line in memory: the test writes what the simulator would send, reads what the board sent.
-class MemoryLine final : public io::IOStream {
- public:
-  MemoryLine() : Device("uart0"), IOStream("uart0") {}
-  kernel::Status open() override { return {}; }
-  void close() override {}
-  bool is_open() const override { return true; }
-  kernel::Result<std::size_t> read_some(std::span<std::byte> buf, kernel::Duration) override {
-    const std::size_t n = std::min(buf.size(), in_size - in_pos);
-    std::memcpy(buf.data(), in.data() + in_pos, n);
-    in_pos += n;
-    return n;
-  }
-  kernel::Status write_all(std::span<const std::byte> data) override {
-    if (out_size + data.size() > out.size()) return kernel::Error{"full"};
-    std::memcpy(out.data() + out_size, data.data(), data.size());
-    out_size += data.size();
-    return {};
-  }
-  std::array<std::byte, 512> in{};
-  std::size_t in_size = 0, in_pos = 0;
-  std::array<std::byte, 512> out{};
-  std::size_t out_size = 0;
-};
-
 int failures = 0;
 void check(bool ok, const char* what) {
   if (!ok) {
@@ -65,7 +41,7 @@ void check(bool ok, const char* what) {
 }
 
 // Puts frame 'N' [seq, ir...] into the line's input (after what was read).
-void send_ir(MemoryLine& line, float seq, const std::array<float, 7>& ir, bool corrupt = false) {
+void send_ir(board::MemoryLine& line, float seq, const std::array<float, 7>& ir, bool corrupt = false) {
   std::array<std::byte, 1 + 4 * 8> payload{};
   payload[0] = std::byte{'N'};
   for (std::size_t k = 0; k < 8; ++k) {
@@ -83,7 +59,7 @@ struct Wheels {
 };
 
 // Decodes every wheel frame the board wrote since the last call; keeps the last.
-Wheels take_wheels(MemoryLine& line, io::FrameDecoder& decoder) {
+Wheels take_wheels(board::MemoryLine& line, io::FrameDecoder& decoder) {
   Wheels w;
   decoder.feed(std::span<const std::byte>(line.out.data(), line.out_size), [&](std::span<const std::byte> f) {
     if (f.size() != 13) return;
@@ -109,7 +85,7 @@ int main() {
   auto built = board::build_maze_graph(executor, 1);
   if (!built) symb_board_fatal(built.error().c_str());
   std::unique_ptr<board::MazeGraph> graph = std::move(built).value();
-  auto line = std::make_shared<MemoryLine>();
+  auto line = std::make_shared<board::MemoryLine>();
   if (auto st = board::attach_maze_link(*graph, line); !st) symb_board_fatal(st.error().c_str());
   executor.run_ready();
   io::FrameDecoder wheel_decoder(64);

@@ -8,9 +8,11 @@
 #include "port/runtime.hpp"
 
 extern "C" {
-extern std::uint32_t __data_start[], __data_end[], __data_load[];
-extern std::uint32_t __bss_start[], __bss_end[];
-extern std::uint32_t __stack_bottom[], __stack_top[];
+// Linker script symbols, declared as char everywhere in the image (one unity batch may hold
+// several files that name them).
+extern char __data_start[], __data_end[], __data_load[];
+extern char __bss_start[], __bss_end[];
+extern char __stack_bottom[], __stack_top[];
 void __libc_init_array();
 void initialise_monitor_handles();
 int main();
@@ -106,13 +108,15 @@ extern "C" __attribute__((section(".isr_vector"), used)) const Handler vector_ta
 }  // namespace symb::board::mps2
 
 extern "C" void Reset_Handler() {
-  std::uint32_t* d = __data_start;
-  for (const std::uint32_t* s = __data_load; d < __data_end;) *d++ = *s++;
-  for (std::uint32_t* b = __bss_start; b < __bss_end;) *b++ = 0;
+  auto* d = reinterpret_cast<std::uint32_t*>(__data_start);
+  for (auto* s = reinterpret_cast<const std::uint32_t*>(__data_load); d < reinterpret_cast<std::uint32_t*>(__data_end);)
+    *d++ = *s++;
+  for (auto* b = reinterpret_cast<std::uint32_t*>(__bss_start); b < reinterpret_cast<std::uint32_t*>(__bss_end);)
+    *b++ = 0;
   // Paint the stack below the current frame, for stack_high_water().
   std::uint32_t* sp;
   __asm volatile("mov %0, sp" : "=r"(sp));
-  for (std::uint32_t* p = __stack_bottom; p < sp - 16;) *p++ = 0xa5a5a5a5u;
+  for (auto* p = reinterpret_cast<std::uint32_t*>(__stack_bottom); p < sp - 16;) *p++ = 0xa5a5a5a5u;
   initialise_monitor_handles();
   __libc_init_array();
   std::exit(main());

@@ -100,6 +100,16 @@ class QemuBoard {
     const std::regex pty(R"((/dev/pts/\d+) \(label serial(\d)\))");
     for (auto it = std::sregex_iterator(out.begin(), out.end(), pty); it != std::sregex_iterator(); ++it)
       ((*it)[2] == "0" ? data : shell) = (*it)[1];
+    // QEMU looks for a reader on a pseudo-terminal once a second and keeps or drops what passes
+    // meanwhile: hold both lines open from the start, as a person's terminals would be, so the
+    // simulator's handshake frames do not arrive in a burst a second late (a late answer).
+    for (const std::string* p : {&data, &shell})
+      if (!p->empty()) keepers_.push_back(::open(p->c_str(), O_WRONLY | O_NOCTTY));
+    std::this_thread::sleep_for(1100ms);
+  }
+  ~QemuBoard() {
+    for (int fd : keepers_)
+      if (fd >= 0) ::close(fd);
   }
   int wait() { return child_.wait(); }
   std::string output() const { return child_.output(); }
@@ -107,6 +117,7 @@ class QemuBoard {
 
  private:
   SymbChild child_;
+  std::vector<int> keepers_;
 };
 
 class BoardQemu : public ::testing::Test {
@@ -144,10 +155,10 @@ TEST_F(BoardQemu, DrivesTheMazeStepByStepAsTheLinuxBoard) {
                       "sim '" + kMaze + "' --serial '" + (dir_ / "tty" / "sim").string() + "'" + duration + " --out '" +
                           (dir_ / "linux").string() + "'",
                       dir_ / "sim-linux.log");
-  SymbChild run(SYMB_BINARY, "run '" + kMaze + "'" + duration + " --out '" + (dir_ / "run").string() + "'",
-                dir_ / "run.log");
   ASSERT_EQ(sim_qemu.wait(), 0) << sim_qemu.output();
   ASSERT_EQ(sim_linux.wait(), 0) << sim_linux.output();
+  SymbChild run(SYMB_BINARY, "run '" + kMaze + "'" + duration + " --out '" + (dir_ / "run").string() + "'",
+                dir_ / "run.log");
   ASSERT_EQ(run.wait(), 0) << run.output();
   linux_board.interrupt();
   EXPECT_EQ(linux_board.wait(), 0) << linux_board.output();
@@ -179,19 +190,18 @@ TEST_F(BoardQemu, DrivesTheMazeStepByStepAsTheLinuxBoard) {
       late_linux);
   EXPECT_EQ(contacts, 0u);
   EXPECT_GT(travelled, 40.0);  // 10 s drive 99 cm (measured); 6 s at least 40
-  // Step for step, unless an answer came late (a loaded machine: one step runs on the previous
-  // command and the runs may part from there on); then the paths are held to docs/hil.md's
-  // tolerance instead: at most 3 cm apart on average.
-  double apart = 0;
-  for (std::size_t i = 0; i < on_qemu.size(); ++i)
-    apart += std::hypot(on_qemu[i].x - on_linux[i].x, on_qemu[i].y - on_linux[i].y);
-  apart /= static_cast<double>(on_qemu.size());
-  std::printf("board on QEMU: paths %.3f cm apart on average\n", apart);
-  if (late_qemu == 0 && late_linux == 0)
-    EXPECT_EQ(same_as_linux, on_qemu.size());
-  else
-    EXPECT_LE(apart, 3.0);
-
+  // Step for step, unless an answer came late (a loaded machine: that step runs on the previous
+  // command, docs/hil.md, and the runs may part from there on). The QEMU board against the
+  // in-process run needs only its own answers on time; against the Linux board, both boards'.
+  if (late_qemu == 0) {
+    EXPECT_EQ(same_as_run, on_qemu.size()) << "QEMU's answers were all on time";
+  }
+  if (late_qemu == 0 && late_linux == 0) {
+    EXPECT_EQ(same_as_linux, on_qemu.size()) << "all answers were on time";
+  }
+  if (same_as_linux < on_qemu.size()) {
+    EXPECT_GT(late_qemu + late_linux, 0) << "the runs parted without a late answer";
+  }
   const auto stats = key_values(qemu.output(), "board-stats:");
   ASSERT_FALSE(stats.empty()) << qemu.output();
   EXPECT_EQ(stats.at("bad"), 0);
@@ -232,22 +242,19 @@ void write_corrupted_frames(const std::string& pty, int n) {
 TEST_F(BoardQemu, ShellSuspendsAndResumesTheControllerSurvivesBadLinesAndBadFramesAreCounted) {
   QemuBoard qemu(dir_, "--duration 12");
   ASSERT_FALSE(qemu.shell.empty()) << qemu.output();
-  // QEMU looks for a reader on a pseudo-terminal once a second and drops what it would write
-  // until it saw one: keep the shell's line open for the whole test, as a person's terminal is.
-  const int keeper = ::open(qemu.shell.c_str(), O_WRONLY | O_NOCTTY);
-  ASSERT_GE(keeper, 0) << qemu.shell;
-  std::this_thread::sleep_for(1100ms);
   SymbChild sim(SYMB_BINARY,
                 "sim '" + kMaze + "' --serial " + qemu.data + " --duration 8s --out '" + (dir_ / "sim").string() + "'",
                 dir_ / "sim.log");
   for (int i = 0; i < 300 && sim.output().find("board answered") == std::string::npos; ++i)
     std::this_thread::sleep_for(10ms);
+  // The board takes its maze-graph RAM figure at the 20th frame, before any shell command.
+  std::this_thread::sleep_for(1s);
 
   const std::string listed = shell_session(dir_, qemu.shell, "tasks", "tasks\n");
   for (const char* task : {"link", "ir", "controller", "wheels"})
     EXPECT_NE(listed.find(task), std::string::npos) << task << " not listed:\n" << listed;
 
-  std::this_thread::sleep_for(1s);
+  std::this_thread::sleep_for(500ms);
   const std::string suspended = shell_session(dir_, qemu.shell, "suspend", "suspend controller\n");
   EXPECT_EQ(suspended.find("error"), std::string::npos) << suspended;
   std::this_thread::sleep_for(1500ms);
@@ -265,7 +272,6 @@ TEST_F(BoardQemu, ShellSuspendsAndResumesTheControllerSurvivesBadLinesAndBadFram
   write_corrupted_frames(qemu.data, kCorrupted);
   ASSERT_EQ(sim.wait(), 0) << sim.output();
   ASSERT_EQ(qemu.wait(), 0) << qemu.output();
-  ::close(keeper);
 
   // While suspended the watchdog stopped the wheels; after resume the robot drove on.
   const auto rows = rows_of(dir_ / "sim" / "steps.csv");

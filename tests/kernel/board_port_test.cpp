@@ -51,7 +51,7 @@ TEST(BoardPort, ShortestCharsWritesWhatToCharsWrites) {
   }
   EXPECT_EQ(board_text(std::nan("")), std_text(std::nan("")));
   EXPECT_EQ(board_text(-INFINITY), std_text(-INFINITY));
-  for (int i = 0; i < 20000; ++i) {
+  for (int i = 0; i < 5000; ++i) {
     const std::uint64_t bits = r.next_u64();
     double d;
     std::memcpy(&d, &bits, sizeof d);
