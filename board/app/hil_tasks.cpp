@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 
+#include "symb/io/frame_sequence.hpp"
 #include "symb/os/warning_limiter.hpp"
 #include "symb/robot/channel_spec.hpp"
 #include "symb/robot/ports.hpp"
@@ -94,12 +95,12 @@ class LinkTask final : public os::Task {
 class IrTask final : public os::Task {
  public:
   IrTask(HilStats& stats, const HilOptions& o)
-      : stats_(stats), lost_after_(o.control_period * o.lost_periods), order_warning_(std::chrono::seconds(1)) {
+      : stats_(stats), sequence_(o.control_period * o.lost_periods), order_warning_(std::chrono::seconds(1)) {
     ranges_.fill(robot::ChannelRange{0.0f, static_cast<float>(robot::thymio::kIrMax)});
   }
 
  protected:
-  void on_start() override { last_frame_ = now(); }
+  void on_start() override { sequence_.start(now()); }
 
   void on_message(const os::Message& m) override {
     const std::span<const float> v = m.numbers();
@@ -111,66 +112,40 @@ class IrTask final : public os::Task {
       return;
     }
     const auto seq = static_cast<std::uint32_t>(seq_f);
-    std::uint64_t missed = 0;
-    bool restart = false;
-    if (seq == 0) {
-      restart = have_seq_ && last_seq_ != 0;
-    } else if (have_seq_ && seq <= last_seq_) {
+    const io::SequenceStep step = sequence_.on_frame(seq, now());
+    if (!step.accepted) {
       ++stats_.out_of_order;
       if (order_warning_.note(now()))
-        log(os::LogLevel::kWarn, std::to_string(order_warning_.count()) +
-                                     " out-of-order frame(s) dropped, latest: seq " + std::to_string(seq) + " after " +
-                                     std::to_string(last_seq_));
+        log(os::LogLevel::kWarn,
+            std::to_string(order_warning_.count()) + " out-of-order frame(s) dropped, latest: " + step.out_of_order);
       return;
-    } else if (have_seq_) {
-      missed = seq - last_seq_ - 1;
     }
-    if (restart) log(os::LogLevel::kInfo, "seq 0 after " + std::to_string(last_seq_) + ": the simulator started anew");
-    const kernel::Time t = now();
-    if (!up_) {
-      if (ever_up_)
-        log(os::LogLevel::kInfo, "link back after " + std::to_string(kernel::to_milliseconds(t - last_frame_)) +
-                                     " ms without frames (seq " + std::to_string(seq) + ")");
-      else
-        log(os::LogLevel::kInfo, "link up: first IR frame, seq " + std::to_string(seq));
-    }
-    const bool recovered = !up_ && ever_up_;
-    up_ = ever_up_ = true;
-    have_seq_ = true;
-    last_seq_ = seq;
-    last_frame_ = t;
+    if (!step.note_restart.empty()) log(os::LogLevel::kInfo, step.note_restart);
+    if (!step.note_link.empty()) log(os::LogLevel::kInfo, step.note_link);
     float out[kIrValues];
     const robot::Conditioned c = robot::condition_sample(ranges_, v.subspan(1), out);
     ++stats_.ir_frames;
-    stats_.missed += missed;
-    stats_.restarts += restart ? 1 : 0;
+    stats_.missed += step.missed;
+    stats_.restarts += step.restart ? 1 : 0;
     stats_.clamped += c.clamped;
-    stats_.link_recoveries += recovered ? 1 : 0;
+    stats_.link_recoveries += step.recovered ? 1 : 0;
     stats_.link_up = true;
     stats_.last_seq = seq;
     send(robot::kDataPort, std::span<const float>(out, kIrValues));
   }
 
   void on_tick() override {
-    if (!up_ || now() - last_frame_ < lost_after_) return;
-    up_ = false;
+    if (!sequence_.lost(now())) return;
     ++stats_.link_losses;
     stats_.link_up = false;
-    log(os::LogLevel::kWarn, "link lost: no IR frame for " +
-                                 std::to_string(kernel::to_milliseconds(now() - last_frame_)) + " ms (last seq " +
-                                 std::to_string(last_seq_) + "); waiting for frames");
+    log(os::LogLevel::kWarn, sequence_.lost_note(now()));
   }
 
  private:
   HilStats& stats_;
   std::array<robot::ChannelRange, kIrValues> ranges_;
-  const kernel::Duration lost_after_;
+  io::FrameSequence sequence_;
   os::WarningLimiter order_warning_;
-  kernel::Time last_frame_{0};
-  std::uint32_t last_seq_ = 0;
-  bool have_seq_ = false;
-  bool up_ = false;
-  bool ever_up_ = false;
 };
 
 class WheelsTask final : public os::Task {

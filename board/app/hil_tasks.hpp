@@ -6,8 +6,8 @@
 //   link    reads the data UART (every tick, 1 ms), decodes frames; a number frame of 8 values
 //           goes to `ir` as [seq, ir0..ir6]; any other good frame is malformed; bad frames are
 //           counted by the decoder. Wheel commands [seq, left, right] from `wheels` are written.
-//   ir      sequence checks (missed, out of order, restart at seq 0), lost/back link reports,
-//           clamps into [0, 4505], sends the 7 values on port 0.
+//   ir      sequence checks (missed, out of order, restart at seq 0), lost/back link reports
+//           (io::FrameSequence, as the Linux board's), clamps into [0, 4505], sends the 7 values.
 //   wheels  refuses NaN and wrong counts, clamps to +-500, sends [seq, left, right] to `link`;
 //           its watchdog sends [seq, 0, 0] once after 1.5 control periods without a command.
 #pragma once
