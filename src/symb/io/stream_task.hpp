@@ -78,13 +78,21 @@ class StreamTask : public os::Task {
 
  private:
   struct Shared;
+  struct Reader;
   void read_loop(std::shared_ptr<Shared> shared);
+  // One pass of the reader: reports a closed stream (once), or reads what arrives within `wait`
+  // and hands it to the node. False when the stream is closed. A target without threads (the
+  // board, SYMB_BOARD) calls it from a periodic task instead of a reader thread.
+  bool read_once(Reader& r, const std::shared_ptr<Shared>& shared, kernel::Duration wait);
   void write_out(std::span<const std::byte> bytes);
 
   std::shared_ptr<IOStream> stream_;
   Options options_;
   std::shared_ptr<Shared> shared_;
   std::thread reader_;
+#ifdef SYMB_BOARD
+  os::TaskId poller_;  // the reader task (`NAME.rx`) of a target without threads
+#endif
   std::vector<std::byte> out_;
 };
 

@@ -11,6 +11,16 @@
 
 namespace symb::kernel {
 
+// a * b as 128 bits: returns the low half, stores the high half. For targets without a 128-bit
+// integer (the 32-bit Cortex-M board); tested against unsigned __int128 on the host.
+inline std::uint64_t multiply_64x64(std::uint64_t a, std::uint64_t b, std::uint64_t& high) {
+  const std::uint64_t a_lo = a & 0xffffffffu, a_hi = a >> 32, b_lo = b & 0xffffffffu, b_hi = b >> 32;
+  const std::uint64_t ll = a_lo * b_lo, lh = a_lo * b_hi, hl = a_hi * b_lo, hh = a_hi * b_hi;
+  const std::uint64_t mid = (ll >> 32) + (lh & 0xffffffffu) + (hl & 0xffffffffu);
+  high = hh + (lh >> 32) + (hl >> 32) + (mid >> 32);
+  return (mid << 32) | (ll & 0xffffffffu);
+}
+
 class RandomStream {
  public:
   explicit RandomStream(std::uint64_t seed = 0, std::uint64_t stream = 0) { reseed(seed, stream); }
@@ -39,9 +49,16 @@ class RandomStream {
   // Uniform integer in [0, n); n > 0. Lemire's multiply-shift with rejection: unbiased.
   std::uint64_t below(std::uint64_t n) {
     for (;;) {
+#ifdef __SIZEOF_INT128__
       const unsigned __int128 m = static_cast<unsigned __int128>(next_u64()) * n;
       const auto low = static_cast<std::uint64_t>(m);
       if (low >= n || low >= (0 - n) % n) return static_cast<std::uint64_t>(m >> 64);
+#else
+      // 32-bit targets (the Cortex-M board) have no 128-bit integer: the same product in halves.
+      std::uint64_t high = 0;
+      const std::uint64_t low = multiply_64x64(next_u64(), n, high);
+      if (low >= n || low >= (0 - n) % n) return high;
+#endif
     }
   }
   // Standard normal (Marsaglia polar method).

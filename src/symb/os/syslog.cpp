@@ -1,6 +1,7 @@
 #include "symb/os/syslog.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 
 namespace symb::os {
@@ -15,12 +16,33 @@ const char* to_string(LogLevel l) {
   return "?";
 }
 
+namespace {
+// printf's %<width>lld (pad ' ') or %0<width>lld (pad '0') of `v`.
+void append_padded(std::string& out, std::int64_t v, int width, char pad) {
+  char digits[24];
+  const std::uint64_t magnitude = v < 0 ? 0 - static_cast<std::uint64_t>(v) : static_cast<std::uint64_t>(v);
+  const auto r = std::to_chars(digits, digits + sizeof digits, magnitude);
+  const int n = static_cast<int>(r.ptr - digits) + (v < 0 ? 1 : 0);
+  if (pad == ' ') out.append(static_cast<std::size_t>(std::max(width - n, 0)), ' ');
+  if (v < 0) out.push_back('-');
+  if (pad == '0') out.append(static_cast<std::size_t>(std::max(width - n, 0)), '0');
+  out.append(digits, r.ptr);
+}
+}  // namespace
+
+std::string format_seconds(kernel::Time t, int width) {
+  const std::int64_t us = t.count() / 1000;
+  std::string out;
+  append_padded(out, us / 1'000'000, width, ' ');
+  out.push_back('.');
+  append_padded(out, us % 1'000'000, 6, '0');
+  return out;
+}
+
 std::string format_log_entry(const LogEntry& e) {
-  char head[48];
-  const std::int64_t us = e.time.count() / 1000;
-  std::snprintf(head, sizeof head, "[%6lld.%06lld] %-5s ", static_cast<long long>(us / 1'000'000),
-                static_cast<long long>(us % 1'000'000), to_string(e.level));
-  std::string line(head);
+  char level[16];
+  std::snprintf(level, sizeof level, " %-5s ", to_string(e.level));
+  std::string line = "[" + format_seconds(e.time, 6) + "]" + level;
   line += e.source;
   line += ": ";
   line += e.text;

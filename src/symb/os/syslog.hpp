@@ -32,6 +32,10 @@ struct LogEntry {
 
 // One line: "[   12.345678] WARN  source: text".
 std::string format_log_entry(const LogEntry& e);
+// `t` as seconds with six decimals, the whole seconds right-aligned in `width` ("    12.034000"
+// for width 6): printf's "%*lld.%06lld" without printf, whose long long a microcontroller's
+// small C library (newlib-nano, the board's) does not format.
+std::string format_seconds(kernel::Time t, int width = 0);
 
 class LogSink {
  public:

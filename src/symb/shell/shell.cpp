@@ -41,13 +41,7 @@ Reply fail(std::string_view message) { return {false, "error: " + std::string(me
 
 std::string duration_text(kernel::Duration d) { return os::format_param_value(os::ParamValue{d}); }
 
-std::string seconds_text(kernel::Time t) {
-  char buf[32];
-  const std::int64_t us = t.count() / 1000;
-  std::snprintf(buf, sizeof buf, "%lld.%06lld", static_cast<long long>(us / 1'000'000),
-                static_cast<long long>(us % 1'000'000));
-  return buf;
-}
+std::string seconds_text(kernel::Time t) { return os::format_seconds(t); }
 
 std::string id_text(os::TaskId id) { return "#" + std::to_string(id.index) + "." + std::to_string(id.generation); }
 
@@ -82,6 +76,13 @@ std::string located(const Token& t, const std::string& message) {
 }
 
 std::string read_regular_file(const std::string& path, std::string& error) {
+#ifdef SYMB_BOARD
+  // A board has no file system; leaving out <fstream> keeps the locale machinery (140 KB) out of
+  // its flash.
+  (void)path;
+  error = "the board has no files";
+  return {};
+#else
   // A FIFO or a device would block or never end: only regular files are scripts.
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
@@ -111,6 +112,7 @@ std::string read_regular_file(const std::string& path, std::string& error) {
     }
   }
   return text;
+#endif
 }
 
 constexpr OptionSpec kJson[] = {{"--json", ""}};

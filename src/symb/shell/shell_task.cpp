@@ -9,7 +9,6 @@ namespace symb::shell {
 namespace {
 
 constexpr std::size_t kShellQueue = 256;  // raw chunks of a fast paste must not be dropped
-constexpr std::size_t kStreamQueue = 64;  // replies waiting to be written
 
 }  // namespace
 
@@ -210,7 +209,7 @@ kernel::Result<ShellSession> attach_shell(os::Node& node, std::shared_ptr<io::IO
   // Both tasks are created unstarted and hooked before they start, so that the greeting and the
   // first bytes typed cannot pass before the hooks exist.
   os::TaskOptions io_options;
-  io_options.queue_capacity = kStreamQueue;
+  io_options.queue_capacity = options.output_queue;
   io_options.autostart = false;
   auto io_id = node.create(name + ".io", std::make_unique<io::StreamTask>(std::move(stream), io::StreamTask::Options{}),
                            io_options);
@@ -218,7 +217,7 @@ kernel::Result<ShellSession> attach_shell(os::Node& node, std::shared_ptr<io::IO
   options.peer = *io_id;
   os::TaskOptions shell_options;
   shell_options.period = CommandShellTask::kTick;
-  shell_options.queue_capacity = kShellQueue;
+  shell_options.queue_capacity = options.input_queue;
   shell_options.autostart = false;
   auto shell_id = node.create(name, std::make_unique<CommandShellTask>(std::move(options)), shell_options);
   if (!shell_id) {

@@ -49,6 +49,10 @@ struct ShellOptions {
   // Called from the task's on_stop (on its own context) however the session ended: a server
   // hears here that it may close the connection.
   std::function<void()> on_close;
+  // attach_shell's queues, each slot a message: raw chunks typed or pasted in, and replies
+  // waiting to be written. A microcontroller (the board: 32 KiB of RAM) gives smaller ones.
+  std::size_t input_queue = 256;  // raw chunks of a fast paste must not be dropped
+  std::size_t output_queue = 64;
 };
 
 class CommandShellTask : public os::Task {

@@ -7,6 +7,7 @@
 
 #include "symb/io/bytes.hpp"
 #include "symb/io/fd_stream.hpp"
+#include "symb/io/frame_sequence.hpp"
 #include "symb/io/reopen_backoff.hpp"
 #include "symb/io/stream_task.hpp"
 #include "symb/os/warning_limiter.hpp"
@@ -148,12 +149,12 @@ class HilIrTask final : public os::Task {
   HilIrTask(std::shared_ptr<LinkShared> shared, const BoardLinkOptions& o)
       : shared_(std::move(shared)),
         channels_(SimIrSensor::channel_specs()),
-        lost_after_(o.control_period * o.lost_periods),
+        sequence_(o.control_period * o.lost_periods),
         malformed_warning_(o.warn_interval),
         order_warning_(o.warn_interval) {}
 
  protected:
-  void on_start() override { last_frame_ = now(); }
+  void on_start() override { sequence_.start(now()); }
 
   void on_message(const os::Message& m) override {
     const io::Bytes* bytes = io::bytes_of(m);
@@ -167,34 +168,18 @@ class HilIrTask final : public os::Task {
       return;
     }
     const std::uint32_t seq = frame->seq;
-    std::uint64_t missed = 0;
-    bool restart = false;
-    if (seq == 0) {
-      restart = have_seq_ && last_seq_ != 0;
-    } else if (have_seq_ && seq <= last_seq_) {
+    const io::SequenceStep step = sequence_.on_frame(seq, now());
+    if (!step.accepted) {
       bump([](BoardLinkStats& s) { ++s.out_of_order; });
       if (order_warning_.note(now()))
-        log(os::LogLevel::kWarn, std::to_string(order_warning_.count()) +
-                                     " out-of-order frame(s) dropped, latest: seq " + std::to_string(seq) + " after " +
-                                     std::to_string(last_seq_));
+        log(os::LogLevel::kWarn,
+            std::to_string(order_warning_.count()) + " out-of-order frame(s) dropped, latest: " + step.out_of_order);
       return;
-    } else if (have_seq_) {
-      missed = seq - last_seq_ - 1;
     }
-    if (restart) log(os::LogLevel::kInfo, "seq 0 after " + std::to_string(last_seq_) + ": the simulator started anew");
-    const kernel::Time t = now();
-    if (!up_) {
-      if (ever_up_)
-        log(os::LogLevel::kInfo, "link back after " + std::to_string(kernel::to_milliseconds(t - last_frame_)) +
-                                     " ms without frames (seq " + std::to_string(seq) + ")");
-      else
-        log(os::LogLevel::kInfo, "link up: first IR frame, seq " + std::to_string(seq));
-    }
-    const bool recovered = !up_ && ever_up_;
-    up_ = ever_up_ = true;
-    have_seq_ = true;
-    last_seq_ = seq;
-    last_frame_ = t;
+    const std::uint64_t missed = step.missed;
+    const bool restart = step.restart, recovered = step.recovered;
+    if (!step.note_restart.empty()) log(os::LogLevel::kInfo, step.note_restart);
+    if (!step.note_link.empty()) log(os::LogLevel::kInfo, step.note_link);
 
     float out[kIrCount];
     const robot::Conditioned c = robot::condition_sample(channels_, frame->ir, out);
@@ -211,15 +196,12 @@ class HilIrTask final : public os::Task {
   }
 
   void on_tick() override {
-    if (!up_ || now() - last_frame_ < lost_after_) return;
-    up_ = false;
+    if (!sequence_.lost(now())) return;
     bump([](BoardLinkStats& s) {
       ++s.link_losses;
       s.link_up = false;
     });
-    log(os::LogLevel::kWarn, "link lost: no IR frame for " +
-                                 std::to_string(kernel::to_milliseconds(now() - last_frame_)) + " ms (last seq " +
-                                 std::to_string(last_seq_) + "); waiting for frames");
+    log(os::LogLevel::kWarn, sequence_.lost_note(now()));
   }
 
  private:
@@ -231,14 +213,9 @@ class HilIrTask final : public os::Task {
 
   std::shared_ptr<LinkShared> shared_;
   const std::vector<robot::ChannelSpec> channels_;
-  const kernel::Duration lost_after_;
+  io::FrameSequence sequence_;
   os::WarningLimiter malformed_warning_;
   os::WarningLimiter order_warning_;
-  kernel::Time last_frame_{0};
-  std::uint32_t last_seq_ = 0;
-  bool have_seq_ = false;
-  bool up_ = false;
-  bool ever_up_ = false;
 };
 
 // [left, right] in, [seq, left, right] out to the link; the watchdog stops a silent controller.
