@@ -272,7 +272,9 @@ kernel::Result<std::unique_ptr<DdsBus>> DdsBus::create(std::vector<os::Node*> no
   // The participant's lease bounds how long a killed peer's readers stay matched (Cyclone's
   // default is 10 s): a writer to a dead reader would fill its history meanwhile. Set once per
   // process and domain; a second bus on the domain shares the first one's.
-  const auto lease_ms = std::chrono::duration_cast<std::chrono::milliseconds>(bus->options_.lease).count();
+  // Three writer leases: a killed peer's writers then miss their liveliness lease first (counted
+  // lost), before its participant expires and takes them away (which looks like a clean leave).
+  const auto lease_ms = 3 * std::chrono::duration_cast<std::chrono::milliseconds>(bus->options_.lease).count();
   const std::string config = "<CycloneDDS><Domain><Discovery><LeaseDuration>" + std::to_string(lease_ms) +
                              "ms</LeaseDuration></Discovery></Domain></CycloneDDS>";
   const dds_entity_t domain = dds_create_domain(bus->options_.domain, config.c_str());
@@ -529,12 +531,23 @@ std::vector<RemoteHookInfo> DdsBus::hooks() const {
 
 std::string DdsBus::listing() const {
   std::ostringstream out;
-  out << "id  sender -> receiver  port  prio  state  attempted  delivered  dropped  in_flight  (dds)\n";
+  out << "id  sender -> receiver  port  prio  state  attempted  delivered  dropped  in_flight  written  received  "
+         "lost\n";
+  const auto counted = hook_counts();
   for (const RemoteHookInfo& h : hooks()) {
     out << h.id.value << "  " << h.sender << " -> " << h.receiver << "  "
         << (h.options.port < 0 ? std::string("any") : std::to_string(h.options.port)) << "  " << h.options.priority
         << "  " << to_string(h.state) << "  " << h.books.attempted << "  " << h.books.delivered << "  "
-        << h.books.dropped() << "  " << h.books.in_flight << '\n';
+        << h.books.dropped() << "  " << h.books.in_flight;
+    for (const HookCounts& c : counted)
+      if (c.id == h.id) out << "  " << c.written << "  " << c.received << "  " << c.lost;
+    std::string causes;
+    for (std::size_t c = 0; c < h.books.dropped_by.size(); ++c)
+      if (h.books.dropped_by[c] > 0)
+        causes += (causes.empty() ? "" : ", ") + std::string(to_string(static_cast<HookDrop>(c))) + " " +
+                  std::to_string(h.books.dropped_by[c]);
+    if (!causes.empty()) out << "  (" << causes << ")";
+    out << '\n';
   }
   const DdsBusCounts c = counts();
   out << "dds: written " << c.written << ", received " << c.received << ", lost " << c.lost << ", garbage "
@@ -561,6 +574,28 @@ bool DdsBus::wait_linked(kernel::Duration timeout) const {
     if (std::chrono::steady_clock::now() >= until) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
+}
+
+void DdsBus::finish_sending() {
+  std::vector<dds_entity_t> writers;
+  {
+    std::lock_guard lock(core_->mu);
+    for (auto& e : core_->ends) {
+      if (e->writer <= 0) continue;
+      writers.push_back(e->writer);
+      e->writer = 0;
+      e->matched = false;
+      if (!e->receiving() || e->alive == 0) e->info.state = LinkState::kDown;
+    }
+  }
+  for (const dds_entity_t w : writers) dds_delete(w);
+}
+
+std::vector<DdsBus::HookCounts> DdsBus::hook_counts() const {
+  std::lock_guard lock(core_->mu);
+  std::vector<HookCounts> out;
+  for (const auto& e : core_->ends) out.push_back({e->info.id, e->key, e->written, e->received, e->lost});
+  return out;
 }
 
 DdsBusCounts DdsBus::counts() const {

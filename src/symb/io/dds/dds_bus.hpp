@@ -103,6 +103,19 @@ class DdsBus final : public HookBus, private HookMedium {
   // Waits (up to `timeout`) until every reader has acknowledged every sample written here; a
   // process calls it before it exits so that its last messages are not lost with it.
   bool flush(kernel::Duration timeout) const;
+  // Deletes the writers of the sending ends built here (their books stay): their readers see
+  // them leave (peers_left), which tells a peer that this process sent all it will send. Further
+  // sends are dropped as kLinkDown. A process that ends calls flush(), then this.
+  void finish_sending();
+  // Per remote hook, DDS's part of the books: what this process's end wrote, took and found
+  // missing. A hook split over two processes closes as sender.written == receiver.received +
+  // receiver.lost once both finished.
+  struct HookCounts {
+    RemoteHookId id;
+    std::string key;  // the HookFrame_'s hook field
+    std::uint64_t written = 0, received = 0, lost = 0;
+  };
+  std::vector<HookCounts> hook_counts() const;
   DdsBusCounts counts() const;
   const DdsBusOptions& options() const { return options_; }
 

@@ -1,0 +1,170 @@
+// `symb serve`: nodes in processes of their own, joined over the DDS bus. Two and four processes
+// in a ring of CPG oscillators (each sends [id, phase] to the next at every 20 ms tick) exchange
+// hook traffic whose books close across the processes exactly; a process killed mid-run is
+// reported by the others, which go on. Release build only: the bus's threads are checked under
+// the sanitizers by tests/io/dds_bus_test.cpp, in process.
+#include <unistd.h>
+
+#include <filesystem>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "support/symb_child.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+// One line of a serve report's hook table.
+struct ServeHookRow {
+  std::string sender, receiver, state;
+  std::uint64_t attempted = 0, delivered = 0, dropped = 0, in_flight = 0, written = 0, received = 0, lost = 0;
+};
+
+struct ServeReport {
+  std::string text;
+  std::map<std::string, ServeHookRow> hooks;  // by "sender>receiver"
+  std::uint64_t peers_lost = 0;
+};
+
+ServeReport parse_report(std::string text) {
+  ServeReport r;
+  r.text = std::move(text);
+  static const std::regex row(
+      R"(^\d+  (\S+) -> (\S+)  \S+  -?\d+  (up|down)  (\d+)  (\d+)  (\d+)  (\d+)  (\d+)  (\d+)  (\d+).*$)");
+  static const std::regex counts(R"(peers lost (\d+))");
+  std::istringstream in(r.text);
+  for (std::string line; std::getline(in, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, row)) {
+      ServeHookRow h{m[1], m[2], m[3]};
+      std::uint64_t* f[] = {&h.attempted, &h.delivered, &h.dropped, &h.in_flight, &h.written, &h.received, &h.lost};
+      for (int i = 0; i < 7; ++i) *f[i] = std::stoull(m[4 + i]);
+      r.hooks[h.sender + ">" + h.receiver] = h;
+    } else if (std::regex_search(line, m, counts)) {
+      r.peers_lost = std::stoull(m[1]);
+    }
+  }
+  return r;
+}
+
+class ServeRing {
+ public:
+  // n processes m0..m(n-1); oscillator k hooked to oscillator k+1 (mod n) on port 1.
+  ServeRing(int n, std::string_view test, std::string duration, std::string lease = "300ms")
+      : dir_(fs::temp_directory_path() / unique(test)) {
+    fs::create_directories(dir_);
+    std::string hooks;
+    for (int k = 0; k < n; ++k)
+      hooks += " --hook 'm" + std::to_string(k) + "/osc>m" + std::to_string((k + 1) % n) + "/osc:1'";
+    const std::string common = " --domain " + std::to_string(10 + ::getpid() % 200) + " --prefix " + unique(test) +
+                               " --lease " + lease + " --duration " + duration + " --link-timeout 5s" + hooks;
+    for (int k = 0; k < n; ++k) {
+      const std::string args = "serve --node m" + std::to_string(k) +
+                               " --exec 'create oscillator osc id=" + std::to_string(k) + " coupling=4 --suspended'" +
+                               common;
+      children_.push_back(std::make_unique<symb::test_support::SymbChild>(SYMB_BINARY, args,
+                                                                          dir_ / ("m" + std::to_string(k) + ".txt")));
+    }
+  }
+  ~ServeRing() {
+    children_.clear();
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  symb::test_support::SymbChild& child(int k) { return *children_[static_cast<std::size_t>(k)]; }
+
+ private:
+  static std::string unique(std::string_view test) {
+    return "serve_" + std::string(test) + "_" + std::to_string(::getpid());
+  }
+  fs::path dir_;
+  std::vector<std::unique_ptr<symb::test_support::SymbChild>> children_;
+};
+
+// Every hook of the ring, from its sender's report and its receiver's: exact across processes.
+void expect_exact_ring(const std::vector<ServeReport>& reports) {
+  const int n = static_cast<int>(reports.size());
+  for (int k = 0; k < n; ++k) {
+    const int next = (k + 1) % n;
+    const std::string key = "m" + std::to_string(k) + "/osc>m" + std::to_string(next) + "/osc";
+    ASSERT_TRUE(reports[k].hooks.contains(key)) << reports[k].text;
+    ASSERT_TRUE(reports[next].hooks.contains(key)) << reports[next].text;
+    const ServeHookRow& out = reports[k].hooks.at(key);
+    const ServeHookRow& in = reports[next].hooks.at(key);
+    EXPECT_GT(out.written, 20u) << key;  // about 50 in 1 s at 20 ms ticks
+    EXPECT_EQ(out.written, in.received + in.lost) << key;
+    EXPECT_EQ(in.lost, 0u) << key;  // reliable DDS on one machine loses nothing
+    // Each end's books close: sent = written + dropped + still queued; taken = delivered + in flight.
+    EXPECT_EQ(out.attempted, out.written + out.dropped + out.in_flight) << key;
+    EXPECT_EQ(in.received, in.delivered + in.dropped + in.in_flight) << key;
+  }
+}
+
+std::vector<ServeReport> finish(ServeRing& ring, int n) {
+  std::vector<ServeReport> reports;
+  for (int k = 0; k < n; ++k) {
+    EXPECT_EQ(ring.child(k).wait(), 0) << ring.child(k).output();
+    reports.push_back(parse_report(ring.child(k).output()));
+  }
+  return reports;
+}
+
+TEST(Serve, TwoProcessesExchangeHookTrafficWithExactBooks) {
+#ifdef SYMB_SANITIZER
+  GTEST_SKIP() << "processes over DDS: release build only";
+#endif
+  ServeRing ring(2, "two", "1s");
+  expect_exact_ring(finish(ring, 2));
+}
+
+TEST(Serve, FourProcessesExchangeHookTrafficWithExactBooks) {
+#ifdef SYMB_SANITIZER
+  GTEST_SKIP() << "processes over DDS: release build only";
+#endif
+  ServeRing ring(4, "four", "1s");
+  expect_exact_ring(finish(ring, 4));
+}
+
+TEST(Serve, AProcessKilledMidRunIsReportedAndTheOthersGoOn) {
+#ifdef SYMB_SANITIZER
+  GTEST_SKIP() << "processes over DDS: release build only";
+#endif
+  // A 200 ms lease: m3 notices within it, m1 within the participant's (three leases), both well
+  // before the run's 2 s end.
+  ServeRing ring(4, "kill", "2s", "200ms");
+  std::this_thread::sleep_for(600ms);  // linked and under way
+  ring.child(2).interrupt();           // m2 dies at once: SIGINT's default action, no goodbye on DDS
+  EXPECT_EQ(ring.child(2).wait(), -1);
+  std::vector<ServeReport> reports(4);
+  for (int k : {0, 1, 3}) {
+    EXPECT_EQ(ring.child(k).wait(), 0) << ring.child(k).output();
+    reports[k] = parse_report(ring.child(k).output());
+  }
+  // m3 heard m2 go silent: reported, counted, and its hook is down.
+  EXPECT_EQ(reports[3].peers_lost, 1u) << reports[3].text;
+  EXPECT_NE(reports[3].text.find("m2/osc>m3/osc:1: its sender is gone"), std::string::npos) << reports[3].text;
+  // m1 lost its reader: reported, and what it sent after is counted as dropped, not lost.
+  EXPECT_NE(reports[1].text.find("m1/osc>m2/osc:1: no reader left"), std::string::npos) << reports[1].text;
+  const ServeHookRow& to_dead = reports[1].hooks.at("m1/osc>m2/osc");
+  EXPECT_GT(to_dead.dropped, 0u);
+  EXPECT_EQ(to_dead.attempted, to_dead.written + to_dead.dropped + to_dead.in_flight);
+  // The hooks between survivors went on, exact.
+  for (const char* key : {"m3/osc>m0/osc", "m0/osc>m1/osc"}) {
+    const int from = key[1] - '0', to = key[8] - '0';
+    const ServeHookRow& out = reports[from].hooks.at(key);
+    const ServeHookRow& in = reports[to].hooks.at(key);
+    EXPECT_GT(out.written, 60u) << key;  // it kept going after m2 died (about 100 in 2 s)
+    EXPECT_EQ(out.written, in.received + in.lost) << key;
+    EXPECT_EQ(in.lost, 0u) << key;
+  }
+}
+
+}  // namespace
