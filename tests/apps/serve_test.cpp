@@ -5,6 +5,7 @@
 // the sanitizers by tests/io/dds_bus_test.cpp, in process.
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <regex>
@@ -165,6 +166,64 @@ TEST(Serve, AProcessKilledMidRunIsReportedAndTheOthersGoOn) {
     EXPECT_EQ(out.written, in.received + in.lost) << key;
     EXPECT_EQ(in.lost, 0u) << key;
   }
+}
+
+// Two network namespaces joined by a veth pair, as two machines on one cable: the processes find
+// each other by DDS discovery with no configuration. Needs root (ip netns); skipped otherwise.
+class ServeNamespaces {
+ public:
+  explicit ServeNamespaces(const std::string& tag) : a_("symb_a_" + tag), b_("symb_b_" + tag) {
+    const std::string va = "sva" + tag, vb = "svb" + tag;
+    ok_ = std::system(("(ip netns add " + a_ + " && ip netns add " + b_ + " && ip link add " + va +
+                       " type veth peer name " + vb + " && ip link set " + va + " netns " + a_ + " && ip link set " +
+                       vb + " netns " + b_ + " && ip -n " + a_ + " addr add 10.77.0.1/24 dev " + va + " && ip -n " +
+                       b_ + " addr add 10.77.0.2/24 dev " + vb + " && ip -n " + a_ + " link set " + va +
+                       " up && ip -n " + b_ + " link set " + vb + " up && ip -n " + a_ + " link set lo up && ip -n " +
+                       b_ + " link set lo up) > /dev/null 2>&1")
+                          .c_str()) == 0;
+  }
+  ~ServeNamespaces() {
+    (void)std::system(("ip netns del " + a_ + " > /dev/null 2>&1; ip netns del " + b_ + " > /dev/null 2>&1").c_str());
+  }
+  bool ok() const { return ok_; }
+  const std::string& a() const { return a_; }
+  const std::string& b() const { return b_; }
+
+ private:
+  std::string a_, b_;
+  bool ok_ = false;
+};
+
+TEST(Serve, TwoNetworkNamespacesFindEachOtherWithNoConfiguration) {
+#ifdef SYMB_SANITIZER
+  GTEST_SKIP() << "processes over DDS: release build only";
+#endif
+  if (::geteuid() != 0) GTEST_SKIP() << "ip netns needs root";
+  // Short names: interface names have at most 15 characters.
+  const std::string tag = std::to_string(::getpid() % 100000);
+  ServeNamespaces ns(tag);
+  if (!ns.ok()) GTEST_SKIP() << "this machine does not allow network namespaces with a veth pair";
+  const fs::path dir = fs::temp_directory_path() / ("serve_netns_" + tag);
+  fs::create_directories(dir);
+  const std::string common = " --domain 3 --prefix netns" + tag +
+                             " --lease 300ms --duration 1s --link-timeout 5s --hook 'm0/osc>m1/osc:1' --hook "
+                             "'m1/osc>m0/osc:1'";
+  std::vector<std::unique_ptr<symb::test_support::SymbChild>> children;
+  for (int k = 0; k < 2; ++k)
+    children.push_back(std::make_unique<symb::test_support::SymbChild>(
+        "/usr/sbin/ip",
+        "netns exec " + (k == 0 ? ns.a() : ns.b()) + " " + SYMB_BINARY + " serve --node m" + std::to_string(k) +
+            " --exec 'create oscillator osc id=" + std::to_string(k) + " coupling=4 --suspended'" + common,
+        dir / ("m" + std::to_string(k) + ".txt")));
+  std::vector<ServeReport> reports;
+  for (auto& c : children) {
+    EXPECT_EQ(c->wait(), 0) << c->output();
+    reports.push_back(parse_report(c->output()));
+  }
+  EXPECT_NE(reports[0].text.find("serve m0: linked"), std::string::npos) << reports[0].text;
+  expect_exact_ring(reports);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
 }
 
 }  // namespace
