@@ -118,26 +118,26 @@ std::vector<ServeReport> finish(ServeRing& ring, int n) {
   return reports;
 }
 
-TEST(Serve, TwoProcessesExchangeHookTrafficWithExactBooks) {
+class Serve : public ::testing::Test {
+ protected:
+  void SetUp() override {
 #ifdef SYMB_SANITIZER
-  GTEST_SKIP() << "processes over DDS: release build only";
+    GTEST_SKIP() << "processes over DDS: release build only";
 #endif
+  }
+};
+
+TEST_F(Serve, TwoProcessesExchangeHookTrafficWithExactBooks) {
   ServeRing ring(2, "two", "1s");
   expect_exact_ring(finish(ring, 2));
 }
 
-TEST(Serve, FourProcessesExchangeHookTrafficWithExactBooks) {
-#ifdef SYMB_SANITIZER
-  GTEST_SKIP() << "processes over DDS: release build only";
-#endif
+TEST_F(Serve, FourProcessesExchangeHookTrafficWithExactBooks) {
   ServeRing ring(4, "four", "1s");
   expect_exact_ring(finish(ring, 4));
 }
 
-TEST(Serve, AProcessKilledMidRunIsReportedAndTheOthersGoOn) {
-#ifdef SYMB_SANITIZER
-  GTEST_SKIP() << "processes over DDS: release build only";
-#endif
+TEST_F(Serve, AProcessKilledMidRunIsReportedAndTheOthersGoOn) {
   // A 200 ms lease: m3 notices within it, m1 within the participant's (three leases), both well
   // before the run's 2 s end.
   ServeRing ring(4, "kill", "2s", "200ms");
@@ -194,10 +194,7 @@ class ServeNamespaces {
   bool ok_ = false;
 };
 
-TEST(Serve, TwoNetworkNamespacesFindEachOtherWithNoConfiguration) {
-#ifdef SYMB_SANITIZER
-  GTEST_SKIP() << "processes over DDS: release build only";
-#endif
+TEST_F(Serve, TwoNetworkNamespacesFindEachOtherWithNoConfiguration) {
   if (::geteuid() != 0) GTEST_SKIP() << "ip netns needs root";
   // Short names: interface names have at most 15 characters.
   const std::string tag = std::to_string(::getpid() % 100000);

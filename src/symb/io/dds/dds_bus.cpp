@@ -96,8 +96,10 @@ void log_on(os::Node* node, bool warn, std::string text) {
   });
 }
 
+using ListenerArg = std::pair<DdsBus::Core*, std::uint32_t>;
+
 void on_data(dds_entity_t reader, void* arg) {
-  auto* a = static_cast<std::pair<DdsBus::Core*, std::uint32_t>*>(arg);
+  auto* a = static_cast<ListenerArg*>(arg);
   DdsBus::Core& core = *a->first;
   std::vector<os::Message> posts;
   std::vector<std::string> warnings;
@@ -194,61 +196,63 @@ void on_data(dds_entity_t reader, void* arg) {
   }
 }
 
-void on_liveliness(dds_entity_t, const dds_liveliness_changed_status_t status, void* arg) {
-  auto* a = static_cast<std::pair<DdsBus::Core*, std::uint32_t>*>(arg);
-  DdsBus::Core& core = *a->first;
+// A status listener's frame: runs `f(core, end, text)` under the core's lock for the listener's end
+// (nothing when the end is gone); `f` answers the node to warn and sets `text` to the warning.
+template <class F>
+void on_end(void* arg, F f) {
+  auto* a = static_cast<ListenerArg*>(arg);
   std::string text;
   os::Node* node = nullptr;
   {
-    std::lock_guard lock(core.mu);
-    DdsBus::End* e = core.find_locked(a->second);
+    std::lock_guard lock(a->first->mu);
+    DdsBus::End* e = a->first->find_locked(a->second);
     if (e == nullptr) return;
-    e->alive = status.alive_count;
-    node = e->rn;
-    if (status.not_alive_count_change > 0) {  // the lease ran out: killed, hung or cut off
-      core.counts.peers_lost += static_cast<std::uint64_t>(status.not_alive_count_change);
-      e->info.state = LinkState::kDown;
-      text = "hook " + e->key + ": its sender is gone (no liveliness within the lease); the run goes on";
-    } else if (status.alive_count_change < 0) {  // it left cleanly (its writer was deleted)
-      ++core.counts.peers_left;
-      if (status.alive_count == 0) e->info.state = LinkState::kDown;
-    } else if (status.alive_count_change > 0 && e->info.state == LinkState::kDown && core.counts.peers_lost > 0) {
-      ++core.counts.peers_back;
-      e->info.state = LinkState::kUp;
-      text = "hook " + e->key + ": its sender is back";
-    } else if (status.alive_count > 0) {
-      e->info.state = LinkState::kUp;
-    }
+    node = f(*a->first, *e, text);
   }
   if (!text.empty()) log_on(node, true, std::move(text));
+}
+
+void on_liveliness(dds_entity_t, const dds_liveliness_changed_status_t status, void* arg) {
+  on_end(arg, [&](DdsBus::Core& core, DdsBus::End& e, std::string& text) {
+    e.alive = status.alive_count;
+    if (status.not_alive_count_change > 0) {  // the lease ran out: killed, hung or cut off
+      core.counts.peers_lost += static_cast<std::uint64_t>(status.not_alive_count_change);
+      e.info.state = LinkState::kDown;
+      text = "hook " + e.key + ": its sender is gone (no liveliness within the lease); the run goes on";
+    } else if (status.alive_count_change < 0) {  // it left cleanly (its writer was deleted)
+      ++core.counts.peers_left;
+      if (status.alive_count == 0) e.info.state = LinkState::kDown;
+    } else if (status.alive_count_change > 0 && e.info.state == LinkState::kDown && core.counts.peers_lost > 0) {
+      ++core.counts.peers_back;
+      e.info.state = LinkState::kUp;
+      text = "hook " + e.key + ": its sender is back";
+    } else if (status.alive_count > 0) {
+      e.info.state = LinkState::kUp;
+    }
+    return e.rn;
+  });
 }
 
 void on_matched(dds_entity_t, const dds_publication_matched_status_t status, void* arg) {
-  auto* a = static_cast<std::pair<DdsBus::Core*, std::uint32_t>*>(arg);
-  DdsBus::Core& core = *a->first;
-  std::string text;
-  os::Node* node = nullptr;
-  {
-    std::lock_guard lock(core.mu);
-    DdsBus::End* e = core.find_locked(a->second);
-    if (e == nullptr) return;
-    const bool was = e->matched;
-    e->matched = status.current_count > 0;
-    node = e->sn;
-    if (was && !e->matched) {
-      e->info.state = LinkState::kDown;
-      text = "hook " + e->key + ": no reader left; sends are dropped as link_down until one comes";
-    } else if (!was && e->matched) {
-      if (!e->receiving()) e->info.state = LinkState::kUp;
+  on_end(arg, [&](DdsBus::Core&, DdsBus::End& e, std::string& text) {
+    const bool was = e.matched;
+    e.matched = status.current_count > 0;
+    if (was && !e.matched) {
+      e.info.state = LinkState::kDown;
+      text = "hook " + e.key + ": no reader left; sends are dropped as link_down until one comes";
+    } else if (!was && e.matched && !e.receiving()) {
+      e.info.state = LinkState::kUp;
     }
-  }
-  if (!text.empty()) log_on(node, true, std::move(text));
+    return e.sn;
+  });
 }
 
 void on_sample_lost(dds_entity_t, const dds_sample_lost_status_t status, void* arg) {
-  auto* a = static_cast<std::pair<DdsBus::Core*, std::uint32_t>*>(arg);
-  std::lock_guard lock(a->first->mu);
-  a->first->counts.lost += static_cast<std::uint64_t>(status.total_count_change);
+  on_end(arg, [&](DdsBus::Core& core, DdsBus::End& e, std::string&) {
+    core.counts.lost += static_cast<std::uint64_t>(status.total_count_change);
+    e.lost += static_cast<std::uint64_t>(status.total_count_change);
+    return e.rn;
+  });
 }
 
 }  // namespace
