@@ -1,11 +1,13 @@
 #include "symb/apps/serve/serve_command.hpp"
 
 #include <chrono>
+#include <fstream>
 #include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "symb/apps/run/probe_recorder.hpp"
 #include "symb/control/control_task_types.hpp"
 #include "symb/io/dds/dds_bus.hpp"
 #include "symb/kernel/thread_executor.hpp"
@@ -31,6 +33,7 @@ constexpr OptionSpec kServeOptions[] = {
     {"--duration", "DURATION", "how long to run once linked (default 10s)"},
     {"--link-timeout", "DURATION", "how long to wait for the peers before running anyway (default 10s)"},
     {"--seed", "N", "the node's seed (default 1)"},
+    {"--probes", "FILE", "write every probe sample of the node's tasks to FILE (CSV, as symb run's probes.csv)"},
     {"--help", "", "print this help"},
 };
 
@@ -84,6 +87,7 @@ int run_serve_command(std::span<const std::string_view> args, const CliContext& 
   std::vector<HookSpec> hooks;
   kernel::Duration duration = 10s, link_timeout = 10s;
   std::uint64_t seed = 1;
+  std::string probes_path;
   constexpr kernel::Duration kMax = std::chrono::hours(24 * 365);
   for (const ParsedOption& o : a.options) {
     if (o.name == "--node") {
@@ -109,6 +113,9 @@ int run_serve_command(std::span<const std::string_view> args, const CliContext& 
       auto h = parse_hook(o.value);
       if (auto* e = std::get_if<UsageError>(&h)) return usage_error(ctx, kCommand, *e);
       hooks.push_back(std::get<HookSpec>(h));
+    } else if (o.name == "--probes") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--probes: empty file name"});
+      probes_path = o.value;
     } else if (o.name == "--seed") {
       auto v = parse_u64("--seed", o.value);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
@@ -130,6 +137,21 @@ int run_serve_command(std::span<const std::string_view> args, const CliContext& 
     return kExitFailure;
   }
   io::DdsBus& bus = **made;
+  std::ofstream probes_file;
+  std::optional<run::ProbeRecorder> probes;
+  if (!probes_path.empty()) {
+    probes_file.open(probes_path, std::ios::binary | std::ios::trunc);
+    if (!probes_file) {
+      ctx.err << kCommand << ": cannot write " << probes_path << "\n";
+      return kExitFailure;
+    }
+    probes.emplace(&probes_file);
+    node.set_probe_sink(probes->sink());
+  }
+  struct ProbeSinkGuard {  // the sink points at `probes`, which goes before the node
+    os::Node& n;
+    ~ProbeSinkGuard() { n.set_probe_sink({}); }
+  } probe_sink_guard{node};
   shell::Shell::Options shell_options;
   shell_options.remote_hook = [&bus](const std::string& sender, const std::string& receiver,
                                      const os::HookOptions& o) -> kernel::Result<std::string> {
