@@ -79,7 +79,10 @@ class DdsBus final : public HookBus, private HookMedium {
  public:
   struct Core;  // shared with DDS's listener threads (defined in the .cpp)
   struct End;
-  // `nodes`: this process's nodes, none null, unique names; they must outlive the bus. Fails when
+  // `nodes`: this process's nodes, none null, unique names; they must outlive the bus. The first
+  // bus of a process on a domain makes the domain (with a participant lease of three liveliness
+  // leases) and deletes it when it goes, taking any other participant on it along: a second bus
+  // or a raw participant on the same domain must go first. Fails when
   // DDS cannot make a participant on the domain (the DDS error text), for a domain above 232 or an
   // empty prefix.
   static kernel::Result<std::unique_ptr<DdsBus>> create(std::vector<os::Node*> nodes, DdsBusOptions options = {});
