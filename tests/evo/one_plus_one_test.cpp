@@ -138,6 +138,25 @@ TEST(OnePlusOne, ChallengerIsTheChampionMutatedWithItsSigma) {
   EXPECT_LT(largest, 0.06);  // 6 sigma
 }
 
+// The island model's migrant (apps/evolve/islands.hpp): it is the next challenger, put into the
+// bounds, judged like any challenger; the candidate under evaluation is not disturbed.
+TEST(OnePlusOne, AMigrantIsTheNextChallengerAndWinsOnlyOnItsMerit) {
+  OnePlusOne a = make_one({}, 5);
+  RealGenome migrant = a.next();
+  for (std::size_t k = 0; k < migrant.values.size(); ++k) migrant.values[k] = k == 0 ? 99.0 : 0.5;
+  const RealGenome first = a.next();
+  a.immigrate(migrant);
+  EXPECT_EQ(a.next().values, first.values);  // the first genome is still the one to evaluate
+  a.report(1.0);
+  ASSERT_EQ(a.candidate_kind(), Candidate::kChallenger);
+  EXPECT_EQ(a.next().values[0], a.options().hi);  // put into the bounds
+  EXPECT_EQ(a.next().values[1], 0.5);
+  EXPECT_EQ(a.counts().immigrants, 1u);
+  a.report(0.5);  // worse than the champion's 1.0: not taken
+  EXPECT_EQ(a.champion().values, first.values);
+  EXPECT_NE(a.next().values[1], 0.5);  // back to mutants (or a re-evaluation of the champion)
+}
+
 TEST(OnePlusOne, BadOptionsAndNanFitness) {
   OnePlusOneOptions o;
   o.reevaluation = 1.5;

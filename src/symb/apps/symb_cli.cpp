@@ -5,6 +5,7 @@
 #include "symb/apps/evolve/evolve_command.hpp"
 #include "symb/apps/hil/hil_commands.hpp"
 #include "symb/apps/run/run_command.hpp"
+#include "symb/apps/serve/serve_command.hpp"
 #include "symb/apps/shell_client.hpp"
 #include "symb/apps/swarm/swarm_command.hpp"
 
@@ -16,7 +17,8 @@ namespace symb::apps {
 
 namespace {
 
-constexpr std::string_view kCommands[] = {"run", "evolve", "sim", "board", "link", "demo", "shell", "version", "help"};
+constexpr std::string_view kCommands[] = {"run",  "evolve", "sim",     "board", "link",
+                                          "demo", "shell",  "version", "help",  "serve"};
 constexpr std::string_view kDemos[] = {"swarm"};
 
 void print_help(std::ostream& out) {
@@ -31,6 +33,8 @@ void print_help(std::ostream& out) {
       << "  link [--dir DIR]        ... the serial lines between them, from pseudo-terminals\n"
       << "  board SCENARIO --robot aseba:tcp:HOST:PORT | aseba:serial:PATH\n"
       << "                          a real Thymio II, or Aseba Playground's, over Aseba (docs/thymio.md)\n"
+      << "  serve --node NAME [options]\n"
+      << "                          one node in its own process, joined to others over DDS (docs/bus.md)\n"
       << "  demo <name> [options]   run a built-in demo (symb demo --help lists them)\n"
       << "  shell --tcp HOST:PORT | --serial PATH\n"
       << "                          open a running node's command shell (like telnet or picocom)\n"
@@ -94,6 +98,7 @@ int run_symb(std::span<const std::string_view> args, const CliContext& ctx) {
   if (command == "board") return hil::run_board_command(rest, ctx);
   if (command == "link") return hil::run_link_command(rest, ctx);
   if (command == "demo") return run_demo(rest, ctx);
+  if (command == "serve") return serve::run_serve_command(rest, ctx);
   if (command == "shell") {
     auto parsed = parse_shell_client_args(rest);
     if (auto* e = std::get_if<UsageError>(&parsed)) return usage_error(ctx, "symb shell", *e);

@@ -1,9 +1,12 @@
 #include "symb/apps/evolve/evolve_command.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
+#include "symb/apps/evolve/collect.hpp"
 #include "symb/apps/evolve/evolve_run.hpp"
+#include "symb/apps/evolve/islands.hpp"
 #include "symb/apps/progress_line.hpp"
 #include "symb/sim/scenario.hpp"
 
@@ -24,8 +27,58 @@ constexpr OptionSpec kOptions[] = {
     {"--view", "[ADDR:]PORT", "watch and drive the run in a browser (docs/view.md; implies --speed 1 unless given)"},
     {"--token", "T", "the web view's token (default: a random one, printed)"},
     {"--quiet", "", "no progress line and no summary"},
+    {"--islands", "",
+     "island model under mpirun: an island per rank, seed + rank, OUT/island_<rank>/ (docs/cluster.md)"},
+    {"--migrate-every", "D",
+     "with --islands: simulated time between migrations along the ring (default 10min; 0: never)"},
     {"--help", "", "this help"},
 };
+
+constexpr OptionSpec kCollectOptions[] = {
+    {"--collect", "", "merge the run folders given into one report"},
+    {"--out", "DIR", "where the report goes (default out/evolve/collected)"},
+    {"--quiet", "", "no summary"},
+    {"--help", "", "this help"},
+};
+
+int run_collect(std::span<const std::string_view> args, const CliContext& ctx) {
+  auto split = split_args(args, kCollectOptions, 100000);
+  if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
+  const SplitArgs& a = std::get<SplitArgs>(split);
+  if (a.help) {
+    ctx.out << "Usage: " << kCommand << " --collect DIR... [--out DIR]\n\n"
+            << "Merges evolution runs' folders (a job array's, scripts/evolve_array's, --islands' islands; a\n"
+            << "folder of run folders stands for them all) into one report: collected.txt (per run and\n"
+            << "the champion fitness over time across runs), fitness.svg, best.genome.\n\n"
+            << "Options:\n"
+            << describe_options(kCollectOptions);
+    return kExitOk;
+  }
+  std::filesystem::path out = std::filesystem::path("out") / "evolve" / "collected";
+  bool quiet = false;
+  for (const ParsedOption& o : a.options) {
+    if (o.name == "--out") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--out: empty folder name"});
+      out = o.value;
+    } else if (o.name == "--quiet") {
+      quiet = true;
+    }
+  }
+  if (a.positional.empty()) return usage_error(ctx, kCommand, UsageError{"--collect needs at least one DIR"});
+  std::vector<std::filesystem::path> dirs(a.positional.begin(), a.positional.end());
+  auto c = collect_runs(dirs, out);
+  if (!c) {
+    ctx.err << kCommand << " --collect: " << c.error() << "\n";
+    return kExitFailure;
+  }
+  if (!quiet) {
+    ctx.out << "collected " << c->runs.size() << " runs; best: " << c->runs[c->best].dir.string()
+            << ", champion fitness " << fixed(c->runs[c->best].champion_fitness, 4) << "\nresults in " << out.string()
+            << "/\n";
+    for (const auto& f : c->files) ctx.out << "  " << f.string() << "\n";
+  }
+  return kExitOk;
+}
 
 void print_help(std::ostream& out) {
   out << "Usage: " << kCommand << " SCENARIO [options]\n\n"
@@ -57,7 +110,10 @@ std::string progress_text(const EvolveProgress& p) {
 }  // namespace
 
 int run_evolve_command(std::span<const std::string_view> args, const CliContext& ctx) {
+  if (std::find(args.begin(), args.end(), std::string_view("--collect")) != args.end()) return run_collect(args, ctx);
   EvolveOptions options;
+  bool islands = false;
+  IslandOptions island_options;
   auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_help);
   if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& parsed = std::get<SplitArgs>(split);
@@ -101,8 +157,20 @@ int run_evolve_command(std::span<const std::string_view> args, const CliContext&
       token = o.value;
     } else if (o.name == "--quiet") {
       quiet = true;
+    } else if (o.name == "--islands") {
+      islands = true;
+    } else if (o.name == "--migrate-every") {
+      if (o.value == "0") {
+        island_options.every = kernel::Duration{0};
+        continue;
+      }
+      auto v = parse_duration("--migrate-every", o.value, kMaxDuration);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      island_options.every = std::get<kernel::Duration>(v);
     }
   }
+  if (islands && (options.resume || options.view.on))
+    return usage_error(ctx, kCommand, UsageError{"--islands runs without --resume and --view"});
   if (options.out_dir.empty()) {
     if (options.resume) return usage_error(ctx, kCommand, UsageError{"--resume needs --out DIR (the run's folder)"});
     options.out_dir = std::filesystem::path("out") / "evolve" / std::filesystem::path(options.scenario_path).stem();
@@ -115,6 +183,20 @@ int run_evolve_command(std::span<const std::string_view> args, const CliContext&
   ProgressLine progress(ctx.err, !quiet, ctx.err_is_terminal);
   options.on_progress = [&](const EvolveProgress& p) { progress.update(p.fraction(), progress_text(p)); };
   options.on_notice = [&ctx](const std::string& line) { ctx.err << line << "\n" << std::flush; };
+  if (islands) {
+    if (options.seed) {
+      island_options.base_seed = *options.seed;
+    } else {
+      auto scenario = sim::load_scenario(options.scenario_path);
+      if (!scenario) {
+        ctx.err << kCommand << ": " << scenario.error() << "\n";
+        return kExitFailure;
+      }
+      island_options.base_seed = scenario->seed;
+    }
+    island_options.quiet = quiet;
+    return run_islands(options, island_options, ctx);
+  }
   auto result = run_evolution(options);
   if (!result) {
     progress.finish("evolve: stopped");

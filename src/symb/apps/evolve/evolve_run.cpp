@@ -21,6 +21,7 @@
 #include "symb/apps/text_file.hpp"
 #include "symb/apps/view/live_view.hpp"
 #include "symb/evo/genome/genome.hpp"
+#include "symb/evo/one_plus_one/one_plus_one_task.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"
@@ -268,6 +269,8 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   const kernel::Time stop_at = options.stop_at ? start + *options.stop_at : kernel::kTimeNever;
   const bool checkpoints = options.checkpoint_every.count() > 0;
   kernel::Time next_checkpoint = checkpoints ? start + options.checkpoint_every : kernel::kTimeNever;
+  const bool migrating = options.migrate && options.migrate_every.count() > 0;
+  kernel::Time next_migration = migrating ? start + options.migrate_every : kernel::kTimeNever;
   // Pacing (--speed) runs from the resume point: the replay before it goes as fast as it can.
   auto pace_start = wall_start;
   kernel::Time pace_from = replaying() ? resume_at : start;
@@ -320,9 +323,20 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
     kernel::Time next = std::min({end, t + slice, next_checkpoint});
     next = std::min(next, resume_at);
     next = std::min(next, stop_at);
+    next = std::min(next, next_migration);
     executor.run_until(next);
     t = next;
     if (auto st = flush(); !st) return Error{st.error()};
+    if (t == next_migration) {
+      const std::vector<float> migrant = options.migrate(champion ? champion->genes : std::vector<float>{}, best);
+      if (!migrant.empty() && t < end) {
+        os::Message m;
+        m.port = evo::kImmigrantPort;
+        m.payload = os::Payload(std::span<const float>(migrant));
+        if (node.post(*evolution_id, m).ok()) ++result.migrants;
+      }
+      next_migration += options.migrate_every;
+    }
     if (auto e = session->cycle_error(); !e.empty()) return Error{e};
     if (replaying() && t == resume_at) {
       if (history.size() != checkpoint->evaluations || history.hash() != checkpoint->history_hash)
@@ -378,6 +392,7 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   result.evaluations = history.size();
   result.champion_fitness = best;
   result.history_hash = history.hash();
+  if (champion) result.champion_genes = champion->genes;
   csv.close();
   if (!csv) return Error{"cannot write " + (out / "fitness.csv").string()};
   result.files = {out / "fitness.csv"};

@@ -55,6 +55,12 @@ struct EvolveOptions {
   // --resume replays to its checkpoint). on_notice hears the URL.
   view::ViewRequest view;
   std::function<void(const std::string&)> on_notice;
+  // The island model (islands.hpp): every `migrate_every` of simulated time (0: never) `migrate`
+  // is called on the run's thread with this run's champion genes (empty before there is one) and
+  // its stored fitness; the genes it returns (empty: none) reach the evolution task as a migrant
+  // (evo::kImmigrantPort), at that virtual instant, so a run stays deterministic.
+  kernel::Duration migrate_every{0};
+  std::function<std::vector<float>(const std::vector<float>& champion, double fitness)> migrate;
 };
 
 struct EvolveResult {
@@ -66,6 +72,8 @@ struct EvolveResult {
   std::uint64_t champions = 0;  // new champions seen
   double champion_fitness = 0;
   std::uint64_t history_hash = 0;
+  std::uint64_t migrants = 0;  // migrants handed to the evolution task
+  std::vector<float> champion_genes;
   bool resumed = false;
   double resumed_from_seconds = 0;
   bool stopped = false;  // stop_at reached

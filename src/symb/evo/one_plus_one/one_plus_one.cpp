@@ -1,5 +1,6 @@
 #include "symb/evo/one_plus_one/one_plus_one.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -40,10 +41,20 @@ OnePlusOne::OnePlusOne(OnePlusOneOptions options, kernel::RandomStream random) :
 }
 
 void OnePlusOne::new_challenger() {
+  kind_ = Candidate::kChallenger;
+  if (immigrant_) {
+    candidate_ = champion_;
+    for (std::size_t i = 0; i < candidate_.values.size() && i < immigrant_->values.size(); ++i)
+      candidate_.values[i] = std::clamp(immigrant_->values[i], candidate_.lo, candidate_.hi);
+    immigrant_.reset();
+    ++counts_.immigrants;
+    return;
+  }
   candidate_ = champion_;
   mutate_gaussian(candidate_, random_);
-  kind_ = Candidate::kChallenger;
 }
+
+void OnePlusOne::immigrate(RealGenome genome) { immigrant_ = std::move(genome); }
 
 void OnePlusOne::report(double fitness) {
   if (!std::isfinite(fitness)) fitness = std::numeric_limits<double>::lowest();

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "symb/evo/genome/real_genome.hpp"
 #include "symb/kernel/random_stream.hpp"
@@ -44,6 +45,7 @@ struct OnePlusOneCounts {
   std::uint64_t challengers = 0;    // challenger reports
   std::uint64_t successes = 0;      // challengers that became champion
   std::uint64_t reevaluations = 0;  // champion re-runs reported
+  std::uint64_t immigrants = 0;     // challengers that came from immigrate()
 };
 
 class OnePlusOne {
@@ -56,6 +58,14 @@ class OnePlusOne {
   Candidate candidate_kind() const { return kind_; }
   // The fitness measured for next(); non-finite values count as the lowest possible.
   void report(double fitness);
+
+  // An island model's migrant: the next challenger drawn is `genome` (its values put into the
+  // bounds, with the champion's step size) instead of a mutant of the champion; it becomes
+  // champion only by beating the stored fitness here, as any challenger must. Takes effect at the
+  // next challenger (the candidate under evaluation is not disturbed); a second call before then
+  // replaces the first. Draws no random number, so a run stays deterministic given when migrants
+  // come.
+  void immigrate(RealGenome genome);
 
   // The champion (meaningful once the first report came) and its stored fitness.
   const RealGenome& champion() const { return champion_; }
@@ -79,6 +89,7 @@ class OnePlusOne {
   Candidate kind_ = Candidate::kFirst;
   double champion_fitness_ = 0;
   double champion_sum_ = 0;
+  std::optional<RealGenome> immigrant_;
   OnePlusOneCounts counts_;
 };
 

@@ -100,6 +100,18 @@ void OnePlusOneTask::start_candidate() {
 }
 
 void OnePlusOneTask::on_message(const os::Message& m) {
+  if (m.port == kImmigrantPort && !m.payload.blob) {
+    const auto genes = m.numbers();
+    if (!algorithm_ || genes.size() != options_.algorithm.genes) {
+      log(os::LogLevel::kWarn, "one_plus_one: ignored a migrant of " + std::to_string(genes.size()) + " genes (" +
+                                   std::to_string(options_.algorithm.genes) + " expected)");
+      return;
+    }
+    RealGenome g = algorithm_->champion();
+    g.values.assign(genes.begin(), genes.end());
+    algorithm_->immigrate(std::move(g));
+    return;
+  }
   if (state() != EvolutionState::kRunning) return;
   if (auto fitness = swap_.feed(m, now())) finish_evaluation(*fitness);
 }

@@ -62,6 +62,11 @@ struct EvaluationRecord {
   std::uint64_t steps = 0;      // counted fitness steps
 };
 
+// A migrant genome for the island model (apps/evolve/islands.hpp): a message on this port whose
+// numbers are the genes (as many as the task's `genes`) becomes the next challenger
+// (OnePlusOne::immigrate). Messages on it with another count are ignored with a warning.
+inline constexpr os::Port kImmigrantPort = 60;
+
 class OnePlusOneTask : public os::Task {
  public:
   static kernel::Result<std::unique_ptr<OnePlusOneTask>> create(OnePlusOneTaskOptions options);

@@ -15,8 +15,6 @@
 
 namespace symb::sim::mujoco {
 
-const char* to_string(LinkState state) { return state == LinkState::kUp ? "up" : "down"; }
-
 // The bus's own activity: ticked once, at the next instant something happens on the bus.
 class OrganismBus::Timer final : public kernel::Activity {
  public:

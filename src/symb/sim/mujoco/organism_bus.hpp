@@ -51,6 +51,7 @@
 #include <string_view>
 #include <vector>
 
+#include "symb/io/hook_bus.hpp"
 #include "symb/io/remote_hook.hpp"
 #include "symb/kernel/executor.hpp"
 #include "symb/kernel/result.hpp"
@@ -75,27 +76,10 @@ struct OrganismBusOptions {
   std::size_t inbound_queue = 64;                            // each inbound proxy's queue
 };
 
-// A remote hook's handle: never reused, so a handle kept past its unhook matches nothing.
-struct RemoteHookId {
-  std::uint32_t value = 0;
-  bool valid() const { return value != 0; }
-  friend bool operator==(RemoteHookId, RemoteHookId) = default;
-};
-
-enum class LinkState { kUp, kDown };
-const char* to_string(LinkState state);
-
-struct RemoteHookInfo {
-  RemoteHookId id;
-  std::size_t sender_module = 0;
-  std::size_t receiver_module = 0;
-  std::string sender;    // "m1/osc"
-  std::string receiver;  // "m2/osc"
-  os::HookOptions options;
-  LinkState state = LinkState::kUp;
-  io::RemoteHookBooks books;
-  io::MediumBooks medium;
-};
+// The remote hook's handle, state and description are the HookBus's (io/hook_bus.hpp).
+using io::LinkState;
+using io::RemoteHookId;
+using io::RemoteHookInfo;
 
 struct OrganismBusCounts {
   std::uint64_t frames = 0;      // frames that finished their transmission
@@ -105,7 +89,7 @@ struct OrganismBusCounts {
   std::uint64_t links_up = 0;    // ... and back up
 };
 
-class OrganismBus final : private io::HookMedium {
+class OrganismBus final : public io::HookBus, private io::HookMedium {
  public:
   // `nodes`: one per module, in module order, none null. Fails for a bandwidth that is not a
   // positive finite number, a negative latency, a zero queue, or no nodes.
@@ -133,14 +117,15 @@ class OrganismBus final : private io::HookMedium {
   kernel::Result<RemoteHookId> hook(std::size_t sender_module, std::string_view sender, std::size_t receiver_module,
                                     std::string_view receiver, os::HookOptions options = {});
   // "m1/osc" style names: the module by its node's name.
-  kernel::Result<RemoteHookId> hook(std::string_view sender, std::string_view receiver, os::HookOptions options = {});
+  kernel::Result<RemoteHookId> hook(std::string_view sender, std::string_view receiver,
+                                    os::HookOptions options = {}) override;
   // Removes both proxies; messages in them are counted as the local hooks count them.
-  kernel::Status unhook(RemoteHookId id);
+  kernel::Status unhook(RemoteHookId id) override;
 
   std::optional<RemoteHookInfo> info(RemoteHookId id) const;
-  std::vector<RemoteHookInfo> hooks() const;
+  std::vector<RemoteHookInfo> hooks() const override;
   // The remote hooks as a text table (a shell's `hooks` appends it).
-  std::string listing() const;
+  std::string listing() const override;
   // Lets a module's shell make remote hooks (`hook osc m2/osc --port 1`, the sender on the shell's
   // own node) and list them (`hooks`). The shell must not outlive the bus.
   void serve_shell(shell::Shell::Options& options);
