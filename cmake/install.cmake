@@ -43,9 +43,10 @@ foreach(header IN LISTS symb_public_headers)
   install(FILES ${PROJECT_SOURCE_DIR}/src/${header} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/${dir})
 endforeach()
 
-# Symbricator::kernel ... Symbricator::sim. symb_apps is installed for `symb` and the Python
-# module but not exported: its headers are not public.
-set(symb_exported kernel os io robot shell control evo sim)
+# Symbricator::kernel ... Symbricator::sim, and Symbricator::dds (the DDS bus, io/dds/; its public
+# header includes no DDS header, the Cyclone library is its own dependency). symb_apps is
+# installed for `symb` and the Python module but not exported: its headers are not public.
+set(symb_exported kernel os io robot shell control evo sim dds)
 set(symb_exported_targets "")
 foreach(layer IN LISTS symb_exported)
   set_target_properties(symb_${layer} PROPERTIES EXPORT_NAME ${layer})
@@ -73,7 +74,7 @@ install(FILES ${PROJECT_BINARY_DIR}/SymbricatorConfig.cmake ${PROJECT_BINARY_DIR
 
 # pkg-config: the same libraries, highest layer first (the order a static link would need).
 set(symb_pc_libs "")
-foreach(layer sim evo control shell robot io os kernel)
+foreach(layer sim evo control shell robot dds io os kernel)
   string(APPEND symb_pc_libs " -lsymb_${layer}")
 endforeach()
 # Relative to the .pc file, so a prefix moved elsewhere (cmake --install --prefix) still works.
