@@ -88,23 +88,14 @@ class PyTask : public os::Task {
   void log_info(const std::string& text) const { log(os::LogLevel::kInfo, text); }
 
  protected:
-  void on_start() override {
-    call("on_start", [](py::object&) {});
-  }
-  void on_tick() override {
-    call("on_tick", [](py::object&) {});
-  }
-  void on_stop() override {
-    call("on_stop", [](py::object&) {});
-  }
-  void on_message(const os::Message& m) override {
-    call(
-        "on_message", [&m](py::object&) {}, &m);
-  }
+  void on_start() override { call("on_start"); }
+  void on_tick() override { call("on_tick"); }
+  void on_stop() override { call("on_stop"); }
+  void on_message(const os::Message& m) override { call("on_message", &m); }
 
  private:
-  template <class F>
-  void call(const char* handler, F&&, const os::Message* m = nullptr) {
+  // `m`: the message for on_message (handed on as port and a list of floats), null for the others.
+  void call(const char* handler, const os::Message* m = nullptr) {
     std::string error;
     {
       py::gil_scoped_acquire gil;

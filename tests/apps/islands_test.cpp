@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <regex>
 #include <string>
 
@@ -124,6 +125,16 @@ TEST_F(IslandsTest, TheLocalJobArrayRunsEachSeedAsSymbEvolveAndCollectMergesThem
   // A folder that is no run is refused with its name.
   EXPECT_NE(sh(std::string(SYMB_BINARY) + " evolve --collect " + dir_.string() + "/nothing", "bad.log"), 0);
   EXPECT_NE(last_output_.find("nothing: no such folder"), std::string::npos) << last_output_;
+  // A run whose fitness.csv was damaged is refused with the file and the line.
+  const fs::path damaged = dir_ / "damaged";
+  fs::create_directories(damaged);
+  std::ofstream(damaged / "summary.txt") << "seed: 9\nchampion fitness: 0.5\n";
+  std::ofstream(damaged / "fitness.csv") << "time_s,kind,fitness,champion\n60,0,0.1,0.1\n120,0,oops\n";
+  EXPECT_NE(
+      sh(std::string(SYMB_BINARY) + " evolve --collect " + damaged.string() + " --out " + (dir_ / "report2").string(),
+         "damaged.log"),
+      0);
+  EXPECT_NE(last_output_.find("fitness.csv:3: not a row of four numbers"), std::string::npos) << last_output_;
 }
 
 }  // namespace

@@ -8,35 +8,14 @@
 
 #include <gtest/gtest.h>
 
+#include "kernel/recording_activity.hpp"
+
 namespace symb::kernel {
 namespace {
 
 using namespace std::chrono_literals;
 
-// Records every call with the tick count at which it ran.
-struct BareRecorder final : Activity {
-  BareRecorder(std::string n, BareMetalExecutor& e, std::vector<std::string>& l)
-      : name(std::move(n)), exec(e), log(l) {}
-  void on_activity_attached(ActivitySlot& s) override { slot = &s; }
-  void on_activity_start() override { note("start"); }
-  void on_activity_input() override {
-    note("input");
-    if (on_input) on_input();
-  }
-  void on_activity_tick() override {
-    note("tick");
-    if (on_tick) on_tick();
-  }
-  void on_activity_stop() override { note("stop"); }
-  void on_activity_released() override { note("released"); }
-  void note(const char* what) { log.push_back(name + ":" + what + "@" + std::to_string(exec.now().count() / 1000000)); }
-
-  std::string name;
-  BareMetalExecutor& exec;
-  std::vector<std::string>& log;
-  ActivitySlot* slot = nullptr;
-  std::function<void()> on_input, on_tick;
-};
+using BareRecorder = test_support::RecordingActivity;
 
 struct BareMetalExecutorTest : ::testing::Test {
   std::vector<std::string> log;

@@ -41,8 +41,6 @@ Reply fail(std::string_view message) { return {false, "error: " + std::string(me
 
 std::string duration_text(kernel::Duration d) { return os::format_param_value(os::ParamValue{d}); }
 
-std::string seconds_text(kernel::Time t) { return os::format_seconds(t); }
-
 std::string id_text(os::TaskId id) { return "#" + std::to_string(id.index) + "." + std::to_string(id.generation); }
 
 std::string bound_text(const std::optional<double>& b, const char* none) {
@@ -743,7 +741,7 @@ Reply Shell::cmd_hooks(const Call& c) {
            os::to_string(h.options.policy), h.options.port >= 0 ? std::to_string(h.options.port) : "any",
            h.options.suppress_window.count() > 0 ? duration_text(h.options.suppress_window) : "-",
            h.options.enabled ? "enabled" : "disabled",
-           h.inhibited_until > now ? seconds_text(h.inhibited_until) : "-"});
+           h.inhibited_until > now ? os::format_seconds(h.inhibited_until) : "-"});
   if (options_.remote_hooks) return ok(t.str() + "remote hooks:\n" + options_.remote_hooks());
   return ok(t.str());
 }
@@ -857,7 +855,7 @@ Reply Shell::cmd_log(const Call& c) {
   }
   Table t({"SEQ", "TIME", "LEVEL", "SOURCE", "TEXT"});
   for (const auto& e : entries)
-    t.add({std::to_string(e.seq), seconds_text(e.time), os::to_string(e.level), e.source, e.text});
+    t.add({std::to_string(e.seq), os::format_seconds(e.time), os::to_string(e.level), e.source, e.text});
   return ok(t.str());
 }
 
@@ -999,7 +997,7 @@ Reply Shell::cmd_time(const Call& c) {
     return ok(j.str());
   }
   Table t({"NODE", "TIME", "NS"});
-  t.add({node_.name(), seconds_text(now), std::to_string(now.count())});
+  t.add({node_.name(), os::format_seconds(now), std::to_string(now.count())});
   return ok(t.str());
 }
 
