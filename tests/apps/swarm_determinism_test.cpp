@@ -210,7 +210,11 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"demo swarm --realtime --shell-port 70000", "--shell-port: '70000' is out of range"},
         BadInput{"shell", "symb shell"}, BadInput{"shell --tcp nohost", "symb shell"},
         BadInput{"version now", "unexpected argument 'now'"},
-        BadInput{"--verison", "'--verison' (did you mean '--version'?)"}),
+        BadInput{"--verison", "'--verison' (did you mean '--version'?)"}, BadInput{"serve", "--node NAME is required"},
+        BadInput{"serve --node", "--node needs a value"},
+        BadInput{"serve --node m0 --hook bogus", "--hook 'bogus': expected SENDER>RECEIVER[:PORT]"},
+        BadInput{"serve --node m0 --domain 999", "--domain: '999' is out of range"},
+        BadInput{"evolve --collect", "--collect needs at least one DIR"}),
     test_name);
 
 TEST(SymbCli, HelpAndVersionSucceed) {
