@@ -337,5 +337,54 @@ TEST(LockstepExecutor, WorkBesideTheLanesRunsInTheNextWindowAndBeforeReturning) 
   EXPECT_EQ(ran, 1);
 }
 
+TEST(LockstepExecutor, CallsBeforeALanesWindowComeFirstInItOnItsThreadAndBeforeReturning) {
+  LockstepExecutor ex({.threads = 2, .quantum = 30ms});
+  LockstepProbe world(ex), first(ex.lane(0)), second(ex.lane(1));
+  // What each lane saw, in its own order: "call@ms" for a call made for it, "tick@ms" for its tick.
+  std::vector<std::string> seen[2];
+  std::atomic<int> calls_off_context{0};
+  std::vector<int> undone_when_asked;  // calls not yet made when the world tick asked for them
+  std::atomic<int> made{0};
+  world.on_tick = [&] {
+    const std::int64_t at = world.now_ms();
+    const int before = made.load();
+    // Three indices, two lanes: the one without a lane is called at once, here.
+    ex.for_each_lane_before_its_window(3, [&, at](std::size_t i) {
+      made.fetch_add(1);
+      if (i < 2) {
+        if (!ex.lane(i).on_own_context()) calls_off_context.fetch_add(1);
+        seen[i].push_back("call@" + std::to_string(at));
+      }
+    });
+    undone_when_asked.push_back(made.load() - before);
+    if (at == 60) ex.stop();
+  };
+  first.on_tick = [&] { seen[0].push_back("tick@" + std::to_string(first.now_ms())); };
+  second.on_tick = [&] { seen[1].push_back("tick@" + std::to_string(second.now_ms())); };
+  ex.lane(0).attach(first, {0, 30ms, "first"});
+  ex.lane(1).attach(second, {0, 30ms, "second"});
+  ex.attach(world, {100, 30ms, "world"});
+  ex.run_until(Time{200ms});
+  // Only index 2 was called in the world's tick; lanes 0 and 1 waited for their window, where
+  // their call came before their own tick at the same instant, on the lane's own context.
+  // The world ticks at 30 and 60 ms.
+  EXPECT_EQ(undone_when_asked, (std::vector<int>{1, 1}));
+  const std::vector<std::string> expected{"call@30", "tick@30", "call@60"};
+  EXPECT_EQ(seen[0], expected);
+  EXPECT_EQ(seen[1], expected);
+  // The run stopped at 60 ms, before another window: the calls of that tick were made before it
+  // returned (the lanes' own ticks at 60 belong to a window that never came).
+  EXPECT_EQ(made.load(), 6);
+  EXPECT_EQ(calls_off_context.load(), 0);
+
+  // Outside a run, and on every other executor, the calls are made at once.
+  ex.for_each_lane_before_its_window(2, [&](std::size_t) { made.fetch_add(1); });
+  EXPECT_EQ(made.load(), 8);
+  VirtualTimeExecutor plain;
+  int ran = 0;
+  plain.for_each_lane_before_its_window(2, [&](std::size_t) { ++ran; });
+  EXPECT_EQ(ran, 2);
+}
+
 }  // namespace
 }  // namespace symb::kernel

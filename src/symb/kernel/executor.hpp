@@ -102,6 +102,14 @@ class Executor {
   // them, and finishes it before the next instant at which its own context runs again, and before
   // run_*() returns; every other executor runs it at once. Only from this executor's own context.
   virtual void run_alongside_lanes(std::function<void()> job) { job(); }
+  // As for_each_lane(), for calls whose effect only lane(i) itself reads (a device publishing its
+  // readings to its robot): an executor whose lanes run in windows may make call i at the start
+  // of lane i's next window, on that lane's thread, before any of its events, where what the call
+  // touches is then in that thread's cache for the lane's own work. Every call is made before
+  // lane i runs again, and before run_*() returns. `fn` must stay valid until then (it is kept).
+  virtual void for_each_lane_before_its_window(std::size_t n, std::function<void(std::size_t)> fn) {
+    for_each_lane(n, fn);
+  }
 };
 
 }  // namespace symb::kernel

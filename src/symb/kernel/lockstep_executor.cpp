@@ -80,6 +80,23 @@ void LockstepExecutor::run_alongside_lanes(std::function<void()> job) {
   alongside_.push_back(std::move(job));
 }
 
+void LockstepExecutor::for_each_lane_before_its_window(std::size_t n, std::function<void(std::size_t)> fn) {
+  assert(main_.on_own_context() || !running_);
+  for (std::size_t i = lanes_.size(); i < n; ++i) fn(i);
+  if (!running_) {
+    for_each_lane(std::min(n, lanes_.size()), fn);
+    return;
+  }
+  before_window_.emplace_back(std::min(n, lanes_.size()), std::move(fn));
+}
+
+void LockstepExecutor::flush_before_window() {
+  if (before_window_.empty()) return;
+  std::vector<std::pair<std::size_t, std::function<void(std::size_t)>>> calls;
+  calls.swap(before_window_);
+  for (const auto& [n, fn] : calls) for_each_lane(n, fn);
+}
+
 std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
   // The jobs are the first items of the pool's run: the thread that takes them takes fewer lanes.
   std::vector<std::function<void()>> jobs;
@@ -88,6 +105,8 @@ std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
     for (auto& job : jobs) job();
     return 0;
   }
+  std::vector<std::pair<std::size_t, std::function<void(std::size_t)>>> before;
+  before.swap(before_window_);
   const auto started = std::chrono::steady_clock::now();
   ++stats_.windows;
   std::atomic<std::uint64_t> handled{0};
@@ -100,6 +119,12 @@ std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
         continue;
       }
       VirtualTimeExecutor& lane = *lanes_[i - first_lane];
+      if (!before.empty()) {
+        lane.set_guest(std::this_thread::get_id());
+        for (const auto& [count, fn] : before)
+          if (i - first_lane < count) fn(i - first_lane);
+        lane.set_guest(std::thread::id{});
+      }
       if (idle)
         n += lane.run_until_idle(end);
       else if (inclusive)
@@ -157,6 +182,7 @@ std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {
     break;
   }
   // A run that stopped before another window still finishes what was to run beside it.
+  flush_before_window();
   while (!alongside_.empty()) {
     std::vector<std::function<void()>> jobs;
     jobs.swap(alongside_);

@@ -66,6 +66,11 @@ class LockstepExecutor final : public Executor {
   // Runs `job` during the next window (B), beside the lanes, as one more item of the worker pool's
   // run; a run that stops before another window runs it before it returns.
   void run_alongside_lanes(std::function<void()> job) override;
+  // Makes call i first in lane i's next window, on the worker that runs the lane (a lane's
+  // readings then meet its handlers in that core's cache instead of being written by one pass
+  // and read back by another); a run that stops before another window makes them before it
+  // returns. Indices without a lane are called at once, on the calling thread.
+  void for_each_lane_before_its_window(std::size_t n, std::function<void(std::size_t)> fn) override;
 
   // Handles every event (main lane and lanes) up to and including `until`, then sets every clock
   // to `until`. Returns the number of events handled. stop() from a main-lane handler returns
@@ -105,12 +110,16 @@ class LockstepExecutor final : public Executor {
   // until idle when `idle`).
   std::uint64_t run_lanes(Time end, bool inclusive, bool idle);
   bool lanes_pending_by(Time t) const;
+  // Makes the calls still waiting for a window (for_each_lane_before_its_window) now.
+  void flush_before_window();
 
   const Options options_;
   WorkerPool pool_;
   VirtualTimeExecutor main_;
   std::vector<std::unique_ptr<VirtualTimeExecutor>> lanes_;
   std::vector<std::function<void()>> alongside_;  // run_alongside_lanes(), for the next window
+  // for_each_lane_before_its_window(), for the next window: each with its count of lanes.
+  std::vector<std::pair<std::size_t, std::function<void(std::size_t)>>> before_window_;
   std::atomic<bool> stop_requested_{false};
   bool running_ = false;
   Stats stats_;

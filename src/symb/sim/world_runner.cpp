@@ -74,8 +74,9 @@ kernel::Status WorldRunner::step_once(kernel::Time now) {
   }
   // Outside the world lock: under the thread executor this runs the sensor tasks' injected work
   // right here, and a handler further down the chain may well look at the world. Robot i's
-  // devices feed a node on lane i, so the publishing may be spread over the lanes' threads.
-  executor().for_each_lane(ir_.size(), [&](std::size_t i) {
+  // devices feed a node on lane i, so the publishing may be spread over the lanes' threads, each
+  // robot's at the start of its lane's window (the record is not written again before then).
+  executor().for_each_lane_before_its_window(ir_.size(), [this, now](std::size_t i) {
     const RobotStep& r = record_.robots[i];
     ir_[i]->publish_readings(r.ir, now);
     if (pose_[i]->has_listener()) pose_[i]->publish_pose(r.state.pose, now);

@@ -26,7 +26,8 @@
 // t + period reads the wheels after every window has closed: the same instants, so the same run.
 // Robot i's devices must feed a node on executor.lane(i) (ScenarioSession builds them so): the
 // runner fills the step's records on the executor's threads (parallel()) and publishes robot i's
-// readings through for_each_lane(), which may hand lane i to another thread for the call.
+// readings through for_each_lane_before_its_window(), which may hand lane i to another thread
+// for the call and make it first in the lane's window.
 // Under the ThreadExecutor everything happens in real time and the same chain takes as long as
 // it takes.
 //
