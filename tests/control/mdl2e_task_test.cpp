@@ -642,6 +642,46 @@ TEST(ControlTaskTypes, CreationErrorsNameTheProgramAndTheLineAndColumn) {
   EXPECT_EQ(node.parameters(*ok)->string("program"), "ok");
 }
 
+TEST(ControlTaskTypes, TasksOfOneRegistryShareTheCompiledProgramOfOneText) {
+  std::string second = "plan p { atom wheels(100, 100) }\n";
+  ControlResources r;
+  r.read_program = [&](std::string_view ref) -> kernel::Result<std::string> {
+    if (ref == "first" || ref == "same_text") return std::string("plan p { atom wheels(300, -300) }\n");
+    if (ref == "second") return second;
+    return kernel::Error{"no such program"};
+  };
+  os::TaskTypeRegistry registry, other_registry;
+  ASSERT_TRUE(register_control_task_types(registry, r));
+  ASSERT_TRUE(register_control_task_types(other_registry, r));
+  const auto make = [](const os::TaskTypeRegistry& from, std::string_view params) -> std::unique_ptr<os::Task> {
+    const os::TaskType* type = from.find("mdl2e");
+    auto given = os::parse_param_assignments(params);
+    auto values = from.resolve(*type, *given);
+    auto task = type->make(*values);
+    return task ? std::move(task).value() : nullptr;
+  };
+  const auto program_of = [](const std::unique_ptr<os::Task>& t) { return &static_cast<Mdl2eTask&>(*t).program(); };
+  auto a = make(registry, "program=first"), b = make(registry, "program=same_text");
+  auto c = make(registry, "program=second"), d = make(other_registry, "program=first");
+  ASSERT_TRUE(a && b && c && d);
+  EXPECT_EQ(program_of(a), program_of(b));  // one text, one compiled program
+  EXPECT_NE(program_of(a), program_of(c));
+  EXPECT_NE(program_of(a), program_of(d));  // registries (sessions) share nothing
+  // A changed file is compiled anew; tasks made before keep the program they run.
+  const mdl2e::Program* before = program_of(c);
+  second = "plan p { atom wheels(50, 50) }\n";
+  auto e = make(registry, "program=second");
+  ASSERT_TRUE(e);
+  EXPECT_NE(program_of(e), before);
+  EXPECT_EQ(program_of(c), before);
+  // A program no task runs any more is not kept: the next task gets it compiled again.
+  c.reset();
+  e.reset();
+  auto f = make(registry, "program=second");
+  ASSERT_TRUE(f);
+  EXPECT_EQ(static_cast<Mdl2eTask&>(*f).program(), *mdl2e::compile_source(second));
+}
+
 TEST(ControlTaskTypes, ShippedObstacleAvoidanceDrivesTheRobotThroughTheNode) {
   ASSERT_FALSE(read_file(std::string(SYMB_SCENARIO_DIR) + "/obstacle_avoidance.mdl2e").empty());
   os::TaskTypeRegistry registry;
