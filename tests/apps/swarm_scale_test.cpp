@@ -18,6 +18,7 @@
 
 #include <gtest/gtest.h>
 
+#include "symb/apps/run/huge_page_heap.hpp"
 #include "symb/apps/run/scenario_run.hpp"
 
 namespace symb::apps::run {
@@ -75,11 +76,12 @@ TEST(SwarmScale, TenThousandRobotsRunAndRecordWithinTheirMemoryBudget) {
   // The heap the run holds once everything is built, before the first step: what it keeps for
   // its robots. (The sanitizers' allocators bypass malloc's books: there it reads nothing.)
   const struct mallinfo2 before = mallinfo2();
-  double held = -1;
+  double held = -1, on_huge_pages = -1;
   options.stop_requested = [&] {
     if (held < 0) {
       const struct mallinfo2 now = mallinfo2();
       held = static_cast<double>(now.uordblks + now.hblkhd) - static_cast<double>(before.uordblks + before.hblkhd);
+      on_huge_pages = static_cast<double>(huge_page_bytes());
     }
     return false;
   };
@@ -116,6 +118,13 @@ TEST(SwarmScale, TenThousandRobotsRunAndRecordWithinTheirMemoryBudget) {
   std::printf("10,000 robots: %.1f KiB of heap a robot once built, %.1fx real time on 2 threads\n", per_robot / 1024,
               r.real_time_factor);
   EXPECT_LE(per_robot, kHeapBudgetPerRobot);
+  // Built, the robots' heap went onto huge pages before the first step (huge_page_heap.hpp),
+  // unless the kernel cannot (then the summary line says why and the run is as it was).
+  std::printf("%s\n", r.heap.c_str());
+  ASSERT_EQ(r.heap.rfind("heap: ", 0), 0u) << r.heap;
+  if (r.heap.find("madvise:") == std::string::npos) {
+    EXPECT_GE(on_huge_pages, 0.9 * held) << r.heap;
+  }
 #endif
   std::error_code ignored;
   fs::remove_all(dir, ignored);

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "symb/apps/cli_args.hpp"
+#include "symb/apps/run/huge_page_heap.hpp"
 #include "symb/apps/run/maze_svg.hpp"
 #include "symb/apps/run/organism_run.hpp"
 #include "symb/apps/run/probe_plot.hpp"
@@ -57,6 +58,7 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
     << "real-time factor: " << fixed(r.real_time_factor, 1) << "\n";
   if (!r.realtime && r.organism.empty())
     s << "robots' nodes: " << fixed(100 * r.nodes_share, 0) << "% of the wall clock (the part --threads spreads)\n";
+  if (!r.heap.empty()) s << r.heap << "\n";
   s << "trajectory hash: " << hex64(r.trajectory_hash) << "\n";
   const RecordFigures& rec = r.recording;
   if (!rec.format.empty())
@@ -302,6 +304,8 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     if (options.on_notice) options.on_notice("view: " + live->url());
   }
 
+  // Built: a big swarm's heap goes onto huge pages before the first step (not timed as stepping).
+  if (lockstep != nullptr && session->robot_count() >= kParallelRobots) result.heap = back_heap_with_huge_pages().note;
   const auto wall_start = std::chrono::steady_clock::now();
   const auto wall_seconds = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();

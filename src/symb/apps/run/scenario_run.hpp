@@ -100,6 +100,9 @@ struct RunResult {
   // 2D virtual time: the share of the run's wall clock spent with the robots' nodes running, the
   // part more threads can shorten (the world's step, radio and recording run on one thread).
   double nodes_share = 0;
+  // From kParallelRobots robots (2D virtual time): the heap on huge pages (huge_page_heap.hpp),
+  // one line for summary.txt; empty below.
+  std::string heap;
   double simulated_seconds = 0;
   double planned_seconds = 0;  // the duration asked for
   bool interrupted = false;    // stopped by stop_requested at simulated_seconds
