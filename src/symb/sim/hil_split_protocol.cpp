@@ -25,6 +25,17 @@ std::vector<std::byte> encode_hello_payload(const HilSplitHello& h) {
   return io::encode_numbers(v);
 }
 
+std::vector<std::byte> encode_bye_payload(std::uint32_t steps) {
+  const float v[2] = {-1.0f, static_cast<float>(steps)};
+  return io::encode_numbers(v);
+}
+
+std::optional<std::uint32_t> decode_bye_payload(std::span<const std::byte> payload) {
+  auto n = io::decode_numbers(payload);
+  if (!n || n->size() != 2 || (*n)[0] != -1.0f) return std::nullopt;
+  return sequence_of((*n)[1]);
+}
+
 std::vector<std::byte> encode_split_sensors_payload(const HilSplitSensors& f) {
   float v[kHilSplitSensorValues];
   std::size_t k = 0;

@@ -8,6 +8,8 @@
 //   world -> robot   sensors  [seq, ir0..ir6, x, y, heading, ground_left, ground_right]
 //                             after world step seq (1, 2, ...): every reading the world runner
 //                             publishes to a robot's devices, as the floats it publishes
+//   world -> robot   bye      [-1, steps]  the run ended after `steps` steps (a clean end: the
+//                             robot's process ends; without it, a world gone is a world lost)
 //   robot -> world   wheels   [seq, left, right]  (HilWheelFrame): the answer to each sensor
 //                             frame, and to the hello (seq 0) with what the node set before the
 //                             world's first step, which step 1 applies (unlike a board's hello
@@ -20,6 +22,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -47,6 +50,9 @@ struct HilSplitSensors {
 };
 
 std::vector<std::byte> encode_hello_payload(const HilSplitHello& h);
+std::vector<std::byte> encode_bye_payload(std::uint32_t steps);
+// The steps of a bye frame; nothing when the payload is not one.
+std::optional<std::uint32_t> decode_bye_payload(std::span<const std::byte> payload);
 std::vector<std::byte> encode_split_sensors_payload(const HilSplitSensors& f);
 // Refused: not a number frame, another count, a bad sequence number (a hello's is 0, a sensor
 // frame's at least 1), seed pieces that are not integers in [0, 65535], NaN readings.

@@ -196,6 +196,10 @@ kernel::Status HilSplitRobot::handle(std::span<const std::byte> payload, std::si
     answer(0);
     return {};
   }
+  if (auto bye = decode_bye_payload(payload)) {
+    ended_ = *bye;
+    return {};
+  }
   auto f = decode_split_sensors_payload(payload);
   {
     std::lock_guard lock(stats_mu_);

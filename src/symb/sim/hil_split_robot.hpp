@@ -19,6 +19,9 @@
 // wheels then, which the world's step 1 applies, as in process. One run per robot process: the node's time
 // cannot go back, so a second hello after sensor frames is refused (finished() with the reason).
 //
+// The world's bye frame ends the run cleanly (ended()); a stream that ends without it is a world
+// lost.
+//
 // Bad input: garbage on the stream is counted by the frame decoder (CRC, framing) and dropped;
 // good frames that are neither a hello nor a sensor frame are malformed; a sensor frame not newer
 // than the last is out of order (dropped); skipped sequence numbers are missed.
@@ -91,6 +94,8 @@ class HilSplitRobot {
   // hello could not be served (another scenario, a second run); the robot is then finished.
   kernel::Result<std::size_t> serve(kernel::Duration timeout);
 
+  // The world said the run ended (its bye frame), after that many steps.
+  std::optional<std::uint32_t> ended() const { return ended_; }
   // The node, once the hello built it (null before).
   RobotSystem* system() { return system_.get(); }
   std::size_t index() const { return index_; }
@@ -120,6 +125,7 @@ class HilSplitRobot {
   std::unique_ptr<RobotSystem> system_;  // after shared_ (its tasks hold the devices)
   std::unique_ptr<Clock> clock_;         // after system_: stopped first
   std::optional<std::uint64_t> seed_;
+  std::optional<std::uint32_t> ended_;
   io::FrameDecoder decoder_{1024};
   std::vector<std::byte> buf_;
   std::vector<std::byte> frame_;

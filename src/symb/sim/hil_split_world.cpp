@@ -119,6 +119,12 @@ void HilSplitWorld::lose(Robot& r, std::uint64_t step, std::string why) {
 
 bool HilSplitWorld::read(Robot& r, kernel::Duration wait, std::uint32_t step) {
   auto got = r.port->read_some(buf_, wait);
+  if (!got && step == 0) {
+    // Before the hello's answer a stream that ends is not the robot's process (a foreign writer
+    // that came and went): wait on for the robot.
+    std::this_thread::sleep_for(std::min<kernel::Duration>(wait, std::chrono::milliseconds(1)));
+    return false;
+  }
   if (!got) {
     lose(r, step, "its stream ended (" + got.error() + ")");
     return false;
@@ -239,6 +245,12 @@ void HilSplitWorld::on_step(const StepRecord& record) {
     std::lock_guard lock(stats_mu_);
     r->stats.waited_s += std::chrono::duration<double>(Wall::now() - began).count();
   }
+}
+
+void HilSplitWorld::say_bye(std::uint64_t steps) {
+  for (auto& r : robots_)
+    if (!r->stats.gone)
+      send(*r, encode_bye_payload(static_cast<std::uint32_t>(std::min<std::uint64_t>(steps, kHilMaxSequence))));
 }
 
 std::vector<HilSplitRobotStats> HilSplitWorld::stats() const {

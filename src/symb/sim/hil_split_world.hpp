@@ -98,6 +98,9 @@ class HilSplitWorld {
   // time: then fails naming those that did not.
   kernel::Status wait_for_robots(kernel::Duration timeout);
 
+  // Tells every remote robot not gone that the run ended after `steps` steps (the bye frame).
+  void say_bye(std::uint64_t steps);
+
   std::vector<HilSplitRobotStats> stats() const;
   // Remote robots declared gone so far.
   std::size_t gone() const;

@@ -1,5 +1,6 @@
 #include "symb/apps/run/remote_robots.hpp"
 
+#include <algorithm>
 #include <sstream>
 
 namespace symb::apps::run {
@@ -51,8 +52,16 @@ RemoteRobots::~RemoteRobots() {
 
 kernel::Status RemoteRobots::wait_for_robots() { return world_->wait_for_robots(options_.wait); }
 
-void RemoteRobots::finish() {
-  for (const auto& s : streams_) (void)s->flush(std::chrono::seconds(2));
+void RemoteRobots::finish(std::uint64_t steps) {
+  world_->say_bye(steps);
+  // A gone robot's reader would never acknowledge: flushing to it would only wait out the timeout.
+  const auto stats = world_->stats();
+  for (std::size_t k = 0; k < streams_.size(); ++k) {
+    const bool gone = std::any_of(stats.begin(), stats.end(), [&](const sim::HilSplitRobotStats& s) {
+      return s.gone && s.robot == options_.robots[k];
+    });
+    if (!gone) (void)streams_[k]->flush(std::chrono::seconds(2));
+  }
   for (const auto& s : streams_) s->finish_sending();
 }
 

@@ -42,9 +42,9 @@ class RemoteRobots {
 
   // The hello, until every robot's process answered (options.wait).
   kernel::Status wait_for_robots();
-  // After the run: what was sent is acknowledged, then the streams' writers go, so the robots'
-  // processes see the world leave (and end) rather than get lost.
-  void finish();
+  // After the run of `steps` steps: the bye frame to every robot not gone, acknowledged, then the
+  // streams' writers go; the robots' processes end.
+  void finish(std::uint64_t steps);
   // summary.txt's part: the bus, each remote robot's figures, the ones gone and why.
   std::string summary() const;
   std::size_t gone() const { return world_->gone(); }

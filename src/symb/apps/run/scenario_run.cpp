@@ -337,7 +337,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   running = false;
   session->stop();
   if (remote) {
-    remote->finish();
+    remote->finish(recorder.steps());
     result.remote = remote->summary();
     result.remote_gone = remote->gone();
   }

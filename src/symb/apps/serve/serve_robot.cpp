@@ -1,6 +1,7 @@
 // `symb serve --scenario S --robot NAME`: one robot of a split world (serve_command.hpp).
 #include <chrono>
 #include <string>
+#include <thread>
 
 #include "symb/apps/run/remote_robots.hpp"
 #include "symb/apps/serve/serve_command.hpp"
@@ -50,12 +51,8 @@ int run_serve_robot(const ServeRobotArgs& args, const CliContext& ctx) {
   bool ok = true;
   for (;;) {
     auto served = robot.serve(std::chrono::milliseconds(100));
-    if (!served) {
-      const io::DdsPeerState peer = s.peer();
-      ok = peer == io::DdsPeerState::kLeft && robot.system() != nullptr;
-      ended = peer == io::DdsPeerState::kLeft   ? "the world ended the run"
-              : peer == io::DdsPeerState::kLost ? "the world is gone (" + served.error() + ")"
-                                                : served.error();
+    if (robot.ended()) {
+      ended = "the world ended the run after " + std::to_string(*robot.ended()) + " steps";
       break;
     }
     if (robot.system() == nullptr && std::chrono::steady_clock::now() - started > args.wait) {
@@ -63,6 +60,18 @@ int run_serve_robot(const ServeRobotArgs& args, const CliContext& ctx) {
       ended = "no world came within " + std::to_string(kernel::to_milliseconds(args.wait)) + " ms";
       break;
     }
+    if (served) continue;
+    if (robot.system() == nullptr && !s.is_open()) {
+      // Not the world yet (a foreign writer that came and went): wait on for the world's hello.
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
+    const io::DdsPeerState peer = s.peer();
+    ok = false;
+    ended = peer == io::DdsPeerState::kLeft || peer == io::DdsPeerState::kLost
+                ? "the world is gone without ending the run (" + served.error() + ")"
+                : served.error();
+    break;
   }
   const sim::HilSplitRobotBoardStats st = robot.stats();
   ctx.out << who << ": " << ended << " at " << std::chrono::duration<double>(robot.now()).count() << " s of node time\n"

@@ -82,9 +82,10 @@ void on_peer_liveliness(dds_entity_t, const dds_liveliness_changed_status_t stat
     } else if (status.alive_count_change < 0) {  // its writer was deleted: a clean end
       ++s.counts.peers_left;
       if (status.alive_count == 0 && s.peer != DdsPeerState::kLost) s.peer = DdsPeerState::kLeft;
-    } else if (status.alive_count > 0 && s.peer == DdsPeerState::kWaiting) {
-      s.peer = DdsPeerState::kAlive;
     }
+    // Any live writer is a peer: one that comes after another left (a foreign writer, a restarted
+    // process) opens the stream again, as a serial line's device that comes back does.
+    if (status.alive_count > 0) s.peer = DdsPeerState::kAlive;
   }
   s.cv.notify_all();
 }
@@ -169,7 +170,7 @@ void DdsFrameStream::close() {
 
 bool DdsFrameStream::is_open() const {
   std::lock_guard lock(state_->mu);
-  return !state_->closed;
+  return !state_->closed && state_->peer != DdsPeerState::kLost && state_->peer != DdsPeerState::kLeft;
 }
 
 kernel::Result<std::size_t> DdsFrameStream::read_some(std::span<std::byte> buf, kernel::Duration timeout) {
@@ -184,10 +185,7 @@ kernel::Result<std::size_t> DdsFrameStream::read_some(std::span<std::byte> buf, 
     return n;
   }
   if (s.closed) return kernel::Error{name() + ": closed"};
-  if (gone()) {
-    s.closed = true;
-    return kernel::Error{std::string("the peer on ") + read_topic_ + " " + to_string(s.peer)};
-  }
+  if (gone()) return kernel::Error{std::string("the peer on ") + read_topic_ + " " + to_string(s.peer)};
   return std::size_t{0};
 }
 

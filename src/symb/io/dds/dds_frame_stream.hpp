@@ -11,9 +11,11 @@
 //
 // The peer (the writers on the read topic) is watched by liveliness: it is kAlive once one
 // asserted it, kLost when its lease ran out (the process was killed, hung or cut off) and kLeft
-// when its writer was deleted (the process ended its run and flushed). Once the peer is gone and
-// everything it sent was read, read_some() fails with the reason and the stream is closed: the
-// end of stream a serial line reports when its other end goes away.
+// when its writer was deleted (the process ended). Once the peer is gone and everything it sent
+// was read, read_some() fails with the reason and is_open() is false: the end of stream a serial
+// line reports when its other end goes away. A writer that comes later (a restarted process, or a
+// foreign one that came and went first) makes the stream open again, as a line's device that comes
+// back does; the protocol above decides what a gone peer means.
 //
 // Threads: one reader and one writer at a time, as io::IOStream says; DDS's listener threads only
 // fill the stream's buffer. DdsFrameLinks holds the process's participant: it outlives its streams
@@ -80,8 +82,8 @@ class DdsFrameStream final : public IOStream {
   struct State;  // shared with DDS's listener threads (defined in the .cpp)
   ~DdsFrameStream() override;
 
-  // Nothing to open: the DDS entities exist from the start. A stream closed by close() or by its
-  // peer's going stays closed.
+  // Nothing to open: the DDS entities exist from the start. A stream closed by close() stays
+  // closed.
   kernel::Status open() override;
   void close() override;
   bool is_open() const override;
