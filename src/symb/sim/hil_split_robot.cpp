@@ -63,9 +63,9 @@ std::string describe(const HilSplitRobotBoardStats& s) {
          "); answers " + std::to_string(s.answers) + " (" + std::to_string(s.write_errors) + " not taken)";
 }
 
-HilSplitRobot::HilSplitRobot(const Scenario& scenario, std::size_t index, std::shared_ptr<io::IOStream> port,
+HilSplitRobot::HilSplitRobot(Scenario scenario, std::size_t index, std::shared_ptr<io::IOStream> port,
                              HilSplitRobotOptions options)
-    : scenario_(scenario),
+    : scenario_(std::move(scenario)),
       index_(index),
       port_(std::move(port)),
       options_(std::move(options)),
@@ -104,7 +104,7 @@ kernel::Result<std::unique_ptr<HilSplitRobot>> HilSplitRobot::create(const Scena
   for (const PluginRef& p : scenario.plugins) {
     auto lib = io::PluginLibrary::open(p.path);
     if (!lib) return kernel::Error{p.where.str() + ": " + lib.error()};
-    r->extra_types_.push_back(
+    r->extra_types_.emplace_back(
         [lib = std::move(lib).value()](os::TaskTypeRegistry& reg) { return lib->register_into(reg); });
   }
   {

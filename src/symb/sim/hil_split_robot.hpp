@@ -108,8 +108,7 @@ class HilSplitRobot {
 
  private:
   class Clock;
-  HilSplitRobot(const Scenario& scenario, std::size_t index, std::shared_ptr<io::IOStream> port,
-                HilSplitRobotOptions options);
+  HilSplitRobot(Scenario scenario, std::size_t index, std::shared_ptr<io::IOStream> port, HilSplitRobotOptions options);
   kernel::Status handle(std::span<const std::byte> payload, std::size_t& handled);
   kernel::Status build(std::uint64_t seed);
   void answer(std::uint32_t seq);

@@ -104,7 +104,7 @@ void HilSplitWorld::send(Robot& r, const std::vector<std::byte>& payload) {
   ++(ok ? r.stats.frames_sent : r.stats.write_errors);
 }
 
-void HilSplitWorld::lose(Robot& r, std::uint64_t step, std::string why) {
+void HilSplitWorld::lose(Robot& r, std::uint64_t step, const std::string& why) {
   (void)session_.runner().wheels(r.stats.index)->set(std::array<float, 2>{0.0f, 0.0f});
   {
     std::lock_guard lock(stats_mu_);

@@ -112,7 +112,7 @@ class HilSplitWorld {
   void send(Robot& r, const std::vector<std::byte>& payload);
   // Reads what robot r sent for up to `wait`; applies an answer to `step` (returns true then).
   bool read(Robot& r, kernel::Duration wait, std::uint32_t step);
-  void lose(Robot& r, std::uint64_t step, std::string why);
+  void lose(Robot& r, std::uint64_t step, const std::string& why);
   void event(const std::string& text);
 
   ScenarioSession& session_;
