@@ -208,7 +208,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (!created) return Error{created.error()};
   std::unique_ptr<sim::ScenarioSession> session = std::move(created).value();
   result.seed = session->seed();
-  std::unique_ptr<RemoteRobots> remote;  // goes before the session: it observes the session's runner
+  std::unique_ptr<RemoteRobots> remote;  // destroyed before the session, whose runner it observes
   if (!options.remote.robots.empty()) {
     auto attached = RemoteRobots::attach(*session, options.remote, options.on_notice);
     if (!attached) return Error{attached.error()};
