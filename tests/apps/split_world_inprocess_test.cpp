@@ -232,6 +232,55 @@ TEST(HilSplit, WhatCannotRunApartIsRefusedAtItsPlace) {
       << unknown.error();
 }
 
+// The robot's side fed frame by frame: what it refuses, and why.
+TEST(HilSplit, ARobotRefusesAnotherScenariosHelloAndASecondRun) {
+  const sim::Scenario sc = swarm();
+  const auto send = [](io::IOStream& to, const std::vector<std::byte>& payload) {
+    std::vector<std::byte> frame;
+    io::encode_frame(payload, frame);
+    ASSERT_TRUE(to.write_all(frame).ok());
+  };
+  {
+    auto [world, end] = io::make_loopback_pair("other");
+    auto robot = sim::HilSplitRobot::create(sc, "thymio4", std::shared_ptr<io::IOStream>(std::move(end)));
+    ASSERT_TRUE(robot.ok()) << robot.error();
+    sim::HilSplitSensors early;
+    early.seq = 1;
+    send(*world, sim::encode_split_sensors_payload(early));  // before any hello: nothing to run it on
+    send(*world, sim::encode_hello_payload({7, 4, 13}));     // a world of 13 robots
+    const auto served = (*robot)->serve(1s);
+    ASSERT_FALSE(served.ok());
+    EXPECT_NE(served.error().find("the world's scenario has 13 robots and asks for robot 4"), std::string::npos)
+        << served.error();
+    EXPECT_NE(served.error().find("do both read the same scenario?"), std::string::npos) << served.error();
+    EXPECT_EQ((*robot)->stats().malformed, 1u);
+    EXPECT_EQ((*robot)->system(), nullptr) << "nothing built";
+  }
+  auto [world, end] = io::make_loopback_pair("again");
+  auto robot = sim::HilSplitRobot::create(sc, "thymio4", std::shared_ptr<io::IOStream>(std::move(end)));
+  ASSERT_TRUE(robot.ok()) << robot.error();
+  send(*world, sim::encode_hello_payload({99, 4, 12}));
+  ASSERT_TRUE((*robot)->serve(1s).ok());
+  EXPECT_EQ((*robot)->seed(), std::optional<std::uint64_t>(99)) << "built with the world's seed, not the file's";
+  ASSERT_NE((*robot)->system(), nullptr);
+  for (std::uint32_t k : {1u, 2u, 2u, 5u}) {  // a repeated frame and two lost ones
+    sim::HilSplitSensors f;
+    f.seq = k;
+    send(*world, sim::encode_split_sensors_payload(f));
+  }
+  for (int k = 0; k < 4; ++k) ASSERT_TRUE((*robot)->serve(100ms).ok());
+  auto st = (*robot)->stats();
+  EXPECT_EQ(st.frames, 3u);
+  EXPECT_EQ(st.out_of_order, 1u);
+  EXPECT_EQ(st.missed, 2u);
+  EXPECT_EQ((*robot)->now(), sc.control_period * 6 - kernel::Duration{1}) << "run up to just before tick 6";
+  send(*world, sim::encode_hello_payload({99, 4, 12}));
+  const auto again = (*robot)->serve(1s);
+  ASSERT_FALSE(again.ok());
+  EXPECT_NE(again.error().find("the world started a new run: this process serves one run"), std::string::npos)
+      << again.error();
+}
+
 TEST(DdsFrameStream, CarriesBytesBothWaysAndTellsAPeerThatLeft) {
   const std::uint32_t domain = 10 + static_cast<std::uint32_t>(::getpid() % 200);
   auto links = io::DdsFrameLinks::create({domain, "frames_" + std::to_string(::getpid()), 300ms});
