@@ -45,6 +45,15 @@ constexpr OptionSpec kOptions[] = {
     {"--record-every", "N", "record every N-th step (steps.csv, steps.h5; the same as --csv-every)"},
     {"--record-robots", "LIST", "2D: record only these robots' rows: names and ranges, e.g. t0..t99,t500"},
     {"--plugin", "PATH", "load a task-type plugin (a shared library; docs/plugins.md); may be repeated"},
+    {"--bus", "KIND", "with --remote: the bus between the processes, dds (the only one; docs/bus.md)"},
+    {"--remote", "NAMES",
+     "2D: these robots' nodes run in other processes (symb serve --scenario S --robot NAME), in lockstep; "
+     "comma-separated"},
+    {"--domain", "N", "--remote: the DDS domain id, 0..232 (default 0)"},
+    {"--prefix", "NAME", "--remote: the first name of every topic, rt/NAME/... (default symb)"},
+    {"--lease", "D", "--remote: a robot process silent this long is lost (default 1s)"},
+    {"--remote-wait", "D", "--remote: how long to wait for the robots' processes to answer (default 10s)"},
+    {"--answer-wait", "D", "--remote: how long a step waits for a robot's answer before it is gone (default 2s)"},
     {"--print-hash", "", "print 'trajectory-hash: <16 hex digits>' on stdout"},
     {"--quiet", "", "no progress line and no summary"},
     {"--help", "", "this help"},
@@ -74,6 +83,10 @@ void print_help(std::ostream& out) {
       << "robot_stats.csv and robot_stats.svg instead of trajectory.svg.\n"
       << "Ctrl-C stops the run early: the files are written for what was run (summary.txt says\n"
       << "where it stopped) and the exit status is 130.\n\n"
+      << "--bus dds --remote NAMES runs those robots' nodes in other processes (symb serve --scenario\n"
+      << "SCENARIO --robot NAME, started before or after), the world and the other robots here, in\n"
+      << "lockstep: the same run as in one process (docs/bus.md). A robot whose process dies is reported,\n"
+      << "its wheels stop and the run goes on; the exit status is then 1.\n\n"
       << "Example: symb run scenarios/maze.yaml --out out/maze\n";
 }
 
@@ -124,6 +137,7 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
   options.scenario_path = std::string(parsed.positional.front());
 
   bool print_hash = false, quiet = false, speed_given = false;
+  std::string bus, remote_option;            // --bus, and the last option that is --remote's alone
   std::optional<std::uint32_t> every_given;  // --csv-every and --record-every, which must agree
   std::optional<std::string> token, shell_robot, genome_controller, view_robot;
   for (const ParsedOption& o : opts) {
@@ -191,12 +205,61 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
     } else if (o.name == "--plugin") {
       if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--plugin: empty path"});
       options.plugins.emplace_back(o.value);
+    } else if (o.name == "--bus") {
+      if (o.value != "dds")
+        return usage_error(ctx, kCommand, UsageError{"--bus " + quote_arg(o.value) + ": the only bus is dds"});
+      bus = o.value;
+    } else if (o.name == "--remote") {
+      std::string_view rest = o.value;
+      for (;;) {
+        const auto comma = rest.find(',');
+        const std::string name(rest.substr(0, comma));
+        if (!os::is_valid_name(name))
+          return usage_error(
+              ctx, kCommand,
+              UsageError{"--remote " + quote_arg(o.value) + ": " + quote_arg(name) + " cannot name a robot"});
+        auto& names = options.remote.robots;
+        if (std::find(names.begin(), names.end(), name) != names.end())
+          return usage_error(ctx, kCommand, UsageError{"--remote " + quote_arg(o.value) + ": " + name + " twice"});
+        names.push_back(name);
+        if (comma == std::string_view::npos) break;
+        rest = rest.substr(comma + 1);
+      }
+    } else if (o.name == "--domain") {
+      auto v = parse_count("--domain", o.value, 0, 232);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      options.remote.dds.domain = static_cast<std::uint32_t>(std::get<std::uint64_t>(v));
+      remote_option = o.name;
+    } else if (o.name == "--prefix") {
+      if (!os::is_valid_name(o.value))
+        return usage_error(ctx, kCommand, UsageError{"--prefix " + quote_arg(o.value) + ": not a name"});
+      options.remote.dds.prefix = o.value;
+      remote_option = o.name;
+    } else if (o.name == "--lease" || o.name == "--remote-wait" || o.name == "--answer-wait") {
+      auto v = parse_duration(o.name, o.value, std::chrono::hours(1));
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      const kernel::Duration d = std::get<kernel::Duration>(v);
+      if (d <= kernel::Duration{0})
+        return usage_error(ctx, kCommand, UsageError{std::string(o.name) + " " + o.value + ": must be positive"});
+      (o.name == "--lease"         ? options.remote.dds.lease
+       : o.name == "--remote-wait" ? options.remote.wait
+                                   : options.remote.answer_wait) = d;
+      remote_option = o.name;
     } else if (o.name == "--print-hash") {
       print_hash = true;
     } else if (o.name == "--quiet") {
       quiet = true;
     }
   }
+  if (!options.remote.robots.empty() && bus.empty())
+    return usage_error(ctx, kCommand, UsageError{"--remote needs --bus dds (the bus between the processes)"});
+  if (!bus.empty() && options.remote.robots.empty())
+    return usage_error(ctx, kCommand, UsageError{"--bus " + bus + " carries remote robots: name them with --remote"});
+  if (!remote_option.empty() && options.remote.robots.empty())
+    return usage_error(ctx, kCommand, UsageError{remote_option + " is for --remote"});
+  if (!options.remote.robots.empty() && options.realtime)
+    return usage_error(ctx, kCommand,
+                       UsageError{"--remote runs in lockstep with the world's virtual time, not with --realtime"});
   if (options.realtime && options.threads > 1)
     return usage_error(ctx, kCommand, UsageError{"--threads is for virtual time; --realtime runs a thread per task"});
   if (options.realtime && speed_given)
@@ -267,6 +330,11 @@ int run_run_command(std::span<const std::string_view> args, const CliContext& ct
     where << "results in " << r.out_dir.string() << "/\n";
     for (const auto& f : r.files) where << "  " << f.string() << "\n";
     where << std::flush;
+  }
+  if (r.remote_gone > 0) {
+    ctx.err << kCommand << ": " << r.remote_gone << " remote robot" << (r.remote_gone == 1 ? "" : "s")
+            << " gone during the run (stopped there; summary.txt says which, when and why)\n";
+    if (!r.interrupted) return kExitFailure;
   }
   return r.interrupted ? kExitInterrupted : kExitOk;
 }

@@ -60,6 +60,7 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
     s << "robots' nodes: " << fixed(100 * r.nodes_share, 0) << "% of the wall clock (the part --threads spreads)\n";
   if (!r.heap.empty()) s << r.heap << "\n";
   s << "trajectory hash: " << hex64(r.trajectory_hash) << "\n";
+  s << r.remote;
   const RecordFigures& rec = r.recording;
   if (!rec.format.empty())
     s << "recording: " << rec.format << ", " << rec.recorded_steps << " steps x " << rec.recorded_robots << " robots, "
@@ -189,6 +190,11 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     session_options.task_types.push_back(
         [lib = std::move(lib).value()](os::TaskTypeRegistry& r) { return lib->register_into(r); });
   }
+  if (!options.remote.robots.empty() && (is_organism || options.realtime))
+    return Error{std::string("--remote: ") +
+                 (is_organism ? scenario.file + ": a 3D organism's modules run in one process "
+                                                "(one module can run on a board: symb sim --board)"
+                              : "remote robots run in lockstep with the world's virtual time, not with --realtime")};
   if (is_organism && (!options.plugins.empty() || !scenario.plugins.empty()))
     return Error{scenario.file + ": plugins are for 2D scenarios (a 3D organism registers only the built-in types)"};
   if (is_organism) {
@@ -204,6 +210,12 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (!created) return Error{created.error()};
   std::unique_ptr<sim::ScenarioSession> session = std::move(created).value();
   result.seed = session->seed();
+  std::unique_ptr<RemoteRobots> remote;  // destroyed before the session, whose runner it observes
+  if (!options.remote.robots.empty()) {
+    auto attached = RemoteRobots::attach(*session, options.remote, options.on_notice);
+    if (!attached) return Error{attached.error()};
+    remote = std::move(attached).value();
+  }
   if (write_files) {
     std::error_code ec;
     fs::create_directories(result.out_dir, ec);
@@ -304,6 +316,8 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
     if (options.on_notice) options.on_notice("view: " + live->url());
   }
 
+  if (remote)
+    if (auto st = remote->wait_for_robots(); !st) return Error{st.error()};
   // Built: a big swarm's heap goes onto huge pages before the first step (not timed as stepping).
   if (lockstep != nullptr && session->robot_count() >= kParallelRobots) result.heap = back_heap_with_huge_pages().note;
   const auto wall_start = std::chrono::steady_clock::now();
@@ -326,6 +340,11 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   if (live) live->finish();
   running = false;
   session->stop();
+  if (remote) {
+    remote->finish(recorder.steps());
+    result.remote = remote->summary();
+    result.remote_gone = remote->gone();
+  }
   ordered.flush();
   result.wall_seconds = wall_seconds();
   live_view.store(nullptr, std::memory_order_release);

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "symb/apps/run/remote_robots.hpp"
 #include "symb/apps/run/run_recorder.hpp"
 #include "symb/apps/run/run_recording.hpp"
 #include "symb/apps/view/view_request.hpp"
@@ -77,6 +78,8 @@ struct RunOptions {
   RecordOptions record;
   // Task-type plugins to load before the scenario is checked (--plugin), besides its own `plugins:`.
   std::vector<std::string> plugins;
+  // 2D virtual time: robots whose nodes run in other processes (--bus dds --remote; remote_robots.hpp).
+  RemoteRobotsOptions remote;
   std::function<void(const RunProgress&)> on_progress;
   std::function<void(const std::string&)> on_notice;  // "shell: ...", "view: ..." for the person
   // Polled between slices of the run (at most 20 ms of wall clock apart while pacing, one
@@ -121,6 +124,9 @@ struct RunResult {
   RecordFigures recording;
   // --view: the frames queued for the pages, sent, and dropped because a page did not keep up.
   std::uint64_t view_frames = 0, view_frames_sent = 0, view_frames_dropped = 0;
+  // --remote: summary.txt's lines on the remote robots (RemoteRobots::summary), and how many were lost.
+  std::string remote;
+  std::size_t remote_gone = 0;
 };
 
 kernel::Result<RunResult> run_scenario(const RunOptions& options);

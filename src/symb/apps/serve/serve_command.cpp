@@ -34,6 +34,11 @@ constexpr OptionSpec kServeOptions[] = {
     {"--link-timeout", "DURATION", "how long to wait for the peers before running anyway (default 10s)"},
     {"--seed", "N", "the node's seed (default 1)"},
     {"--probes", "FILE", "write every probe sample of the node's tasks to FILE (CSV, as symb run's probes.csv)"},
+    {"--scenario", "FILE",
+     "serve one robot of this scenario's world, run by symb run --bus dds --remote (docs/bus.md)"},
+    {"--robot", "NAME", "with --scenario: the robot whose node this process runs"},
+    {"--wait", "DURATION", "with --scenario: how long to wait for the world (default 60s)"},
+    {"--plugin", "PATH", "with --scenario: a task-type plugin, as symb run --plugin (repeatable)"},
     {"--help", "", "print this help"},
 };
 
@@ -42,7 +47,11 @@ void print_help(std::ostream& out) {
       << "One node in its own process, joined to the nodes of other processes over Cyclone DDS\n"
       << "(docs/bus.md). Every process declares the same --hook list and builds the ends it holds.\n\n"
       << "Options:\n"
-      << describe_options(kServeOptions) << "\nExample (two terminals):\n"
+      << describe_options(kServeOptions) << "\n"
+      << "With --scenario and --robot it serves one robot of a split world instead: the robot's node,\n"
+      << "built as symb run builds it, answers the world of `symb run SCENARIO --bus dds --remote NAME`\n"
+      << "in lockstep (the same --domain and --prefix), until that run ends.\n"
+      << "\nExample (two terminals):\n"
       << "  symb serve --node m1 --exec 'create oscillator osc id=0 coupling=4' --hook 'm1/osc>m2/osc:1' "
          "--hook 'm2/osc>m1/osc:1'\n"
       << "  symb serve --node m2 --exec 'create oscillator osc id=1 coupling=4' --hook 'm1/osc>m2/osc:1' "
@@ -88,9 +97,28 @@ int run_serve_command(std::span<const std::string_view> args, const CliContext& 
   kernel::Duration duration = 10s, link_timeout = 10s;
   std::uint64_t seed = 1;
   std::string probes_path;
+  ServeRobotArgs robot_args;
+  std::string node_option;  // the last option that is --node's alone
   constexpr kernel::Duration kMax = std::chrono::hours(24 * 365);
   for (const ParsedOption& o : a.options) {
-    if (o.name == "--node") {
+    if (o.name == "--exec" || o.name == "--hook" || o.name == "--duration" || o.name == "--link-timeout" ||
+        o.name == "--probes" || o.name == "--seed" || o.name == "--node")
+      node_option = o.name;
+    if (o.name == "--scenario") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--scenario: empty file name"});
+      robot_args.scenario = o.value;
+    } else if (o.name == "--robot") {
+      if (!os::is_valid_name(o.value))
+        return usage_error(ctx, kCommand, UsageError{"--robot " + quote_arg(o.value) + ": cannot name a robot"});
+      robot_args.robot = o.value;
+    } else if (o.name == "--wait") {
+      auto v = parse_duration("--wait", o.value, kMax);
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      robot_args.wait = std::get<kernel::Duration>(v);
+    } else if (o.name == "--plugin") {
+      if (o.value.empty()) return usage_error(ctx, kCommand, UsageError{"--plugin: empty path"});
+      robot_args.plugins.push_back(o.value);
+    } else if (o.name == "--node") {
       name = o.value;
     } else if (o.name == "--bus") {
       if (o.value != "dds") return usage_error(ctx, kCommand, UsageError{"--bus " + quote_arg(o.value) + ": only dds"});
@@ -122,7 +150,18 @@ int run_serve_command(std::span<const std::string_view> args, const CliContext& 
       seed = std::get<std::uint64_t>(v);
     }
   }
-  if (name.empty()) return usage_error(ctx, kCommand, UsageError{"--node NAME is required"});
+  if (!robot_args.scenario.empty() || !robot_args.robot.empty()) {
+    if (robot_args.scenario.empty()) return usage_error(ctx, kCommand, UsageError{"--robot needs --scenario FILE"});
+    if (robot_args.robot.empty()) return usage_error(ctx, kCommand, UsageError{"--scenario needs --robot NAME"});
+    if (!node_option.empty())
+      return usage_error(ctx, kCommand,
+                         UsageError{node_option + " is for --node; a scenario's robot is built from the scenario"});
+    robot_args.dds = {bus_options.domain, bus_options.prefix, bus_options.lease};
+    return run_serve_robot(robot_args, ctx);
+  }
+  if (!robot_args.plugins.empty()) return usage_error(ctx, kCommand, UsageError{"--plugin is for --scenario"});
+  if (name.empty())
+    return usage_error(ctx, kCommand, UsageError{"--node NAME is required (or --scenario FILE --robot NAME)"});
 
   os::TaskTypeRegistry types;
   if (auto st = control::register_control_task_types(types, {}); !st) {

@@ -10,6 +10,7 @@
 #include <dds/dds.h>
 
 #include "symb/io/bytes.hpp"
+#include "symb/io/dds/dds_participant.hpp"
 #include "symb/io/frame_codec.hpp"
 #include "symb/os/node.hpp"
 
@@ -18,19 +19,11 @@
 namespace symb::io {
 namespace {
 
-constexpr std::uint32_t kMaxDomain = 232;  // Cyclone's highest domain id with the default ports
 constexpr int kTakeBatch = 32;
 constexpr std::uint64_t kLoggedPerCause = 3;  // garbage of one cause logged per hook; the rest counted
 
-std::string dds_error(dds_return_t rc) { return std::string(dds_strretcode(rc)); }
-
-// DDS topic names take letters, digits, '_' and '/': a task name's '.' and '-' become '_'.
-std::string topic_part(std::string_view s) {
-  std::string out(s);
-  for (char& c : out)
-    if (c == '.' || c == '-') c = '_';
-  return out;
-}
+std::string dds_error(dds_return_t rc) { return dds::error_text(rc); }
+using dds::topic_part;
 
 struct Name {
   std::string_view node, task;
@@ -261,9 +254,9 @@ DdsBus::DdsBus(std::vector<os::Node*> nodes, DdsBusOptions options)
     : options_(std::move(options)), nodes_(std::move(nodes)), core_(std::make_shared<Core>()) {}
 
 kernel::Result<std::unique_ptr<DdsBus>> DdsBus::create(std::vector<os::Node*> nodes, DdsBusOptions options) {
-  if (options.domain > kMaxDomain)
+  if (options.domain > dds::kMaxDomain)
     return kernel::Error{"dds bus: domain " + std::to_string(options.domain) + " is above " +
-                         std::to_string(kMaxDomain)};
+                         std::to_string(dds::kMaxDomain)};
   if (options.prefix.empty()) return kernel::Error{"dds bus: empty topic prefix"};
   if (options.lease <= kernel::Duration{0}) return kernel::Error{"dds bus: the liveliness lease must be positive"};
   for (std::size_t i = 0; i < nodes.size(); ++i) {
@@ -273,21 +266,12 @@ kernel::Result<std::unique_ptr<DdsBus>> DdsBus::create(std::vector<os::Node*> no
         return kernel::Error{"dds bus: two nodes named '" + nodes[i]->name() + "'"};
   }
   std::unique_ptr<DdsBus> bus(new DdsBus(std::move(nodes), std::move(options)));
-  // The participant's lease bounds how long a killed peer's readers stay matched (Cyclone's
-  // default is 10 s): a writer to a dead reader would fill its history meanwhile. Set once per
-  // process and domain; a second bus on the domain shares the first one's.
-  // Three writer leases: a killed peer's writers then miss their liveliness lease first (counted
-  // lost), before its participant expires and takes them away (which looks like a clean leave).
-  const auto lease_ms = 3 * std::chrono::duration_cast<std::chrono::milliseconds>(bus->options_.lease).count();
-  const std::string config = "<CycloneDDS><Domain><Discovery><LeaseDuration>" + std::to_string(lease_ms) +
-                             "ms</LeaseDuration></Discovery></Domain></CycloneDDS>";
-  const dds_entity_t domain = dds_create_domain(bus->options_.domain, config.c_str());
-  if (domain > 0) bus->core_->domain = domain;
-  const dds_entity_t p = dds_create_participant(bus->options_.domain, nullptr, nullptr);
-  if (p < 0)
-    return kernel::Error{"dds bus: no participant on domain " + std::to_string(bus->options_.domain) + ": " +
-                         dds_error(p)};
-  bus->core_->participant = p;
+  // The participant's lease (dds_participant.hpp) bounds how long a killed peer's readers stay
+  // matched; set once per process and domain; a second bus on the domain shares the first one's.
+  auto p = dds::open_participant(bus->options_.domain, bus->options_.lease, "dds bus");
+  if (!p) return kernel::Error{p.error()};
+  bus->core_->domain = p->domain;
+  bus->core_->participant = p->participant;
   bus->core_->self = bus->core_;
   // An origin tells one sending end's serials from another's (a restarted process, a second
   // writer on a topic); it must differ across processes, so it does not come from a seed.
@@ -393,11 +377,7 @@ kernel::Result<RemoteHookId> DdsBus::hook(std::string_view sender, std::string_v
   const std::string name = topic(sender, receiver, options.port);
   end->topic = dds_create_topic(core_->participant, &symb_msg_dds__HookFrame__desc, name.c_str(), nullptr, nullptr);
   if (end->topic < 0) return kernel::Error{what + ": DDS topic " + name + ": " + dds_error(end->topic)};
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(0));
-  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
-  dds_qset_liveliness(qos, DDS_LIVELINESS_AUTOMATIC,
-                      std::chrono::duration_cast<std::chrono::nanoseconds>(options_.lease).count());
+  dds_qos_t* qos = dds::reliable_qos(options_.lease);
   const auto fail = [&](std::string text) -> kernel::Result<RemoteHookId> {
     dds_delete_qos(qos);
     if (end->writer > 0) dds_delete(end->writer);

@@ -1,0 +1,90 @@
+#include "symb/sim/hil_split_protocol.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "symb/io/stream_task.hpp"
+
+namespace symb::sim {
+
+namespace {
+
+std::optional<std::uint32_t> whole_number(float v, std::uint32_t most) {
+  if (!std::isfinite(v) || v < 0 || v > static_cast<float>(most) || std::floor(v) != v) return std::nullopt;
+  return static_cast<std::uint32_t>(v);
+}
+
+}  // namespace
+
+std::vector<std::byte> encode_hello_payload(const HilSplitHello& h) {
+  float v[kHilHelloValues];
+  v[0] = 0;
+  for (int k = 0; k < 4; ++k) v[1 + k] = static_cast<float>((h.seed >> (16 * k)) & 0xFFFF);
+  v[5] = static_cast<float>(h.robot);
+  v[6] = static_cast<float>(h.robots);
+  return io::encode_numbers(v);
+}
+
+std::vector<std::byte> encode_bye_payload(std::uint32_t steps) {
+  const float v[2] = {-1.0f, static_cast<float>(steps)};
+  return io::encode_numbers(v);
+}
+
+std::optional<std::uint32_t> decode_bye_payload(std::span<const std::byte> payload) {
+  auto n = io::decode_numbers(payload);
+  if (!n || n->size() != 2 || (*n)[0] != -1.0f) return std::nullopt;
+  return sequence_of((*n)[1]);
+}
+
+std::vector<std::byte> encode_split_sensors_payload(const HilSplitSensors& f) {
+  float v[kHilSplitSensorValues];
+  std::size_t k = 0;
+  v[k++] = static_cast<float>(f.seq);
+  for (float x : f.ir) v[k++] = x;
+  for (float x : f.pose) v[k++] = x;
+  for (float x : f.ground) v[k++] = x;
+  return io::encode_numbers(v);
+}
+
+kernel::Result<HilSplitHello> decode_hello_payload(std::span<const std::byte> payload) {
+  auto n = io::decode_numbers(payload);
+  if (!n) return kernel::Error{"hello frame: not a number frame (" + std::to_string(payload.size()) + " bytes)"};
+  if (n->size() != kHilHelloValues)
+    return kernel::Error{"hello frame: expected " + std::to_string(kHilHelloValues) + " numbers, got " +
+                         std::to_string(n->size())};
+  if ((*n)[0] != 0) return kernel::Error{"hello frame: sequence number " + std::to_string((*n)[0]) + ", not 0"};
+  HilSplitHello h;
+  for (int k = 0; k < 4; ++k) {
+    const auto piece = whole_number((*n)[1 + k], 0xFFFF);
+    if (!piece) return kernel::Error{"hello frame: seed piece " + std::to_string(k) + " is not a 16-bit integer"};
+    h.seed |= static_cast<std::uint64_t>(*piece) << (16 * k);
+  }
+  const auto robot = whole_number((*n)[5], kHilMaxSequence), robots = whole_number((*n)[6], kHilMaxSequence);
+  if (!robot || !robots || *robot >= *robots)
+    return kernel::Error{"hello frame: robot index " + std::to_string((*n)[5]) + " of " + std::to_string((*n)[6])};
+  h.robot = *robot;
+  h.robots = *robots;
+  return h;
+}
+
+kernel::Result<HilSplitSensors> decode_split_sensors_payload(std::span<const std::byte> payload) {
+  auto n = io::decode_numbers(payload);
+  if (!n) return kernel::Error{"sensor frame: not a number frame (" + std::to_string(payload.size()) + " bytes)"};
+  if (n->size() != kHilSplitSensorValues)
+    return kernel::Error{"sensor frame: expected " + std::to_string(kHilSplitSensorValues) + " numbers, got " +
+                         std::to_string(n->size())};
+  const auto seq = sequence_of((*n)[0]);
+  if (!seq || *seq == 0) return kernel::Error{"sensor frame: bad sequence number " + std::to_string((*n)[0])};
+  HilSplitSensors f;
+  f.seq = *seq;
+  std::size_t k = 1;
+  for (float& x : f.ir) x = (*n)[k++];
+  for (float& x : f.pose) x = (*n)[k++];
+  for (float& x : f.ground) x = (*n)[k++];
+  for (std::size_t i = 1; i < n->size(); ++i)
+    if (std::isnan((*n)[i]))
+      return kernel::Error{"sensor frame " + std::to_string(f.seq) + ": value " + std::to_string(i) + " is NaN"};
+  return f;
+}
+
+}  // namespace symb::sim

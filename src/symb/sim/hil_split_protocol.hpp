@@ -1,0 +1,62 @@
+// The frames of a split world (hil_split_world.hpp, docs/bus.md "A world split over processes"):
+// the 2D hardware-in-the-loop protocol (hil_protocol.hpp) with the two things a robot's node in
+// another process needs beyond a board's IR, both io number frames:
+//
+//   world -> robot   hello    [0, seed0, seed1, seed2, seed3, robot index, robot count]
+//                             the run's seed in four 16-bit pieces (a float32 carries 24 bits
+//                             exactly), repeated every period until the robot answers
+//   world -> robot   sensors  [seq, ir0..ir6, x, y, heading, ground_left, ground_right]
+//                             after world step seq (1, 2, ...): every reading the world runner
+//                             publishes to a robot's devices, as the floats it publishes
+//   world -> robot   bye      [-1, steps]  the run ended after `steps` steps (a clean end: the
+//                             robot's process ends; without it, a world gone is a world lost)
+//   robot -> world   wheels   [seq, left, right]  (HilWheelFrame): the answer to each sensor
+//                             frame, and to the hello (seq 0) with what the node set before the
+//                             world's first step, which step 1 applies (unlike a board's hello
+//                             answer, which is never applied)
+//
+// The hello is what makes the robot's node the in-process one: it is built with the run's seed
+// (robot_node_seed(seed, index)), and the index and count check that both sides read the same
+// scenario.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "symb/kernel/result.hpp"
+#include "symb/sim/ground_model.hpp"
+#include "symb/sim/hil_protocol.hpp"
+#include "symb/sim/world.hpp"
+
+namespace symb::sim {
+
+inline constexpr std::size_t kHilHelloValues = 7;
+inline constexpr std::size_t kHilSplitSensorValues = 1 + kIrCount + 3 + kGroundCount;
+
+struct HilSplitHello {
+  std::uint64_t seed = 0;
+  std::uint32_t robot = 0;  // its index in the scenario
+  std::uint32_t robots = 0;
+};
+
+struct HilSplitSensors {
+  std::uint32_t seq = 0;
+  IrReadings ir{};
+  float pose[3] = {0, 0, 0};  // x, y (cm), heading (rad): as SimPoseSensor publishes them
+  GroundReadings ground{};
+};
+
+std::vector<std::byte> encode_hello_payload(const HilSplitHello& h);
+std::vector<std::byte> encode_bye_payload(std::uint32_t steps);
+// The steps of a bye frame; nothing when the payload is not one.
+std::optional<std::uint32_t> decode_bye_payload(std::span<const std::byte> payload);
+std::vector<std::byte> encode_split_sensors_payload(const HilSplitSensors& f);
+// Refused: not a number frame, another count, a bad sequence number (a hello's is 0, a sensor
+// frame's at least 1), seed pieces that are not integers in [0, 65535], NaN readings.
+kernel::Result<HilSplitHello> decode_hello_payload(std::span<const std::byte> payload);
+kernel::Result<HilSplitSensors> decode_split_sensors_payload(std::span<const std::byte> payload);
+
+}  // namespace symb::sim

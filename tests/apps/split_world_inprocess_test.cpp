@@ -1,0 +1,338 @@
+// The split world's pieces in one process (docs/bus.md "A world split over processes"), so the
+// sanitizer builds check them too: HilSplitWorld and HilSplitRobot over a loopback stream give the
+// in-process swarm bit for bit; a robot that stops answering is gone after the answer wait and its
+// wheels stop while the run goes on; the split frames refuse what is not theirs; DdsFrameStream
+// carries bytes both ways between two ends of one process and tells a peer that left from one that
+// is alive, a foreign writer that came and went not ending the stream for good.
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "symb/io/dds/dds_frame_stream.hpp"
+#include "symb/io/frame_codec.hpp"
+#include "symb/io/loopback_stream.hpp"
+#include "symb/io/stream_task.hpp"
+#include "symb/kernel/lockstep_executor.hpp"
+#include "symb/sim/hil_split_protocol.hpp"
+#include "symb/sim/hil_split_robot.hpp"
+#include "symb/sim/hil_split_world.hpp"
+#include "symb/sim/scenario_session.hpp"
+
+namespace {
+namespace split_inprocess {
+
+using namespace std::chrono_literals;
+using namespace symb;
+
+const std::string kSwarm = std::string(SYMB_SCENARIO_DIR) + "/swarm.yaml";
+constexpr std::uint64_t kSteps = 60;
+// How long a step waits for an answer in the silent-robot test: a sanitizer build's robot needs more.
+#ifdef SYMB_SANITIZER
+constexpr auto kAnswerWait = 1000ms;
+#else
+constexpr auto kAnswerWait = 100ms;
+#endif
+
+struct Pose3 {
+  double x, y, theta;
+  bool operator==(const Pose3&) const = default;
+};
+using Trajectory = std::vector<std::vector<Pose3>>;  // per step, per robot
+
+sim::Scenario swarm() {
+  auto sc = sim::load_scenario(kSwarm);
+  EXPECT_TRUE(sc.ok()) << sc.error();
+  return std::move(sc).value();
+}
+
+void record(sim::ScenarioSession& s, Trajectory& out) {
+  s.runner().add_observer([&out](const sim::StepRecord& r) {
+    std::vector<Pose3> poses;
+    for (const sim::RobotStep& x : r.robots) poses.push_back({x.state.pose.x, x.state.pose.y, x.state.pose.theta});
+    out.push_back(std::move(poses));
+  });
+}
+
+kernel::LockstepExecutor::Options lockstep(const sim::Scenario& sc) {
+  return {.threads = 1, .quantum = sc.control_period};
+}
+
+Trajectory in_process(const sim::Scenario& sc) {
+  kernel::LockstepExecutor ex(lockstep(sc));
+  auto s = sim::ScenarioSession::create(sc, ex);
+  EXPECT_TRUE(s.ok()) << s.error();
+  Trajectory t;
+  record(**s, t);
+  (*s)->start();
+  ex.run_until(sc.control_period * static_cast<std::int64_t>(kSteps) + 1ms);
+  (*s)->stop();
+  return t;
+}
+
+// A robot's process, as a thread: serves until the world's bye, or until it is told to go silent.
+class RobotThread {
+ public:
+  RobotThread(const sim::Scenario& sc, const std::string& name, std::shared_ptr<io::IOStream> port,
+              std::uint32_t silent_after = 0)
+      : silent_after_(silent_after) {
+    auto r = sim::HilSplitRobot::create(sc, name, std::move(port));
+    EXPECT_TRUE(r.ok()) << r.error();
+    if (!r.ok()) return;
+    robot_ = std::move(r).value();
+    thread_ = std::thread([this] {
+      while (!stop_.load() && !robot_->ended()) {
+        if (silent_after_ > 0 && robot_->stats().last_seq >= silent_after_) {
+          std::this_thread::sleep_for(1ms);
+          continue;
+        }
+        if (!robot_->serve(20ms).ok()) break;
+      }
+    });
+  }
+  ~RobotThread() { join(); }
+  void join() {
+    stop_.store(true);
+    if (thread_.joinable()) thread_.join();
+  }
+  sim::HilSplitRobot& robot() { return *robot_; }
+
+ private:
+  std::uint32_t silent_after_;
+  std::unique_ptr<sim::HilSplitRobot> robot_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+TEST(HilSplit, RemoteRobotsOverStreamsRunTheSwarmBitForBit) {
+  const sim::Scenario sc = swarm();
+  const Trajectory reference = in_process(sc);
+  ASSERT_EQ(reference.size(), kSteps);
+
+  kernel::LockstepExecutor ex(lockstep(sc));
+  auto s = sim::ScenarioSession::create(sc, ex);
+  ASSERT_TRUE(s.ok()) << s.error();
+  Trajectory split;
+  record(**s, split);
+  std::vector<std::unique_ptr<RobotThread>> robots;
+  std::vector<sim::HilSplitWorld::Remote> remotes;
+  for (std::size_t i : {1u, 6u}) {
+    auto [a, b] = io::make_loopback_pair("split" + std::to_string(i));
+    remotes.push_back({i, std::shared_ptr<io::IOStream>(std::move(a))});
+    robots.push_back(std::make_unique<RobotThread>(sc, sc.robots[i].name, std::shared_ptr<io::IOStream>(std::move(b))));
+  }
+  auto world = sim::HilSplitWorld::create(**s, std::move(remotes), {.answer_wait = 10s, .on_event = {}});
+  ASSERT_TRUE(world.ok()) << world.error();
+  ASSERT_TRUE((*world)->wait_for_robots(10s).ok());
+  (*s)->start();
+  ex.run_until(sc.control_period * static_cast<std::int64_t>(kSteps) + 1ms);
+  (*s)->stop();
+  (*world)->say_bye(kSteps);
+  for (auto& r : robots) r->join();
+  ASSERT_EQ(split.size(), kSteps);
+  EXPECT_TRUE(split == reference) << "the split swarm must be the in-process one";
+  for (const auto& st : (*world)->stats()) {
+    EXPECT_FALSE(st.gone) << st.why;
+    EXPECT_EQ(st.applied, kSteps);
+    EXPECT_EQ(st.bad_frames(), 0u);
+  }
+  for (auto& r : robots) {
+    EXPECT_EQ(r->robot().stats().frames, kSteps);
+    EXPECT_EQ(r->robot().ended(), std::optional<std::uint32_t>(kSteps));
+    EXPECT_EQ(r->robot().seed(), std::optional<std::uint64_t>(sc.seed));
+  }
+}
+
+TEST(HilSplit, ARobotThatStopsAnsweringIsGoneItsWheelsStopAndTheRunGoesOn) {
+  const sim::Scenario sc = swarm();
+  kernel::LockstepExecutor ex(lockstep(sc));
+  auto s = sim::ScenarioSession::create(sc, ex);
+  ASSERT_TRUE(s.ok()) << s.error();
+  Trajectory t;
+  record(**s, t);
+  auto [a, b] = io::make_loopback_pair("silent");
+  RobotThread robot(sc, "thymio3", std::shared_ptr<io::IOStream>(std::move(b)), 10);
+  std::vector<std::string> events;
+  auto world = sim::HilSplitWorld::create(
+      **s, {{3, std::shared_ptr<io::IOStream>(std::move(a))}},
+      {.answer_wait = kAnswerWait, .on_event = [&events](const std::string& e) { events.push_back(e); }});
+  ASSERT_TRUE(world.ok()) << world.error();
+  ASSERT_TRUE((*world)->wait_for_robots(10s).ok());
+  (*s)->start();
+  ex.run_until(sc.control_period * static_cast<std::int64_t>(kSteps) + 1ms);
+  (*s)->stop();
+  robot.join();
+  ASSERT_EQ(t.size(), kSteps);
+  const auto st = (*world)->stats().at(0);
+  EXPECT_TRUE(st.gone);
+  EXPECT_EQ(st.gone_at, 11u);  // it answered steps 1 to 10
+  EXPECT_EQ(st.applied, 10u);
+  EXPECT_NE(st.why.find("no answer to step 11 within " + std::to_string(kAnswerWait.count()) + " ms"),
+            std::string::npos)
+      << st.why;
+  EXPECT_EQ((*world)->gone(), 1u);
+  ASSERT_FALSE(events.empty());
+  EXPECT_NE(events.back().find("robot thymio3: gone at step 11"), std::string::npos) << events.back();
+  // From step 12 on its wheels are at rest: it stands where it stood.
+  for (std::uint64_t k = 12; k < kSteps; ++k) EXPECT_TRUE(t[k][3] == t[11][3]) << "step " << k + 1;
+  EXPECT_FALSE(t[5][3] == t[0][3]) << "it drove while it answered";
+}
+
+TEST(HilSplit, TheFramesRefuseWhatIsNotTheirs) {
+  const sim::HilSplitHello h{0x0123'4567'89AB'CDEFull, 4, 12};
+  const auto back = sim::decode_hello_payload(sim::encode_hello_payload(h));
+  ASSERT_TRUE(back.ok()) << back.error();
+  EXPECT_EQ(back->seed, h.seed);
+  EXPECT_EQ(back->robot, 4u);
+  EXPECT_EQ(back->robots, 12u);
+  const auto numbers = [](std::vector<float> v) { return io::encode_numbers(v); };
+  EXPECT_FALSE(sim::decode_hello_payload(numbers({0, 1, 2, 3, 65536, 0, 2})).ok()) << "a seed piece above 16 bits";
+  EXPECT_FALSE(sim::decode_hello_payload(numbers({0, 1, 2, 3, 4, 2, 2})).ok()) << "robot 2 of 2";
+  EXPECT_FALSE(sim::decode_hello_payload(numbers({1, 1, 2, 3, 4, 0, 2})).ok()) << "a hello's seq is 0";
+  sim::HilSplitSensors f;
+  f.seq = 7;
+  f.ir[2] = 1234.5f;
+  f.pose[2] = -3.1f;
+  f.ground[1] = 0.25f;
+  const auto g = sim::decode_split_sensors_payload(sim::encode_split_sensors_payload(f));
+  ASSERT_TRUE(g.ok()) << g.error();
+  EXPECT_EQ(g->seq, 7u);
+  EXPECT_EQ(g->ir[2], 1234.5f);
+  EXPECT_EQ(g->pose[2], -3.1f);
+  EXPECT_EQ(g->ground[1], 0.25f);
+  f.seq = 0;
+  EXPECT_FALSE(sim::decode_split_sensors_payload(sim::encode_split_sensors_payload(f)).ok()) << "seq 0 is the hello's";
+  f.seq = 8;
+  f.pose[0] = std::nanf("");
+  EXPECT_FALSE(sim::decode_split_sensors_payload(sim::encode_split_sensors_payload(f)).ok()) << "NaN";
+  EXPECT_FALSE(sim::decode_split_sensors_payload(numbers({1, 2, 3})).ok()) << "a count of 3";
+  EXPECT_EQ(sim::decode_bye_payload(sim::encode_bye_payload(166)), std::optional<std::uint32_t>(166));
+  EXPECT_FALSE(sim::decode_bye_payload(numbers({1, 166})).has_value());
+}
+
+TEST(HilSplit, WhatCannotRunApartIsRefusedAtItsPlace) {
+  auto medea = sim::load_scenario(std::string(SYMB_SCENARIO_DIR) + "/medea_swarm.yaml");
+  ASSERT_TRUE(medea.ok()) << medea.error();
+  const auto radio = sim::HilSplitWorld::check(*medea, 2);
+  ASSERT_FALSE(radio.ok());
+  EXPECT_NE(radio.error().find("robot thymio2 cannot run in another process: the world has a radio"), std::string::npos)
+      << radio.error();
+  EXPECT_NE(radio.error().find("medea_swarm.yaml:"), std::string::npos) << "at its place: " << radio.error();
+  auto [a, b] = io::make_loopback_pair("refused");
+  const auto unknown = sim::HilSplitRobot::create(swarm(), "thymio12", std::shared_ptr<io::IOStream>(std::move(b)));
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().find("no robot named 'thymio12' (its robots: thymio0, thymio1"), std::string::npos)
+      << unknown.error();
+}
+
+// The robot's side fed frame by frame: what it refuses, and why.
+TEST(HilSplit, ARobotRefusesAnotherScenariosHelloAndASecondRun) {
+  const sim::Scenario sc = swarm();
+  const auto send = [](io::IOStream& to, const std::vector<std::byte>& payload) {
+    std::vector<std::byte> frame;
+    io::encode_frame(payload, frame);
+    ASSERT_TRUE(to.write_all(frame).ok());
+  };
+  {
+    auto [world, end] = io::make_loopback_pair("other");
+    auto robot = sim::HilSplitRobot::create(sc, "thymio4", std::shared_ptr<io::IOStream>(std::move(end)));
+    ASSERT_TRUE(robot.ok()) << robot.error();
+    sim::HilSplitSensors early;
+    early.seq = 1;
+    send(*world, sim::encode_split_sensors_payload(early));  // before any hello: nothing to run it on
+    send(*world, sim::encode_hello_payload({7, 4, 13}));     // a world of 13 robots
+    const auto served = (*robot)->serve(1s);
+    ASSERT_FALSE(served.ok());
+    EXPECT_NE(served.error().find("the world's scenario has 13 robots and asks for robot 4"), std::string::npos)
+        << served.error();
+    EXPECT_NE(served.error().find("do both read the same scenario?"), std::string::npos) << served.error();
+    EXPECT_EQ((*robot)->stats().malformed, 1u);
+    EXPECT_EQ((*robot)->system(), nullptr) << "nothing built";
+  }
+  auto [world, end] = io::make_loopback_pair("again");
+  auto robot = sim::HilSplitRobot::create(sc, "thymio4", std::shared_ptr<io::IOStream>(std::move(end)));
+  ASSERT_TRUE(robot.ok()) << robot.error();
+  send(*world, sim::encode_hello_payload({99, 4, 12}));
+  ASSERT_TRUE((*robot)->serve(1s).ok());
+  EXPECT_EQ((*robot)->seed(), std::optional<std::uint64_t>(99)) << "built with the world's seed, not the file's";
+  ASSERT_NE((*robot)->system(), nullptr);
+  for (std::uint32_t k : {1u, 2u, 2u, 5u}) {  // a repeated frame and two lost ones
+    sim::HilSplitSensors f;
+    f.seq = k;
+    send(*world, sim::encode_split_sensors_payload(f));
+  }
+  for (int k = 0; k < 4; ++k) ASSERT_TRUE((*robot)->serve(100ms).ok());
+  auto st = (*robot)->stats();
+  EXPECT_EQ(st.frames, 3u);
+  EXPECT_EQ(st.out_of_order, 1u);
+  EXPECT_EQ(st.missed, 2u);
+  EXPECT_EQ((*robot)->now(), sc.control_period * 6 - kernel::Duration{1}) << "run up to just before tick 6";
+  send(*world, sim::encode_hello_payload({99, 4, 12}));
+  const auto again = (*robot)->serve(1s);
+  ASSERT_FALSE(again.ok());
+  EXPECT_NE(again.error().find("the world started a new run: this process serves one run"), std::string::npos)
+      << again.error();
+}
+
+TEST(DdsFrameStream, CarriesBytesBothWaysAndTellsAPeerThatLeft) {
+  const std::uint32_t domain = 10 + static_cast<std::uint32_t>(::getpid() % 200);
+  auto links = io::DdsFrameLinks::create({domain, "frames_" + std::to_string(::getpid()), 300ms});
+  ASSERT_TRUE(links.ok()) << links.error();
+  auto world = (*links)->stream("r1", "down", "up");
+  auto robot = (*links)->stream("r1", "up", "down");
+  ASSERT_TRUE(world.ok() && robot.ok());
+  EXPECT_EQ((*world)->write_topic(), "rt/frames_" + std::to_string(::getpid()) + "/r1/down");
+  ASSERT_TRUE((*world)->wait_matched(10s));
+  ASSERT_TRUE((*robot)->wait_matched(10s));
+  const std::vector<std::byte> hello{std::byte{0}, std::byte{1}, std::byte{2}, std::byte{0}};
+  ASSERT_TRUE((*world)->write_all(hello).ok());
+  ASSERT_TRUE((*robot)->write_all(std::vector<std::byte>{std::byte{9}}).ok());
+  const auto read_all = [](io::DdsFrameStream& s, std::size_t n) {
+    std::vector<std::byte> got, buf(16);
+    const auto until = std::chrono::steady_clock::now() + 5s;
+    while (got.size() < n && std::chrono::steady_clock::now() < until) {
+      auto r = s.read_some(buf, 100ms);
+      if (!r.ok()) break;
+      got.insert(got.end(), buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(*r));
+    }
+    return got;
+  };
+  EXPECT_EQ(read_all(**robot, 4), hello);
+  EXPECT_EQ(read_all(**world, 1), std::vector<std::byte>{std::byte{9}});
+  EXPECT_EQ((*robot)->peer(), io::DdsPeerState::kAlive);
+  {
+    // A foreign writer on the robot's input comes and goes: the world's writer is still there.
+    auto foreign = (*links)->stream("r1", "down", "nowhere");
+    ASSERT_TRUE(foreign.ok());
+    ASSERT_TRUE((*foreign)->write_all(hello).ok());
+    EXPECT_TRUE((*foreign)->flush(2s));
+  }
+  EXPECT_EQ(read_all(**robot, 4), hello);
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ((*robot)->peer(), io::DdsPeerState::kAlive);
+  EXPECT_TRUE((*robot)->is_open());
+  // The world finishes: what it wrote is read first, then the stream ends.
+  ASSERT_TRUE((*world)->write_all(hello).ok());
+  EXPECT_TRUE((*world)->flush(2s));
+  (*world)->finish_sending();
+  EXPECT_FALSE((*world)->write_all(hello).ok()) << "this end finished sending";
+  EXPECT_EQ(read_all(**robot, 4), hello);
+  std::vector<std::byte> buf(16);
+  kernel::Result<std::size_t> end = std::size_t{0};
+  for (int k = 0; k < 50 && end.ok(); ++k) end = (*robot)->read_some(buf, 100ms);
+  ASSERT_FALSE(end.ok());
+  EXPECT_NE(end.error().find("left"), std::string::npos) << end.error();
+  EXPECT_FALSE((*robot)->is_open());
+  EXPECT_EQ((*robot)->counts().chunks_read, 3u);
+  EXPECT_EQ((*world)->counts().chunks_written, 2u);
+}
+
+}  // namespace split_inprocess
+}  // namespace
