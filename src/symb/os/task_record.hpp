@@ -25,10 +25,11 @@ struct TaskRecord;
 // One entry of a sender's hook list. The receiver pointer is safe: a task is unhooked from every
 // sender, under that sender's out_mu, before it can be freed. Its traffic is counted at the
 // receiver (InHook, slot `edge` - 1), except what never reaches the receiver: the sends it let
-// pass (disabled, another port), counted here under out_mu.
+// pass (disabled, another port), counted here under out_mu. A hook to a HookSink has no receiver
+// task: `receiver` is null and `edge` is its slot + 1 in the sender's `sinks`.
 struct Hook {
   std::uint32_t serial = 0;
-  std::uint32_t edge = 0;         // the receiver's InputHooks slot + 1
+  std::uint32_t edge = 0;         // the receiver's InputHooks slot + 1 (a sink: the sender's SinkEnd slot + 1)
   std::uint64_t sent_before = 0;  // the sender's `sent` when the hook was made
   std::uint64_t skipped = 0;      // sends not offered: disabled, or another port
   std::int32_t priority = 0;
@@ -52,6 +53,14 @@ struct InHook {
   TrafficCounters traffic;
 
   std::uint64_t in_flight() const { return traffic.attempted - traffic.delivered - traffic.dropped(); }
+};
+
+// The far end of a hook to a HookSink, kept by its sender under out_mu, with the hook's traffic
+// (there is no receiver to count it). `sink` is null in a free slot.
+struct SinkEnd {
+  std::shared_ptr<HookSink> sink;
+  TrafficCounters traffic;
+  bool due = false;  // to be handed the message being sent, once out_mu is released
 };
 
 // A suppression in force at a receiver: hooks below `level` are blocked until `until`.
@@ -129,7 +138,8 @@ struct TaskRecord final : kernel::Activity {
   // Output side: the hooks of this task as a sender.
   kernel::OptionalMutex out_mu;
   std::vector<Hook> hooks;
-  std::atomic<std::uint64_t> sent{0};  // written by the task's own context only
+  std::vector<SinkEnd> sinks;          // of its hooks to HookSinks (slots; see Hook)
+  std::atomic<std::uint64_t> sent{0};  // written under out_mu (its own sends, and Node::send_as)
   // Hops of what this task sends now (see kMaxHops): the handled message's + 1 inside
   // on_message, 0 elsewhere. The task's own context only.
   std::uint16_t next_hops = 0;
