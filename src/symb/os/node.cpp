@@ -488,7 +488,7 @@ Status Node::remove(TaskId id) {
       if (!s.record) continue;
       std::lock_guard out(s.record->out_mu);
       std::erase_if(s.record->hooks, [&](const detail::Hook& h) {
-        if (h.receiver != r) return false;
+        if (h.task() != r) return false;
         end_hook(*s.record, h);
         return true;
       });
@@ -701,7 +701,7 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   {
     std::lock_guard out(s->out_mu);
     for (const detail::Hook& x : s->hooks)
-      if (x.receiver == r && same_hook_key(x.port, h.port))
+      if (x.task() == r && same_hook_key(x.port, h.port))
         return Error{"task '" + s->name + "' is already hooked to '" + r->name + "'" +
                      (h.port < 0 ? std::string() : " on port " + std::to_string(h.port)) + " (hook " +
                      std::to_string(x.serial) + ")"};
@@ -735,16 +735,14 @@ Result<HookId> Node::hook(TaskId sender, std::shared_ptr<HookSink> sink, HookOpt
   h.enabled = options.enabled;
   std::lock_guard out(s->out_mu);
   for (const detail::Hook& x : s->hooks)
-    if (x.receiver == nullptr && s->sinks[x.edge - 1].sink == sink && same_hook_key(x.port, h.port))
+    if (x.to_sink && x.sink->sink == sink && same_hook_key(x.port, h.port))
       return Error{"task '" + s->name + "' is already hooked to sink '" + sink->name() + "'" +
                    (h.port < 0 ? std::string() : " on port " + std::to_string(h.port)) + " (hook " +
                    std::to_string(x.serial) + ")"};
   h.serial = ++hook_serial_;
   h.sent_before = s->sent.load(std::memory_order_relaxed);
-  auto free_slot = std::find_if(s->sinks.begin(), s->sinks.end(), [](const detail::SinkEnd& e) { return !e.sink; });
-  if (free_slot == s->sinks.end()) free_slot = s->sinks.insert(s->sinks.end(), detail::SinkEnd{});
-  *free_slot = detail::SinkEnd{std::move(sink), {}, false};
-  h.edge = static_cast<std::uint32_t>(free_slot - s->sinks.begin()) + 1;
+  h.to_sink = true;
+  h.sink = new detail::SinkEnd{std::move(sink), {}, false};  // freed by end_hook
   auto at =
       std::find_if(s->hooks.begin(), s->hooks.end(), [&](const detail::Hook& x) { return x.priority < h.priority; });
   s->hooks.insert(at, h);
@@ -792,11 +790,11 @@ std::vector<HookInfo> Node::hooks() const {
       i.id = HookId{s.record->id.index, h.serial};
       i.sender = s.record->id;
       i.sender_name = s.record->name;
-      if (h.receiver != nullptr) {
+      if (h.to_sink) {
+        i.receiver_name = h.sink->sink->name();
+      } else {
         i.receiver = h.receiver->id;
         i.receiver_name = h.receiver->name;
-      } else {
-        i.receiver_name = s.record->sinks[h.edge - 1].sink->name();
       }
       i.options = HookOptions{h.priority, h.policy, h.enabled, h.port, h.suppress_window};
       i.inhibited_until = h.inhibited_until;
@@ -811,8 +809,8 @@ HookTraffic Node::accounting(const TaskRecord& s, const detail::Hook& h) {
   HookTraffic a;
   a.sent = s.sent.load(std::memory_order_relaxed) - h.sent_before;
   a.skipped = h.skipped;
-  if (h.receiver == nullptr) {
-    a.traffic = s.sinks[h.edge - 1].traffic;  // nothing queued: handed over at once
+  if (h.to_sink) {
+    a.traffic = h.sink->traffic;  // nothing queued: handed over at once
     return a;
   }
   TaskRecord& r = *h.receiver;
@@ -825,10 +823,10 @@ HookTraffic Node::accounting(const TaskRecord& s, const detail::Hook& h) {
 }
 
 void Node::end_hook(TaskRecord& s, const detail::Hook& h) {
-  if (h.receiver == nullptr) {
-    detail::SinkEnd& e = s.sinks[h.edge - 1];
-    retired_hooks_ += HookTraffic{s.sent.load(std::memory_order_relaxed) - h.sent_before, h.skipped, e.traffic, 0};
-    e = detail::SinkEnd{};  // a send under way keeps its own reference to the sink
+  if (h.to_sink) {
+    retired_hooks_ +=
+        HookTraffic{s.sent.load(std::memory_order_relaxed) - h.sent_before, h.skipped, h.sink->traffic, 0};
+    delete h.sink;  // a send under way holds its own reference to the sink
     return;
   }
   std::lock_guard in(h.receiver->in_mu);
@@ -885,7 +883,7 @@ Status Node::inhibit(TaskId sender, TaskId receiver, kernel::Duration window) {
   std::lock_guard out(s->out_mu);
   bool any = false;
   for (auto& h : s->hooks)
-    if (r == nullptr || h.receiver == r) {
+    if (r == nullptr || h.task() == r) {
       h.inhibited_until = until;
       any = true;
     }
@@ -939,8 +937,8 @@ void Node::send_locked(TaskRecord& from, const Message& m, std::unique_lock<kern
       ++h.skipped;
       continue;
     }
-    if (h.receiver == nullptr) [[unlikely]] {
-      detail::SinkEnd& e = from.sinks[h.edge - 1];
+    if (h.to_sink) [[unlikely]] {
+      detail::SinkEnd& e = *h.sink;
       ++e.traffic.attempted;
       if (m.time < h.inhibited_until) {
         ++e.traffic.inhibited;
@@ -970,13 +968,13 @@ void Node::send_locked(TaskRecord& from, const Message& m, std::unique_lock<kern
   std::shared_ptr<HookSink> inline_due[kInline];
   std::vector<std::shared_ptr<HookSink>> more_due;
   std::size_t n = 0;
-  for (detail::SinkEnd& e : from.sinks) {
-    if (!e.due) continue;
-    e.due = false;
+  for (detail::Hook& h : from.hooks) {
+    if (!h.to_sink || !h.sink->due) continue;
+    h.sink->due = false;
     if (n < kInline)
-      inline_due[n++] = e.sink;
+      inline_due[n++] = h.sink->sink;
     else
-      more_due.push_back(e.sink);
+      more_due.push_back(h.sink->sink);
   }
   out.unlock();
   for (std::size_t i = 0; i < n; ++i) inline_due[i]->on_message(m);
