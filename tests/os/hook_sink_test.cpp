@@ -168,7 +168,8 @@ TEST(SendAs, DeliversThroughTheStandInsHooksUnderTheReceiversRules) {
   EXPECT_EQ(firsts, (std::vector<float>{1, 2, 9, 5}));
   EXPECT_EQ(got->received().back().time, Time{30ms});
 
-  const HookInfo* h = find_hook(node.hooks(), in);
+  const auto hooks = node.hooks();
+  const HookInfo* h = find_hook(hooks, in);
   ASSERT_NE(h, nullptr);
   EXPECT_EQ(h->accounting.sent, 5u);  // every send_as, as the stand-in's own sends
   EXPECT_EQ(h->accounting.traffic.attempted, 5u);

@@ -190,6 +190,8 @@ void on_data(dds_entity_t reader, void* arg) {
         posts.emplace_back(s.port, os::Payload(std::span<const float>(s.values._buffer, s.values._length)));
       }
       dds_return_loan(reader, samples, n);
+      // Less than a batch: DDS held no more. A sample that arrives now calls this listener again.
+      if (n < kTakeBatch) break;
     }
     if (e == nullptr) return;
     node = e->rn;
