@@ -2,17 +2,23 @@
 // a raw Cyclone DDS program doing the same round trip in the same run. One echo process (forked
 // before any DDS call) answers both: its node's `echo` task hooked back over the bus, and a raw
 // reader whose listener writes each sample back. In this process a task `src` is posted a message
-// of 8 floats, the bus carries it to `echo` and back to `sink`, whose handler wakes the timing
-// thread; the raw side writes the same HookFrame_ sample (same type, same field values) and a raw
-// listener wakes the timing thread on the answer. Batches of the two sides are interleaved at
-// random. Target: framework median round trip <= 1.3x the raw one.
+// of 8 floats and sends it, the bus carries it to `echo` and back to `sink`; the raw side writes
+// the same HookFrame_ sample (same type, same field values) and a raw listener takes the answer.
+// A round trip is timed from the hand-over (`src` sending; the raw dds_write) to the answer's
+// arrival (`sink`'s handler; the raw listener), so the timing thread's own hand-offs (posting to
+// `src`, being woken by the answer) count on neither side. Both processes run on one core (see
+// pin_process). Batches of the two sides are interleaved at random. Target: framework median
+// round trip <= 1.3x the raw one.
+#include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -49,6 +55,20 @@ class BenchEcho final : public os::Task {
   void on_message(const os::Message& m) override { send(m.port, m.payload); }
 };
 
+// When the round trip under way was handed over (the framework's `src` task sending, the raw
+// side's dds_write) and when its answer arrived (the `sink` task's handler, the raw listener):
+// the timing thread's own hand-offs, starting `src` and being woken, are not the bus's.
+std::atomic<std::int64_t> g_sent_at{0}, g_answered_at{0};
+std::int64_t stamp() { return SteadyClock::now().time_since_epoch().count(); }
+
+class BenchSource final : public os::Task {
+ protected:
+  void on_message(const os::Message& m) override {
+    g_sent_at.store(stamp());
+    send(m.port, m.payload);
+  }
+};
+
 // Wakes the timing thread: a mutex and a condition variable, the same on both sides (GCC 12's
 // std::atomic<uint64_t>::wait lost wake-ups here).
 std::mutex g_mu;
@@ -73,7 +93,10 @@ bool wait_answer(std::uint64_t before) {
 
 class BenchSink final : public os::Task {
  protected:
-  void on_message(const os::Message&) override { answered(); }
+  void on_message(const os::Message&) override {
+    g_answered_at.store(stamp());
+    answered();
+  }
 };
 
 dds_qos_t* raw_qos() {
@@ -125,6 +148,7 @@ void raw_answer(dds_entity_t reader, void*) {
   int valid = 0;
   for (int i = 0; i < n; ++i) valid += infos[i].valid_data ? 1 : 0;
   if (n > 0) dds_return_loan(reader, samples, n);
+  if (valid > 0) g_answered_at.store(stamp());
   for (int i = 0; i < valid; ++i) answered();
 }
 
@@ -158,7 +182,7 @@ struct FrameworkRig {
   os::TaskId src;
   bool ok = false;
   FrameworkRig() {
-    src = *ping.create("src", std::make_unique<BenchEcho>(), {.queue_capacity = 64});
+    src = *ping.create("src", std::make_unique<BenchSource>(), {.queue_capacity = 64});
     (void)ping.create("sink", std::make_unique<BenchSink>(), {.queue_capacity = 64});
     auto b = io::DdsBus::create({&ping}, g_options);
     if (!b) return;
@@ -170,10 +194,9 @@ struct FrameworkRig {
     os::Message m;
     m.payload = os::Payload{1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f, 8.0f};
     const std::uint64_t before = answers();
-    const auto t0 = SteadyClock::now();
     if (!ping.post(src, m).ok()) return -1;
     if (!wait_answer(before)) return kLost;
-    return (SteadyClock::now() - t0).count();
+    return g_answered_at.load() - g_sent_at.load();
   }
 };
 
@@ -193,10 +216,10 @@ struct RawRig {
     s.values._length = s.values._maximum = 8;
     s.values._buffer = values;
     const std::uint64_t before = answers();
-    const auto t0 = SteadyClock::now();
+    const std::int64_t t0 = stamp();
     if (dds_write(end.writer, &s) != DDS_RETCODE_OK) return -1;
     if (!wait_answer(before)) return kLost;
-    return (SteadyClock::now() - t0).count();
+    return g_answered_at.load() - t0;
   }
 };
 
@@ -243,9 +266,31 @@ double percentile(std::vector<std::int64_t> v, double p) {
          1e3;
 }
 
+// Pins this process, before it makes a thread or forks the echo process, to the first core it may
+// use: every thread of both processes (the tasks', DDS's, the timing thread) then shares one
+// core, the same for both sides. Unpinned on the shared 2-core box, where each wake landed
+// (on the spot, or on the other core behind another tenant's work) decided the figures.
+// SYMB_BENCH_UNPINNED=1 leaves placement to the scheduler. Answers the core, or -1.
+int pin_process() {
+  const char* unpinned = std::getenv("SYMB_BENCH_UNPINNED");
+  if (unpinned != nullptr && std::string(unpinned) == "1") return -1;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof(set), &set) != 0) return -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c) {
+    if (!CPU_ISSET(c, &set)) continue;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(c, &one);
+    return sched_setaffinity(0, sizeof(one), &one) == 0 ? c : -1;
+  }
+  return -1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  const int core = pin_process();
   g_options.domain = 100 + static_cast<std::uint32_t>(::getpid()) % 100;
   g_options.prefix = "bench_dds_" + std::to_string(::getpid());
   g_raw_ping = "rt/" + g_options.prefix + "/raw/ping";
@@ -278,7 +323,8 @@ int main(int argc, char** argv) {
   ::waitpid(child, nullptr, 0);
   if (!ran) return 1;
   const double fw = percentile(g_framework_ns, 0.5), raw = percentile(g_raw_ns, 0.5);
-  std::printf("\nround trip of 8 floats between two processes on this machine (%zu each):\n", g_framework_ns.size());
+  std::printf("\nround trip of 8 floats between two processes on this machine (%zu each), %s:\n", g_framework_ns.size(),
+              core >= 0 ? ("every thread on core " + std::to_string(core)).c_str() : "unpinned");
   std::printf("  DDS bus (task -> remote hook -> echo task -> remote hook -> task): median %.1f us, p99 %.1f us\n", fw,
               percentile(g_framework_ns, 0.99));
   std::printf("  raw Cyclone DDS (write -> listener echo -> listener):            median %.1f us, p99 %.1f us\n", raw,

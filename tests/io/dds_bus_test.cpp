@@ -12,6 +12,7 @@
 #include <dds/dds.h>
 #include <gtest/gtest.h>
 
+#include "symb/io/bytes.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/os/node.hpp"
 
@@ -30,6 +31,7 @@ namespace symb::io {
 namespace {
 
 using namespace std::chrono_literals;
+using os::TaskId;
 
 // Sends every message it is handed on, port kept: the test posts into it, its hooks carry it.
 class DdsEcho final : public os::Task {
@@ -48,6 +50,13 @@ class DdsCount final : public os::Task {
     count.fetch_add(1);
   }
 };
+
+os::Message numbers_on(os::Port port, os::Payload payload) {
+  os::Message m;
+  m.port = port;
+  m.payload = std::move(payload);
+  return m;
+}
 
 // A domain and a topic prefix of this test run's own, so parallel ctest runs do not meet.
 DdsBusOptions own_bus(std::string_view test) {
@@ -222,6 +231,106 @@ TEST(DdsBus, AFloodIsRefusedAndCountedAtTheReceiverNotLost) {
   EXPECT_EQ(h.books.delivered + h.books.dropped(HookDrop::kReceiver), std::uint64_t(kFlood));
   EXPECT_GT(h.books.dropped(HookDrop::kReceiver), 0u);
   EXPECT_EQ(p.count->count.load(), h.books.delivered);
+  EXPECT_EQ(bus->counts().lost, 0u);
+}
+
+// A message crosses with no proxy task: the sender's hook writes to DDS (a hook to a sink, named
+// dds_to.<id>), and the listener sends as the stand-in dds_from.<id> straight into the receiver's
+// queue through a local hook that keeps the remote hook's priority, queue policy and suppression.
+TEST(DdsBus, TheReceiversPriorityPolicyAndSuppressionApplyOnTheDirectPath) {
+  DdsPair p(/*sink_queue=*/8);
+  const TaskId boss = *p.r2.create("boss", std::make_unique<DdsEcho>());
+  ASSERT_TRUE(p.r2.hook(boss, p.sink, {.priority = 5, .suppress_window = 60s}));
+  auto bus = DdsBus::create({&p.r1, &p.r2}, own_bus("rules")).value();
+  ASSERT_TRUE(bus->hook("r1/src", "r2/sink", {.priority = 2, .policy = os::QueuePolicy::kRefuse}).ok());
+  ASSERT_TRUE(bus->wait_linked(5s));
+  // The ends as the nodes list them: no proxy task on either side.
+  EXPECT_FALSE(p.r1.find("dds_to.1").has_value());
+  bool sink_end = false, stand_in = false;
+  for (const os::HookInfo& h : p.r1.hooks())
+    if (h.sender_name == "src" && h.receiver_name == "dds_to.1" && !h.receiver.valid()) sink_end = true;
+  for (const os::HookInfo& h : p.r2.hooks())
+    if (h.sender_name == "dds_from.1" && h.receiver == p.sink && h.options.priority == 2 &&
+        h.options.policy == os::QueuePolicy::kRefuse)
+      stand_in = true;
+  EXPECT_TRUE(sink_end);
+  EXPECT_TRUE(stand_in);
+  const auto books = [&] { return bus->hooks().at(0).books; };
+  const auto send = [&](int n) {
+    for (int i = 0; i < n; ++i) ASSERT_TRUE(p.r1.post(p.src, numbers_on(0, os::Payload({float(i)}))));
+  };
+
+  // Refuse: a receiver that does not run keeps 8 and refuses the rest, counted at the receiver.
+  ASSERT_TRUE(p.r2.suspend(p.sink).ok());
+  send(20);
+  ASSERT_TRUE(eventually([&] { return books().attempted == 20 && books().in_flight == 8; }));
+  EXPECT_EQ(books().dropped(HookDrop::kReceiver), 12u);
+  EXPECT_TRUE(books().closes());
+  ASSERT_TRUE(p.r2.resume(p.sink).ok());
+  ASSERT_TRUE(eventually([&] { return p.count->count.load() == 8; }));
+
+  // A higher-priority delivery into the receiver opens a window that drops the remote hook's.
+  ASSERT_TRUE(p.r2.post(boss, numbers_on(0, os::Payload({-1.0f}))));
+  ASSERT_TRUE(eventually([&] { return p.count->count.load() == 9; }));
+  send(5);
+  ASSERT_TRUE(eventually([&] { return books().attempted == 25 && books().in_flight == 0; }));
+  const RemoteHookBooks b = books();
+  EXPECT_EQ(b.delivered, 8u);
+  EXPECT_EQ(b.dropped(HookDrop::kReceiver), 12u + 5u);
+  EXPECT_TRUE(b.closes());
+  EXPECT_EQ(p.count->count.load(), 9u);
+  EXPECT_EQ(p.count->last.load(), -1.0f);
+  EXPECT_EQ(bus->counts().written, 25u);  // the receiver's rules drop after DDS, never before
+  EXPECT_EQ(bus->counts().received, 25u);
+}
+
+// The sender's side of the hook: its port filter and an inhibition apply before DDS, a blob is
+// refused, and each is counted in the books.
+TEST(DdsBus, TheSendersPortInhibitionAndBlobsAreCountedBeforeDds) {
+  DdsPair p;
+  auto bus = DdsBus::create({&p.r1, &p.r2}, own_bus("sender")).value();
+  ASSERT_TRUE(bus->hook("r1/src", "r2/sink", {.port = 1}).ok());
+  ASSERT_TRUE(bus->wait_linked(5s));
+  const auto books = [&] { return bus->hooks().at(0).books; };
+  ASSERT_TRUE(p.r1.post(p.src, numbers_on(1, os::Payload({1.0f}))));
+  ASSERT_TRUE(p.r1.post(p.src, numbers_on(2, os::Payload({2.0f}))));  // another port
+  ASSERT_TRUE(eventually([&] { return p.count->count.load() == 1; }));
+  ASSERT_TRUE(p.r1.post(p.src, numbers_on(1, text_payload("a blob"))));
+  ASSERT_TRUE(eventually([&] { return books().dropped(HookDrop::kBlob) == 1; }));
+  ASSERT_TRUE(p.r1.inhibit(p.src, {}, 60s));
+  ASSERT_TRUE(p.r1.post(p.src, numbers_on(1, os::Payload({3.0f}))));
+  ASSERT_TRUE(eventually([&] { return books().attempted == 3; }));
+  const RemoteHookBooks b = books();
+  EXPECT_EQ(b.delivered, 1u);
+  EXPECT_EQ(b.dropped(HookDrop::kBlob), 1u);
+  EXPECT_EQ(b.dropped(HookDrop::kSender), 1u);  // inhibited
+  EXPECT_EQ(b.in_flight, 0u);
+  EXPECT_TRUE(b.closes());
+  EXPECT_EQ(bus->counts().written, 1u);
+}
+
+// A flood from a peer into a receiver whose hook refuses: the receiver's bounded queue takes what
+// it can, the rest is refused and counted; nothing taken from DDS goes unaccounted.
+TEST(DdsBus, AFloodIntoARefusingHookIsRefusedByTheReceiversQueueAndCounted) {
+  DdsPair p(/*sink_queue=*/8);
+  const DdsBusOptions o = own_bus("refuse_flood");
+  auto bus = DdsBus::create({&p.r2}, o).value();
+  ASSERT_TRUE(bus->hook("r1/src", "r2/sink", {.policy = os::QueuePolicy::kRefuse}).ok());
+  ASSERT_TRUE(p.r2.suspend(p.sink).ok());
+  DdsRawPeer peer(o, bus->topic("r1/src", "r2/sink", -1));
+  ASSERT_TRUE(eventually([&] { return peer.matched(); }));
+  constexpr std::uint32_t kFlood = 2000;
+  for (std::uint32_t i = 0; i < kFlood; ++i) peer.write("r1/src>r2/sink", i, 0, 1);
+  ASSERT_TRUE(eventually([&] { return bus->hooks()[0].medium.posted == kFlood; }));
+  const auto full = bus->hooks()[0];
+  EXPECT_EQ(full.books.in_flight, 8u);
+  EXPECT_EQ(full.books.dropped(HookDrop::kReceiver), kFlood - 8);
+  ASSERT_TRUE(p.r2.resume(p.sink).ok());
+  ASSERT_TRUE(eventually([&] { return p.count->count.load() == 8 && bus->hooks()[0].books.in_flight == 0; }));
+  EXPECT_EQ(p.count->last.load(), 7.0f);  // a refusing queue keeps the oldest
+  const auto h = bus->hooks()[0];
+  EXPECT_EQ(h.books.delivered + h.books.dropped(HookDrop::kReceiver), std::uint64_t(kFlood));
+  EXPECT_EQ(bus->counts().received, kFlood);
   EXPECT_EQ(bus->counts().lost, 0u);
 }
 

@@ -6,8 +6,11 @@
 // Two buses implement it: the organism bus of docked modules, simulated in process
 // (sim/mujoco/organism_bus.hpp), and the DDS bus between processes and machines
 // (io/dds/dds_bus.hpp). Code that makes, lists or removes remote hooks through this interface
-// (a scenario, a shell, a test) runs unchanged over either. Both build a remote hook the same way:
-// two local hooks and two proxy tasks (io/remote_hook.hpp) around a HookMedium of their own.
+// (a scenario, a shell, a test) runs unchanged over either. Both keep a remote hook's books the
+// same way (io/remote_hook.hpp). The organism bus builds one of two local hooks and two proxy
+// tasks around a HookMedium; the DDS bus, between processes where each hand-off between threads
+// shows in the latency, of a hook to an os::HookSink that writes on the sender's thread and a
+// stand-in task its reader's listener sends as (os::Node::send_as) into the receiver's queue.
 #pragma once
 
 #include <cstddef>

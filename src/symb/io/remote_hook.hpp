@@ -1,7 +1,8 @@
 // Remote hook: a hook whose sender and receiver live on different nodes, joined by a bus (the
-// organism bus of docked modules, sim/mujoco/organism_bus.hpp; later a real CAN or DDS link).
-// Hooks never cross nodes inside the os layer, so a remote hook is made of two local hooks and two
-// proxy tasks:
+// organism bus of docked modules, sim/mujoco/organism_bus.hpp; the DDS bus between processes,
+// io/dds/dds_bus.hpp, which keeps these books but carries a message with no proxy task: see there).
+// Hooks never cross nodes inside the os layer, so on the organism bus a remote hook is made of two
+// local hooks and two proxy tasks:
 //
 //   sender --local hook (the remote hook's options)--> OutboundProxy  ==bus frames==>
 //   InboundProxy --local hook--> receiver

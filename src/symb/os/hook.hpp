@@ -18,10 +18,15 @@
 //
 // Cycles: a hook may close a cycle (a -> b -> a). What bounds it is kMaxHops (message.hpp): a
 // chain of answers longer than that faults the task that would extend it.
+//
+// A hook's receiver may also be outside the node (HookSink below: a writer to a network), and a
+// source outside the node may send as a task standing for it (Node::send_as): both let a
+// message leave or enter a node with no hand-over to another task's thread.
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <utility>
 
 #include "symb/kernel/bounded_queue.hpp"
 #include "symb/kernel/time.hpp"
@@ -72,12 +77,37 @@ inline bool same_hook_key(std::int32_t port_a, std::int32_t port_b) {
   return (port_a < 0 ? -1 : port_a) == (port_b < 0 ? -1 : port_b);
 }
 
+// The far end of a hook whose receiver is not a task of the node: a writer to a network, a
+// recorder (Node::hook(sender, sink, options)). It is handed each message the hook lets through
+// on the sender's own context, within the sender's send(), after the node's locks are released:
+// no queue, no hand-over to another thread. Of the hook's options, the port filter, the enabled
+// flag, inhibition and the priority (the order among the sender's hooks) apply; a queue policy
+// and a suppression window, which belong to a receiver's queue, do not. Its accounting: every
+// message offered is delivered (handed to the sink) or inhibited, none is queued.
+// on_message must not block; it runs on whichever thread sent, so a sender fed by
+// Node::send_as from several threads calls it from several at once. The node holds a reference
+// while the hook lives and during a call: a send counted before an unhook may still call it just
+// after the unhook returned.
+class HookSink {
+ public:
+  explicit HookSink(std::string name) : name_(std::move(name)) {}
+  virtual ~HookSink() = default;
+  HookSink(const HookSink&) = delete;
+  HookSink& operator=(const HookSink&) = delete;
+  // What Node::hooks() shows as the hook's receiver.
+  const std::string& name() const { return name_; }
+  virtual void on_message(const Message& m) = 0;
+
+ private:
+  const std::string name_;
+};
+
 struct HookInfo {
   HookId id;
   TaskId sender;
-  TaskId receiver;
+  TaskId receiver;  // invalid for a hook to a HookSink
   std::string sender_name;
-  std::string receiver_name;
+  std::string receiver_name;  // the sink's name for a hook to a HookSink
   HookOptions options;
   kernel::Time inhibited_until{0};
   HookTraffic accounting;

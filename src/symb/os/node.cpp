@@ -488,7 +488,7 @@ Status Node::remove(TaskId id) {
       if (!s.record) continue;
       std::lock_guard out(s.record->out_mu);
       std::erase_if(s.record->hooks, [&](const detail::Hook& h) {
-        if (h.receiver != r) return false;
+        if (h.task() != r) return false;
         end_hook(*s.record, h);
         return true;
       });
@@ -701,7 +701,7 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
   {
     std::lock_guard out(s->out_mu);
     for (const detail::Hook& x : s->hooks)
-      if (x.receiver == r && same_hook_key(x.port, h.port))
+      if (x.task() == r && same_hook_key(x.port, h.port))
         return Error{"task '" + s->name + "' is already hooked to '" + r->name + "'" +
                      (h.port < 0 ? std::string() : " on port " + std::to_string(h.port)) + " (hook " +
                      std::to_string(x.serial) + ")"};
@@ -716,6 +716,36 @@ Result<HookId> Node::hook(TaskId sender, TaskId receiver, HookOptions options) {
         std::find_if(s->hooks.begin(), s->hooks.end(), [&](const detail::Hook& x) { return x.priority < h.priority; });
     s->hooks.insert(at, h);
   }
+  return HookId{sender.index, h.serial};
+}
+
+Result<HookId> Node::hook(TaskId sender, std::shared_ptr<HookSink> sink, HookOptions options) {
+  std::lock_guard lock(mu_);
+  TaskRecord* s = lookup_locked(sender);
+  if (s == nullptr) return Error{no_task(sender).error()};
+  if (!sink) return Error{"task '" + s->name + "': no sink to hook to"};
+  if (options.port > 0xffff) return Error{"hook port must be -1 (any) or 0..65535"};
+  if (options.suppress_window.count() != 0)
+    return Error{"hook from '" + s->name + "' to sink '" + sink->name() +
+                 "': a sink has no queue for a suppression window to guard"};
+  detail::Hook h;
+  h.priority = options.priority;
+  h.port = options.port < 0 ? -1 : options.port;
+  h.policy = options.policy;
+  h.enabled = options.enabled;
+  std::lock_guard out(s->out_mu);
+  for (const detail::Hook& x : s->hooks)
+    if (x.to_sink && x.sink->sink == sink && same_hook_key(x.port, h.port))
+      return Error{"task '" + s->name + "' is already hooked to sink '" + sink->name() + "'" +
+                   (h.port < 0 ? std::string() : " on port " + std::to_string(h.port)) + " (hook " +
+                   std::to_string(x.serial) + ")"};
+  h.serial = ++hook_serial_;
+  h.sent_before = s->sent.load(std::memory_order_relaxed);
+  h.to_sink = true;
+  h.sink = new detail::SinkEnd{std::move(sink), {}, false};  // freed by end_hook
+  auto at =
+      std::find_if(s->hooks.begin(), s->hooks.end(), [&](const detail::Hook& x) { return x.priority < h.priority; });
+  s->hooks.insert(at, h);
   return HookId{sender.index, h.serial};
 }
 
@@ -759,9 +789,13 @@ std::vector<HookInfo> Node::hooks() const {
       HookInfo i;
       i.id = HookId{s.record->id.index, h.serial};
       i.sender = s.record->id;
-      i.receiver = h.receiver->id;
       i.sender_name = s.record->name;
-      i.receiver_name = h.receiver->name;
+      if (h.to_sink) {
+        i.receiver_name = h.sink->sink->name();
+      } else {
+        i.receiver = h.receiver->id;
+        i.receiver_name = h.receiver->name;
+      }
       i.options = HookOptions{h.priority, h.policy, h.enabled, h.port, h.suppress_window};
       i.inhibited_until = h.inhibited_until;
       i.accounting = accounting(*s.record, h);
@@ -775,6 +809,10 @@ HookTraffic Node::accounting(const TaskRecord& s, const detail::Hook& h) {
   HookTraffic a;
   a.sent = s.sent.load(std::memory_order_relaxed) - h.sent_before;
   a.skipped = h.skipped;
+  if (h.to_sink) {
+    a.traffic = h.sink->traffic;  // nothing queued: handed over at once
+    return a;
+  }
   TaskRecord& r = *h.receiver;
   std::lock_guard in(r.in_mu);
   a.traffic = r.inputs->slots[h.edge - 1].traffic;
@@ -784,7 +822,13 @@ HookTraffic Node::accounting(const TaskRecord& s, const detail::Hook& h) {
   return a;
 }
 
-void Node::end_hook(const TaskRecord& s, const detail::Hook& h) {
+void Node::end_hook(TaskRecord& s, const detail::Hook& h) {
+  if (h.to_sink) {
+    retired_hooks_ +=
+        HookTraffic{s.sent.load(std::memory_order_relaxed) - h.sent_before, h.skipped, h.sink->traffic, 0};
+    delete h.sink;  // a send under way holds its own reference to the sink
+    return;
+  }
   std::lock_guard in(h.receiver->in_mu);
   h.receiver->end_in_hook(h.edge, s.sent.load(std::memory_order_relaxed) - h.sent_before, h.skipped);
 }
@@ -839,7 +883,7 @@ Status Node::inhibit(TaskId sender, TaskId receiver, kernel::Duration window) {
   std::lock_guard out(s->out_mu);
   bool any = false;
   for (auto& h : s->hooks)
-    if (r == nullptr || h.receiver == r) {
+    if (r == nullptr || h.task() == r) {
       h.inhibited_until = until;
       any = true;
     }
@@ -881,11 +925,27 @@ void Node::send_from(TaskRecord& from, const Message& m) {
     cut_cycle(from);
     return;
   }
-  std::lock_guard out(from.out_mu);
+  std::unique_lock out(from.out_mu);
+  send_locked(from, m, out);
+}
+
+void Node::send_locked(TaskRecord& from, const Message& m, std::unique_lock<kernel::OptionalMutex>& out) {
   kernel::bump(from.sent);
+  bool sinks_due = false;
   for (auto& h : from.hooks) {
     if (!h.enabled || (h.port >= 0 && h.port != m.port)) {
       ++h.skipped;
+      continue;
+    }
+    if (h.to_sink) [[unlikely]] {
+      detail::SinkEnd& e = *h.sink;
+      ++e.traffic.attempted;
+      if (m.time < h.inhibited_until) {
+        ++e.traffic.inhibited;
+        continue;
+      }
+      ++e.traffic.delivered;
+      e.due = sinks_due = true;
       continue;
     }
     if (m.time < h.inhibited_until) {
@@ -901,6 +961,37 @@ void Node::send_from(TaskRecord& from, const Message& m) {
     if (kernel::ActivitySlot* wake = h.receiver->offer(m, h.edge, h.priority, h.policy, h.suppress_window))
       wake->wake();
   }
+  if (!sinks_due) return;
+  // Handed over outside out_mu: a sink may lead into another node (a network writer delivering to
+  // a reader of this process on this thread), whose locks must not nest inside this sender's.
+  constexpr std::size_t kInline = 4;
+  std::shared_ptr<HookSink> inline_due[kInline];
+  std::vector<std::shared_ptr<HookSink>> more_due;
+  std::size_t n = 0;
+  for (detail::Hook& h : from.hooks) {
+    if (!h.to_sink || !h.sink->due) continue;
+    h.sink->due = false;
+    if (n < kInline)
+      inline_due[n++] = h.sink->sink;
+    else
+      more_due.push_back(h.sink->sink);
+  }
+  out.unlock();
+  for (std::size_t i = 0; i < n; ++i) inline_due[i]->on_message(m);
+  for (const auto& sink : more_due) sink->on_message(m);
+}
+
+Status Node::send_as(TaskId sender, Port port, const Payload& payload) {
+  std::unique_lock lock(mu_);
+  TaskRecord* s = lookup_locked(sender);
+  if (s == nullptr) return no_task(sender);
+  // The sender's out_mu keeps its record: remove() takes it before the task can be freed. The
+  // node lock goes first, so that a send into a busy node does not hold every other caller up.
+  std::unique_lock out(s->out_mu);
+  lock.unlock();
+  const Message m{.source = sender, .port = port, .hops = 0, .time = now(), .payload = payload};
+  send_locked(*s, m, out);
+  return {};
 }
 
 void Node::cut_cycle(TaskRecord& from) {

@@ -113,6 +113,10 @@ class Node {
   // --- hooks -------------------------------------------------------------------------------------
   // From now on, every send of `sender` also reaches `receiver`'s queue.
   kernel::Result<HookId> hook(TaskId sender, TaskId receiver, HookOptions options = {});
+  // From now on, every send of `sender` that the hook lets through is handed to `sink`, on the
+  // sender's context (see HookSink). Refuses a suppression window (no receiver queue to guard)
+  // and the same sink hooked twice on one port.
+  kernel::Result<HookId> hook(TaskId sender, std::shared_ptr<HookSink> sink, HookOptions options = {});
   kernel::Status unhook(HookId id);
   kernel::Status set_hook_enabled(HookId id, bool enabled);
   // Every live hook, with its accounting (see hook.hpp).
@@ -129,6 +133,15 @@ class Node {
   // Fails when the queue refused it (full, under kRefuse) or a suppression window dropped it;
   // either way the message is counted like any other.
   kernel::Status post(TaskId receiver, const Message& message, QueuePolicy policy = QueuePolicy::kRefuse);
+
+  // Sends as task `sender` sends from its handler, from outside its context: how a source outside
+  // the node (a network reader) feeds the node's hooks at once, with a task standing for it,
+  // rather than through a task of its own that would forward each message on its thread. Every
+  // hook of `sender` applies and counts it as one of its sends (hook.hpp): port filter,
+  // inhibition, and the receivers' priorities, queue policies and suppression windows. Starts a
+  // chain of its own (no hops). May run beside the task's own handlers and other send_as calls.
+  // Under the virtual-time executor, on the executor's context only (from a thread: inject()).
+  kernel::Status send_as(TaskId sender, Port port, const Payload& payload);
 
   // Wakes a task without a message, the way an RTOS's direct-to-task notification does: its
   // on_notify() runs once on its own context, before the messages queued with it, however many
@@ -176,11 +189,15 @@ class Node {
   kernel::Status start_locked(detail::TaskRecord& r);
   void release(detail::TaskRecord& r);
   void send_from(detail::TaskRecord& from, const Message& m);
+  // The body of a send, under `from`'s out_mu held by `out`; releases it before handing the
+  // message to the sinks due.
+  void send_locked(detail::TaskRecord& from, const Message& m, std::unique_lock<kernel::OptionalMutex>& out);
   void cut_cycle(detail::TaskRecord& from);
   // Under `s`'s out_mu: the accounting of hook `h` of sender `s` (takes the receiver's in_mu).
   static HookTraffic accounting(const detail::TaskRecord& s, const detail::Hook& h);
-  // Under `s`'s out_mu: `h` goes; its receiver keeps its counts until its messages are handled.
-  static void end_hook(const detail::TaskRecord& s, const detail::Hook& h);
+  // Under mu_ and `s`'s out_mu: `h` goes; its receiver keeps its counts until its messages are
+  // handled (a sink's counts retire at once).
+  void end_hook(detail::TaskRecord& s, const detail::Hook& h);
   void trace(const detail::TaskRecord& receiver, const Message& m);
   void probe(const detail::TaskRecord& from, std::string_view channel, std::span<const float> values);
 

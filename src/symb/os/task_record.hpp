@@ -22,22 +22,38 @@ namespace symb::os::detail {
 
 struct TaskRecord;
 
+// The far end of a hook to a HookSink, with the hook's traffic (there is no receiver to count
+// it). Owned by its Hook, under the sender's out_mu; freed by Node::end_hook.
+struct SinkEnd {
+  std::shared_ptr<HookSink> sink;
+  TrafficCounters traffic;
+  bool due = false;  // to be handed the message being sent, once out_mu is released
+};
+
 // One entry of a sender's hook list. The receiver pointer is safe: a task is unhooked from every
 // sender, under that sender's out_mu, before it can be freed. Its traffic is counted at the
 // receiver (InHook, slot `edge` - 1), except what never reaches the receiver: the sends it let
-// pass (disabled, another port), counted here under out_mu.
+// pass (disabled, another port), counted here under out_mu. A hook to a HookSink has no receiver
+// task: it holds its SinkEnd in the receiver's place (`to_sink`), so a hook stays 64 bytes.
 struct Hook {
   std::uint32_t serial = 0;
-  std::uint32_t edge = 0;         // the receiver's InputHooks slot + 1
+  std::uint32_t edge = 0;         // the receiver's InputHooks slot + 1 (0 for a sink)
   std::uint64_t sent_before = 0;  // the sender's `sent` when the hook was made
   std::uint64_t skipped = 0;      // sends not offered: disabled, or another port
   std::int32_t priority = 0;
   std::int32_t port = -1;
   QueuePolicy policy = QueuePolicy::kKeepNewest;
   bool enabled = true;
-  TaskRecord* receiver = nullptr;
+  bool to_sink = false;
+  union {
+    TaskRecord* receiver = nullptr;  // unless to_sink
+    SinkEnd* sink;                   // to_sink
+  };
   kernel::Duration suppress_window{0};
   kernel::Time inhibited_until{0};
+
+  // The receiving task, or null for a hook to a sink.
+  TaskRecord* task() const { return to_sink ? nullptr : receiver; }
 };
 
 // A hook's accounting at its receiver, under the receiver's in_mu. Every message it queues is
@@ -129,7 +145,7 @@ struct TaskRecord final : kernel::Activity {
   // Output side: the hooks of this task as a sender.
   kernel::OptionalMutex out_mu;
   std::vector<Hook> hooks;
-  std::atomic<std::uint64_t> sent{0};  // written by the task's own context only
+  std::atomic<std::uint64_t> sent{0};  // written under out_mu (its own sends, and Node::send_as)
   // Hops of what this task sends now (see kMaxHops): the handled message's + 1 inside
   // on_message, 0 elsewhere. The task's own context only.
   std::uint16_t next_hops = 0;

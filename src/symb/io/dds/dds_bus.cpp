@@ -29,7 +29,35 @@ struct Name {
   std::string_view node, task;
 };
 
+// Stands on the receiver's node for a sender in another process: the listener sends as it
+// (Node::send_as), so the local hook from it to the receiver applies and counts. It never runs a
+// handler of its own.
+class RemoteSenderStandIn final : public os::Task {};
+
 }  // namespace
+
+// What a DDS listener is given: its end's id, and the lock that keeps one reader's deliveries in
+// the order they were taken should DDS call its listener from two threads.
+struct DdsBus::ListenerArg {
+  Core* core = nullptr;
+  std::uint32_t id = 0;
+  std::mutex deliver;
+};
+
+// The sending end's far end of the sender's hook (os::HookSink): writes each message the hook lets
+// through to DDS on the sender's own thread, within its send().
+class DdsBus::Writer final : public os::HookSink {
+ public:
+  Writer(std::string name, std::weak_ptr<Core> core, std::uint32_t id, std::string key)
+      : HookSink(std::move(name)), core_(std::move(core)), id_(id), key_(std::move(key)) {}
+  void on_message(const os::Message& m) override;
+
+ private:
+  const std::weak_ptr<Core> core_;
+  const std::uint32_t id_;
+  const std::string key_;  // the sample's `hook` field
+  std::mutex write_mu_;    // serials in the order they are written
+};
 
 // One remote hook as this process holds it: its sending end, its receiving end, or both.
 struct DdsBus::End {
@@ -37,8 +65,8 @@ struct DdsBus::End {
   std::string key;  // the HookFrame_'s `hook` field: "r1/osc>r2/osc" (":<port>" with a filter)
   // Sending end.
   os::Node* sn = nullptr;
-  os::TaskId sender, outbound;
-  os::HookId out_hook;
+  os::TaskId sender;
+  os::HookId out_hook;  // sender -> the Writer (a hook to an os::HookSink)
   dds_entity_t writer = 0;
   std::uint64_t origin = 0;
   std::uint32_t serial = 0;
@@ -46,15 +74,16 @@ struct DdsBus::End {
   std::uint64_t written = 0;
   // Receiving end.
   os::Node* rn = nullptr;
-  os::TaskId receiver, inbound;
-  os::HookId in_hook;
+  os::TaskId receiver, inbound;  // inbound: the RemoteSenderStandIn
+  os::HookId in_hook;            // inbound -> receiver
   dds_entity_t reader = 0;
   std::map<std::uint64_t, std::uint32_t> next;  // per origin: the serial expected next
   std::uint32_t alive = 0;                      // live writers (liveliness)
-  std::uint64_t received = 0, lost = 0, pending = 0;
+  std::uint64_t received = 0, lost = 0;
+  std::uint64_t pending = 0;              // taken from DDS, not yet sent on by the stand-in
   std::array<std::uint64_t, 4> logged{};  // garbage logged, by cause
   dds_entity_t topic = 0;
-  std::unique_ptr<std::pair<DdsBus::Core*, std::uint32_t>> arg;  // the listeners' argument
+  std::unique_ptr<ListenerArg> arg;  // the listeners' argument
   bool sending() const { return sn != nullptr; }
   bool receiving() const { return rn != nullptr; }
 };
@@ -66,8 +95,7 @@ struct DdsBus::Core {
   std::uint32_t next_id = 1;
   std::uint64_t origin_base = 0;
   dds_entity_t participant = 0;
-  dds_entity_t domain = 0;  // made by this bus (else another bus of the process made it)
-  FrameDecoder decoder{256};
+  dds_entity_t domain = 0;   // made by this bus (else another bus of the process made it)
   std::weak_ptr<Core> self;  // work injected into a node finds the core only while the bus lives
 
   End* find_locked(std::uint32_t id) {
@@ -89,18 +117,22 @@ void log_on(os::Node* node, bool warn, std::string text) {
   });
 }
 
-using ListenerArg = std::pair<DdsBus::Core*, std::uint32_t>;
+using ListenerArg = DdsBus::ListenerArg;
 
+// Takes what DDS holds for a receiving end, checks each sample, counts it, and has the stand-in
+// send the good ones on to the receiver: on this listener thread under the thread executor (its
+// inject() runs at once), so a message reaches the receiver's queue with no thread between.
 void on_data(dds_entity_t reader, void* arg) {
   auto* a = static_cast<ListenerArg*>(arg);
-  DdsBus::Core& core = *a->first;
-  std::vector<os::Message> posts;
+  DdsBus::Core& core = *a->core;
+  std::lock_guard order(a->deliver);
+  std::vector<std::pair<os::Port, os::Payload>> posts;
   std::vector<std::string> warnings;
   os::Node* node = nullptr;
   os::TaskId inbound;
   {
     std::lock_guard lock(core.mu);
-    DdsBus::End* e = core.find_locked(a->second);
+    DdsBus::End* e = core.find_locked(a->id);
     void* samples[kTakeBatch];
     dds_sample_info_t infos[kTakeBatch];
     for (;;) {
@@ -150,43 +182,28 @@ void on_data(dds_entity_t reader, void* arg) {
         ++e->received;
         ++core.counts.received;
         ++e->pending;
-        HookFrame f;
-        f.hook = e->info.id.value;
-        f.sequence = s.serial;
-        f.time = kernel::Time{s.stamp};
-        f.port = s.port;
-        f.payload.count = static_cast<std::uint8_t>(s.values._length);
-        std::copy_n(s.values._buffer, s.values._length, f.payload.values);
-        auto bytes = std::make_shared<Bytes>();
-        encode_hook_frame(f, bytes->data);
-        os::Message m;
-        m.payload = os::Payload(std::shared_ptr<const os::Blob>(std::move(bytes)));
-        posts.push_back(std::move(m));
+        posts.emplace_back(s.port, os::Payload(std::span<const float>(s.values._buffer, s.values._length)));
       }
       dds_return_loan(reader, samples, n);
+      // Less than a batch: DDS held no more. A sample that arrives now calls this listener again.
+      if (n < kTakeBatch) break;
     }
     if (e == nullptr) return;
     node = e->rn;
     inbound = e->inbound;
   }
   for (std::string& w : warnings) log_on(node, true, std::move(w));
-  const std::uint32_t id = a->second;
-  for (os::Message& m : posts) {
-    node->inject([weak = core.self, node, inbound, id, m = std::move(m)]() mutable {
-      const auto alive = weak.lock();
-      if (!alive) return;  // the bus is gone, and its proxies with it
-      m.time = node->now();
-      const bool ok = node->post(inbound, m, os::QueuePolicy::kRefuse).ok();
-      std::lock_guard lock(alive->mu);
-      DdsBus::End* e = alive->find_locked(id);
-      if (e == nullptr) return;
-      --e->pending;
-      if (ok)
-        ++e->info.medium.posted;
-      else
-        ++e->info.medium.refused;
-    });
-  }
+  if (posts.empty()) return;
+  // Outside the core's lock: sending takes the receiving node's locks, and a Writer (on a
+  // sender's thread, within its node's send) takes the core's.
+  node->inject([weak = core.self, node, inbound, id = a->id, posts = std::move(posts)] {
+    const auto alive = weak.lock();
+    if (!alive) return;  // the bus is gone, and its stand-ins with it
+    // A stand-in removed meanwhile (unhook) refuses; its end, and its books, are gone too.
+    for (const auto& [port, payload] : posts) (void)node->send_as(inbound, port, payload);
+    std::lock_guard lock(alive->mu);
+    if (DdsBus::End* e = alive->find_locked(id)) e->pending -= posts.size();
+  });
 }
 
 // A status listener's frame: runs `f(core, end, text)` under the core's lock for the listener's end
@@ -197,10 +214,10 @@ void on_end(void* arg, F f) {
   std::string text;
   os::Node* node = nullptr;
   {
-    std::lock_guard lock(a->first->mu);
-    DdsBus::End* e = a->first->find_locked(a->second);
+    std::lock_guard lock(a->core->mu);
+    DdsBus::End* e = a->core->find_locked(a->id);
     if (e == nullptr) return;
-    node = f(*a->first, *e, text);
+    node = f(*a->core, *e, text);
   }
   if (!text.empty()) log_on(node, true, std::move(text));
 }
@@ -287,7 +304,7 @@ DdsBus::~DdsBus() {
     ends.swap(core_->ends);
   }
   for (auto& e : ends) {
-    if (e->sending()) (void)e->sn->remove(e->outbound);
+    if (e->sending()) (void)e->sn->unhook(e->out_hook);
     if (e->receiving()) (void)e->rn->remove(e->inbound);
   }
   // Deleting the participant deletes every reader and writer and waits for running listeners.
@@ -372,7 +389,9 @@ kernel::Result<RemoteHookId> DdsBus::hook(std::string_view sender, std::string_v
   end->info.options = options;
   end->info.state = LinkState::kDown;  // up once DDS matched the ends
   end->origin = core_->origin_base ^ (0x9E3779B97F4A7C15ull * id);
-  end->arg = std::make_unique<std::pair<Core*, std::uint32_t>>(core_.get(), id);
+  end->arg = std::make_unique<ListenerArg>();
+  end->arg->core = core_.get();
+  end->arg->id = id;
 
   const std::string name = topic(sender, receiver, options.port);
   end->topic = dds_create_topic(core_->participant, &symb_msg_dds__HookFrame__desc, name.c_str(), nullptr, nullptr);
@@ -383,15 +402,15 @@ kernel::Result<RemoteHookId> DdsBus::hook(std::string_view sender, std::string_v
     if (end->writer > 0) dds_delete(end->writer);
     if (end->reader > 0) dds_delete(end->reader);
     dds_delete(end->topic);
-    if (end->sending()) (void)end->sn->remove(end->outbound);
     if (end->receiving()) (void)end->rn->remove(end->inbound);
     return kernel::Error{what + ": " + text};
   };
-  const os::TaskOptions proxy_options{.priority = 0, .queue_capacity = options_.inbound_queue};
   const std::string suffix = "." + std::to_string(id);
   if (rm != kRemoteEnd) {
     os::Node& rn = *nodes_[rm];
-    auto inbound = rn.create("dds_from" + suffix, std::make_unique<InboundProxy>(medium(), id), proxy_options);
+    // Its queue is never used: what it stands for is sent as it, not to it.
+    auto inbound =
+        rn.create("dds_from" + suffix, std::make_unique<RemoteSenderStandIn>(), os::TaskOptions{.queue_capacity = 1});
     if (!inbound) return fail(inbound.error());
     end->rn = &rn;
     end->receiver = *r;
@@ -403,13 +422,8 @@ kernel::Result<RemoteHookId> DdsBus::hook(std::string_view sender, std::string_v
     end->in_hook = *in_hook;
   }
   if (sm != kRemoteEnd) {
-    os::Node& sn = *nodes_[sm];
-    const os::TaskOptions out_proxy{.priority = 0, .queue_capacity = options_.outbound_queue};
-    auto outbound = sn.create("dds_to" + suffix, std::make_unique<OutboundProxy>(medium(), id), out_proxy);
-    if (!outbound) return fail(outbound.error());
-    end->sn = &sn;
+    end->sn = nodes_[sm];
     end->sender = *s;
-    end->outbound = *outbound;
   }
   End* raw = end.get();
   {
@@ -449,9 +463,11 @@ kernel::Result<RemoteHookId> DdsBus::hook(std::string_view sender, std::string_v
       std::lock_guard lock(core_->mu);
       raw->writer = writer;
     }
+    // The suppression window is the receiver's (its end applies it); a sink has no queue.
     os::HookOptions out_options = options;
     out_options.suppress_window = kernel::Duration{0};
-    auto out_hook = raw->sn->hook(raw->sender, raw->outbound, out_options);
+    auto out_hook =
+        raw->sn->hook(raw->sender, std::make_shared<Writer>("dds_to" + suffix, core_, id, key), out_options);
     if (!out_hook) return unregister(out_hook.error());
     std::lock_guard lock(core_->mu);
     raw->out_hook = *out_hook;
@@ -471,7 +487,7 @@ kernel::Status DdsBus::unhook(RemoteHookId id) {
     gone = std::move(*it);
     core_->ends.erase(it);
   }
-  if (gone->sending()) (void)gone->sn->remove(gone->outbound);
+  if (gone->sending() && gone->out_hook.serial != 0) (void)gone->sn->unhook(gone->out_hook);
   if (gone->receiving()) (void)gone->rn->remove(gone->inbound);
   // Waits for the end's running listeners; later ones find no end and do nothing.
   if (gone->writer > 0) dds_delete(gone->writer);
@@ -492,8 +508,10 @@ std::vector<RemoteHookInfo> DdsBus::hooks() const {
     for (const auto& e : core_->ends) {
       Copy c{e->info, e->sn, e->rn, e->out_hook, e->in_hook};
       MediumBooks& m = c.info.medium;
-      // Written and not yet taken here (both ends here), or taken and not yet handed on.
-      const std::uint64_t in_dds = e->sending() && e->receiving() ? e->written - e->received - e->lost : 0;
+      // Written and not yet taken here (both ends here), or taken and not yet handed on. A
+      // sample taken by a listener on the writer's own thread is counted taken before written.
+      const std::uint64_t taken = e->received + e->lost;
+      const std::uint64_t in_dds = e->sending() && e->receiving() && e->written > taken ? e->written - taken : 0;
       m.link_down += e->lost;
       m.in_medium = in_dds + e->pending;
       copies.push_back(std::move(c));
@@ -507,7 +525,10 @@ std::vector<RemoteHookInfo> DdsBus::hooks() const {
   };
   std::vector<RemoteHookInfo> out;
   for (Copy& c : copies) {
-    c.info.books = remote_hook_books(traffic(c.sn, c.out_hook), c.info.medium, traffic(c.rn, c.in_hook));
+    const os::HookTraffic in = traffic(c.rn, c.in_hook);
+    // The stand-in holds nothing: what the listener gave it is what it sent.
+    c.info.medium.posted = in.sent;
+    c.info.books = remote_hook_books(traffic(c.sn, c.out_hook), c.info.medium, in);
     out.push_back(std::move(c.info));
   }
   return out;
@@ -587,68 +608,46 @@ DdsBusCounts DdsBus::counts() const {
   return core_->counts;
 }
 
-void DdsBus::transmit(std::uint32_t hook, std::span<const std::byte> frame, std::size_t) {
-  Core& core = *core_;
+void DdsBus::Writer::on_message(const os::Message& m) {
+  const auto core = core_.lock();
+  if (!core) return;  // the bus is gone (a send counted just before it went)
+  std::lock_guard order(write_mu_);
   dds_entity_t writer = 0;
   symb_msg_dds__HookFrame_ s{};
-  std::string key;
-  HookFrame f;
   {
-    std::lock_guard lock(core.mu);
-    End* e = core.find_locked(hook);
-    if (e == nullptr) return;  // unhooked while this message was in the outbound proxy
+    std::lock_guard lock(core->mu);
+    End* e = core->find_locked(id_);
+    if (e == nullptr) return;  // unhooked while this message was being sent
     ++e->info.medium.handed;
+    if (m.payload.blob) {
+      ++e->info.medium.blob;
+      return;
+    }
     if (!e->matched) {
       ++e->info.medium.link_down;
       return;
     }
-    bool good = false;
-    core.decoder.feed(frame, [&](std::span<const std::byte> payload) {
-      auto parsed = parse_hook_frame(payload);
-      if (parsed.ok()) {
-        f = *parsed;
-        good = true;
-      }
-    });
-    core.decoder.reset();
-    if (!good) {  // cannot happen: the outbound proxy encoded it
-      ++e->info.medium.decode;
-      return;
-    }
     writer = e->writer;
-    key = e->key;
     s.origin = e->origin;
     s.serial = e->serial++;
   }
-  s.hook = key.data();
-  s.stamp = f.time.count();
-  s.port = f.port;
-  s.values._length = s.values._maximum = f.payload.count;
-  s.values._buffer = f.payload.values;
+  s.hook = const_cast<char*>(key_.c_str());
+  s.stamp = m.time.count();
+  s.port = m.port;
+  s.values._length = s.values._maximum = m.payload.count;
+  s.values._buffer = const_cast<float*>(m.payload.values);
   s.values._release = false;
-  // Outside the lock: DDS may deliver to a reader of this process on this thread.
+  // Outside the core's lock: DDS may deliver to a reader of this process on this thread.
   const dds_return_t rc = dds_write(writer, &s);
-  std::lock_guard lock(core.mu);
-  End* e = core.find_locked(hook);
+  std::lock_guard lock(core->mu);
+  End* e = core->find_locked(id_);
   if (e == nullptr) return;
   if (rc == DDS_RETCODE_OK) {
     ++e->written;
-    ++core.counts.written;
+    ++core->counts.written;
   } else {
-    --e->serial;  // one sending context per hook: nothing was written after it
+    --e->serial;  // write_mu_: nothing was written after it
     ++e->info.medium.queue_full;
-  }
-}
-
-void DdsBus::refuse(std::uint32_t hook, HookDrop cause) {
-  std::lock_guard lock(core_->mu);
-  End* e = core_->find_locked(hook);
-  if (e == nullptr) return;
-  if (cause == HookDrop::kBlob) {
-    ++e->info.medium.handed;
-    ++e->info.medium.blob;
-  } else if (cause == HookDrop::kDecode) {
-    ++e->info.medium.decode;
   }
 }
 

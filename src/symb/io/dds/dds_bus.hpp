@@ -1,12 +1,20 @@
 // DdsBus: remote hooks between processes and machines, carried by Eclipse Cyclone DDS (Debian
-// cyclonedds-dev, its C API). The second HookBus (io/hook_bus.hpp) beside the organism bus: the
-// same remote hook of two local hooks and two proxy tasks (io/remote_hook.hpp), the bytes in the
-// middle being DDS samples instead of simulated CAN frames.
+// cyclonedds-dev, its C API). The second HookBus (io/hook_bus.hpp) beside the organism bus, with
+// the same books (io/remote_hook.hpp), and no task of its own on a message's way:
+//
+//   sender --hook to an os::HookSink--> DDS writer  ==DDS==>  listener --Node::send_as(dds_from.<id>)
+//          --local hook--> receiver
+//
+// The sender's hook (port filter, inhibition) hands each message to the DDS writer on the
+// sender's own thread, within its send(); the reader's listener, on DDS's thread, sends it as the
+// stand-in task dds_from.<id>, whose local hook to the receiver applies the receiver's rules
+// (priority, queue policy, suppression window) and counts it, straight into the receiver's queue.
 //
 // Every process of a run makes one DdsBus over its own nodes and declares the same remote hooks
-// ("r1/osc" -> "r2/osc"): each process builds the ends whose nodes it holds (the sender's end: the
-// outbound proxy and a DDS writer; the receiver's end: a DDS reader and the inbound proxy) and
-// ignores the others. Peers find each other by DDS discovery, with no configuration.
+// ("r1/osc" -> "r2/osc"): each process builds the ends whose nodes it holds (the sender's end: a
+// DDS writer and the sender's hook to it; the receiver's end: a DDS reader, the stand-in and its
+// hook to the receiver) and ignores the others. Peers find each other by DDS discovery, with no
+// configuration.
 //
 // On the wire, following ROS 2's DDS conventions so a ROS 2 tool sees the topics:
 //   topic  rt/<prefix>/<sender node>/<sender task>/to/<receiver node>/<receiver task>[/port<p>]
@@ -19,7 +27,8 @@
 // - at the receiver: serials are per origin (one sending end), so a gap is counted `lost` (in
 //   transit); samples that are garbage (more than 32 numbers, a port the hook does not carry, a
 //   hook field naming another hook, a serial going backwards) are counted by cause, logged with
-//   what was wrong, and dropped; the inbound proxy's bounded queue refuses a flood (kReceiver).
+//   what was wrong, and dropped; the receiver's bounded queue takes a flood under the hook's
+//   policy, what it refuses or overwrites counted (kReceiver).
 // - a sending end that disappears (its process killed) is noticed by DDS liveliness within the
 //   lease: the hook turns kDown with a warning in the receiver's log, counted `peers_lost`; the
 //   rest of the run goes on. A sender whose readers are all gone turns kDown too.
@@ -28,8 +37,10 @@
 //   two processes' books together: sender.written == receiver.received + receiver.lost once the
 //   traffic has settled (tests/io/dds_bus_test.cpp checks both).
 //
-// Threads: DDS calls the listeners on its own threads; they hand samples to the receiver's node
-// with Node::inject, so the node's own rules hold under every executor.
+// Threads: DDS calls the listeners on its own threads (and on a writer's, for a reader in the
+// same process); they send through Node::inject, which the thread executor runs at once and the
+// virtual-time executor on its own context. No node lock is held while DDS is called, nor the
+// bus's lock while a node's are taken.
 //
 //   auto bus = DdsBus::create({&r2}, {.domain = 7, .prefix = "demo"}).value();  // in process 2
 //   auto id = bus->hook("r1/osc", "r2/osc", {.port = 1}).value();
@@ -57,8 +68,6 @@ struct DdsBusOptions {
   std::uint32_t domain = 0;     // DDS domain id (0..232); a test picks its own so runs do not meet
   std::string prefix = "symb";  // the first name of every topic: rt/<prefix>/...
   kernel::Duration lease = std::chrono::milliseconds(1000);  // a silent sender is lost after it
-  std::size_t inbound_queue = 64;                            // each inbound proxy's queue
-  std::size_t outbound_queue = 64;                           // each outbound proxy's queue
 };
 
 struct DdsBusCounts {
@@ -75,10 +84,12 @@ struct DdsBusCounts {
   std::uint64_t garbage() const { return bad_size + bad_port + unknown_hook + out_of_order; }
 };
 
-class DdsBus final : public HookBus, private HookMedium {
+class DdsBus final : public HookBus {
  public:
   struct Core;  // shared with DDS's listener threads (defined in the .cpp)
   struct End;
+  struct ListenerArg;
+  class Writer;
   // `nodes`: this process's nodes, none null, unique names; they must outlive the bus. The first
   // bus of a process on a domain makes the domain (with a participant lease of three liveliness
   // leases) and deletes it when it goes, taking any other participant on it along: a second bus
@@ -124,13 +135,10 @@ class DdsBus final : public HookBus, private HookMedium {
 
  private:
   DdsBus(std::vector<os::Node*> nodes, DdsBusOptions options);
-  HookMedium& medium() { return *this; }
-  void transmit(std::uint32_t hook, std::span<const std::byte> frame, std::size_t numbers) override;
-  void refuse(std::uint32_t hook, HookDrop cause) override;
 
   const DdsBusOptions options_;
   std::vector<os::Node*> nodes_;
-  std::shared_ptr<Core> core_;  // shared with work injected into the nodes, which may outlive a hook
+  std::shared_ptr<Core> core_;  // shared with work injected into the nodes and the writers, which may outlive a hook
 };
 
 }  // namespace symb::io
