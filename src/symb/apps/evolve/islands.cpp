@@ -105,7 +105,7 @@ class Ring {
         lose(from, k);
         return {};
       }
-      const double deadline = now_seconds() + wait_;
+      double deadline = now_seconds() + wait_;
       for (;;) {
         int done = 0;
         const bool failed = MPI_Test(&request, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS;
@@ -115,7 +115,9 @@ class Ring {
           for (std::size_t i = 0; i < count; ++i) migrant[i] = static_cast<float>(got[2 + i]);
           return migrant;
         }
-        drain_notices();
+        // A notice means a rank just waited `wait` for a gone one: whoever this rank waits for may
+        // be held up behind it, so the wait starts again.
+        if (drain_notices()) deadline = now_seconds() + wait_;
         if (failed || gone_from_[from] <= k || gone_from_[rank_] <= k || now_seconds() > deadline) {
           cancel(request);
           if (gone_from_[rank_] <= k) return {};
