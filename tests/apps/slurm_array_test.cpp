@@ -3,9 +3,11 @@
 // proctrack/linuxproc, task/none, loopback, its own ports and state folders), then
 // `sbatch --array=1-3 scripts/evolve_array SCENARIO OUT --duration 5min` and
 // `symb evolve --collect OUT`, whose report must be the local fallback's
-// (`scripts/evolve_array --array 1-3 ...`) for the same seeds. Release build, as root, with
-// Debian's slurmd, slurmctld, slurm-client and munge (scripts/setup); skipped with the reason
-// otherwise. The daemons it started are stopped, always (TearDown).
+// (`scripts/evolve_array --array 1-3 ...`) for the same seeds; and an island job
+// (`sbatch -n 2 --wrap "srun --mpi=pmix symb evolve ... --islands"`), whose islands must be
+// mpirun's here. Release build, as root, with Debian's slurmd, slurmctld, slurm-client and munge
+// (scripts/setup); skipped with the reason otherwise. The daemons it started are stopped, always
+// (TearDown).
 #include <unistd.h>
 
 #include <cstdlib>
@@ -31,7 +33,7 @@ class SlurmArrayTest : public ::testing::Test {
     GTEST_SKIP() << "Slurm: release build only";
 #endif
     if (::geteuid() != 0) GTEST_SKIP() << "not root: the hand-started slurmd and munged need root";
-    for (const char* tool : {"slurmctld", "slurmd", "sbatch", "squeue", "scontrol", "munged"})
+    for (const char* tool : {"slurmctld", "slurmd", "sbatch", "srun", "squeue", "scontrol", "munged"})
       if (std::system(("PATH=$PATH:/usr/sbin command -v " + std::string(tool) + " > /dev/null 2>&1").c_str()) != 0)
         GTEST_SKIP() << "no " << tool << " (Debian slurmd, slurmctld, slurm-client, munge: scripts/setup)";
     dir_ = fs::temp_directory_path() / ("slurm_" + std::to_string(::getpid()));
@@ -65,7 +67,7 @@ class SlurmArrayTest : public ::testing::Test {
   std::string last_output_;
 };
 
-TEST_F(SlurmArrayTest, AnArrayJobOnAOneNodeClusterGivesTheLocalFallbacksReport) {
+TEST_F(SlurmArrayTest, ArrayAndIslandJobsOnAOneNodeClusterGiveWhatTheyGiveHere) {
   ASSERT_EQ(sh(kSource + "/tests/apps/slurm_one_node.sh start " + cluster_.string(), "start.log"), 0) << last_output_;
   const std::string slurm = "SLURM_CONF=" + (cluster_ / "slurm.conf").string() + " ";
   const std::string arguments = std::string(SYMB_SCENARIO_DIR) + "/evolve_maze.yaml ";
@@ -79,12 +81,23 @@ TEST_F(SlurmArrayTest, AnArrayJobOnAOneNodeClusterGivesTheLocalFallbacksReport) 
   std::smatch id;
   ASSERT_TRUE(std::regex_search(last_output_, id, std::regex(R"((\d+))"))) << last_output_;
   const std::string job = id[1];
-  // Done when the queue no longer holds it (30 s at most); every array task completed with 0.
-  ASSERT_EQ(sh("for i in $(seq 120); do [ -z \"$(" + slurm + "timeout 2 squeue -h -j " + job +
+  // An island job: two ranks started by srun through Slurm's PMIx (Debian's OpenMPI has no PMI-1/2).
+  const std::string island_args = std::string(SYMB_BINARY) + " evolve " + arguments +
+                                  "--islands --seed 5 --duration 10min --migrate-every 2min --checkpoint-every 0 "
+                                  "--quiet --out ";
+  ASSERT_EQ(sh(slurm + "sbatch --parsable -n 2 --output=" + dir_.string() +
+                   "/islands_%j.out --wrap=\"srun --mpi=pmix " + island_args + (dir_ / "islands_slurm").string() + "\"",
+               "sbatch_islands.log"),
+            0)
+      << last_output_;
+  ASSERT_TRUE(std::regex_search(last_output_, id, std::regex(R"((\d+))"))) << last_output_;
+  const std::string island_job = id[1];
+  // Done when the queue no longer holds them (30 s at most); every task completed with 0.
+  ASSERT_EQ(sh("for i in $(seq 120); do [ -z \"$(" + slurm + "timeout 2 squeue -h -j " + job + "," + island_job +
                    ")\" ] && exit 0; sleep 0.25; done; exit 1",
                "squeue.log"),
             0)
-      << "the array job did not finish within 30 s: " << read_whole_file(cluster_ / "log" / "slurmctld.log");
+      << "the jobs did not finish within 30 s: " << read_whole_file(cluster_ / "log" / "slurmctld.log");
   ASSERT_EQ(sh(slurm + "scontrol -o show job " + job, "scontrol.log"), 0) << last_output_;
   const std::string tasks = last_output_;
   const std::regex completed(R"(ArrayTaskId=\d+ .*JobState=COMPLETED .*ExitCode=0:0)");
@@ -103,6 +116,25 @@ TEST_F(SlurmArrayTest, AnArrayJobOnAOneNodeClusterGivesTheLocalFallbacksReport) 
   const std::string here = report("report_local", dir_ / "local");
   EXPECT_NE(on_slurm.find("collected 3 runs"), std::string::npos) << on_slurm;
   EXPECT_EQ(on_slurm, here);
+
+  // The island job gives what mpirun gives here: the same islands, hash for hash.
+  ASSERT_EQ(sh(slurm + "scontrol -o show job " + island_job, "scontrol_islands.log"), 0) << last_output_;
+  EXPECT_NE(last_output_.find("JobState=COMPLETED"), std::string::npos)
+      << last_output_ << read_whole_file(dir_ / ("islands_" + island_job + ".out"));
+  ASSERT_EQ(sh("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 timeout 60 mpirun --oversubscribe --mca btl "
+               "self,vader --mca oob_tcp_if_include lo -np 2 " +
+                   island_args + (dir_ / "islands_local").string(),
+               "islands_local.log"),
+            0)
+      << last_output_;
+  const auto hash = [](const std::string& text) {
+    std::smatch m;
+    return std::regex_search(text, m, std::regex("islands hash: ([0-9a-f]{16})")) ? m[1].str() : std::string();
+  };
+  const std::string slurm_islands = read_whole_file(dir_ / "islands_slurm" / "islands.txt");
+  EXPECT_NE(slurm_islands.find("islands: 2 ranks"), std::string::npos) << slurm_islands;
+  EXPECT_FALSE(hash(slurm_islands).empty()) << slurm_islands;
+  EXPECT_EQ(hash(slurm_islands), hash(read_whole_file(dir_ / "islands_local" / "islands.txt")));
 }
 
 }  // namespace
