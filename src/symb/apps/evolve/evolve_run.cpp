@@ -245,7 +245,8 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   double best = 0;
   std::optional<NewChampion> champion;
   const auto flush = [&]() -> kernel::Status {
-    for (const EvaluationRow& r : watcher.take_rows()) {
+    const std::vector<EvaluationRow> rows = watcher.take_rows();
+    for (const EvaluationRow& r : rows) {
       history.add(r);
       csv << fixed(seconds(r.time), 3) << "," << r.kind << "," << exact(r.fitness) << "," << exact(r.champion_fitness)
           << "," << exact(r.sigma) << "," << r.evaluations << "\n";
@@ -262,7 +263,7 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
       champion = std::move(c);
     }
     // On disk as it goes: a process killed (an island's rank) keeps every evaluation up to here.
-    csv.flush();
+    if (!rows.empty()) csv.flush();
     if (!csv) return Error{"cannot write " + (out / "fitness.csv").string()};
     return {};
   };

@@ -370,7 +370,7 @@ int run_islands(EvolveOptions options, const IslandOptions& islands, const CliCo
     text << r << "  " << static_cast<std::uint64_t>(v[0]) << "  " << static_cast<std::uint64_t>(v[1]) << "  "
          << static_cast<std::uint64_t>(v[2]) << "  " << static_cast<std::uint64_t>(v[3]) << "  " << fixed(v[4], 6)
          << "  " << hex64(hash);
-    if (v[7] > 0) text << "  (" << static_cast<std::uint64_t>(v[7]) << " migrants missing)";
+    if (v[7] > 0) text << "  (migrants missing: " << static_cast<std::uint64_t>(v[7]) << ")";
     if (ring.gone_from(r) != kNever)
       text << "  (taken as gone from exchange " << ring.gone_from(r) + 1 << ": too slow; it ran on alone)";
     text << "\n";
