@@ -383,6 +383,8 @@ TEST(Evolve, BadCommandLinesExitWithTwo) {
       {{"evolve", kScenario, "--resume"}, "--resume needs --out DIR"},
       {{"evolve", kScenario, "--speed", "0"}, "--speed"},
       {{"evolve", kScenario, "--colour"}, "--colour"},
+      {{"evolve", kScenario, "--islands", "--migrant-wait", "10ms"}, "--migrant-wait: at least 100ms"},
+      {{"evolve", kScenario, "--islands", "--migrant-wait", "a while"}, "--migrant-wait"},
       {{"evolv"}, "did you mean 'evolve'"},
       {{"run", kScenario, "--genome", (dir / "missing.genome").string()}, "--genome: cannot read"},
       {{"run", kScenario, "--genome", (dir / "bad.genome").string()}, "bad.genome:2:"},

@@ -31,6 +31,8 @@ constexpr OptionSpec kOptions[] = {
      "island model under mpirun: an island per rank, seed + rank, OUT/island_<rank>/ (docs/cluster.md)"},
     {"--migrate-every", "D",
      "with --islands: simulated time between migrations along the ring (default 10min; 0: never)"},
+    {"--migrant-wait", "D",
+     "with --islands: wall clock to wait for a migrant before its island is taken as gone (default 60s)"},
     {"--help", "", "this help"},
 };
 
@@ -167,6 +169,12 @@ int run_evolve_command(std::span<const std::string_view> args, const CliContext&
       auto v = parse_duration("--migrate-every", o.value, kMaxDuration);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
       island_options.every = std::get<kernel::Duration>(v);
+    } else if (o.name == "--migrant-wait") {
+      auto v = parse_duration("--migrant-wait", o.value, std::chrono::hours(24));
+      if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kCommand, *e);
+      island_options.wait = std::get<kernel::Duration>(v);
+      if (island_options.wait < std::chrono::milliseconds(100))
+        return usage_error(ctx, kCommand, UsageError{"--migrant-wait: at least 100ms"});
     }
   }
   if (islands && (options.resume || options.view.on))

@@ -87,6 +87,8 @@ class Watcher {
     } else if (s.channel == "evaluations") {
       pending_.evaluations = static_cast<std::uint64_t>(s.values[0]);
       rows_.push_back(pending_);
+    } else if (s.channel == "immigrants" && s.values.size() >= 2) {
+      immigrants_taken_ = static_cast<std::uint64_t>(s.values[1]);
     } else if (s.channel == "champion") {
       champions_.push_back({s.time, pending_.evaluations, std::vector<float>(s.values.begin(), s.values.end()),
                             pending_.sigma, pending_.fitness});
@@ -102,6 +104,11 @@ class Watcher {
     std::lock_guard lock(mu_);
     return std::exchange(champions_, {});
   }
+  // Migrants that entered the population (the task's "immigrants" probe).
+  std::uint64_t immigrants_taken() {
+    std::lock_guard lock(mu_);
+    return immigrants_taken_;
+  }
 
  private:
   std::string node_, task_;
@@ -109,6 +116,7 @@ class Watcher {
   EvaluationRow pending_;
   std::vector<EvaluationRow> rows_;
   std::vector<NewChampion> champions_;
+  std::uint64_t immigrants_taken_ = 0;
 };
 
 struct GenomeFrame {
@@ -237,7 +245,8 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   double best = 0;
   std::optional<NewChampion> champion;
   const auto flush = [&]() -> kernel::Status {
-    for (const EvaluationRow& r : watcher.take_rows()) {
+    const std::vector<EvaluationRow> rows = watcher.take_rows();
+    for (const EvaluationRow& r : rows) {
       history.add(r);
       csv << fixed(seconds(r.time), 3) << "," << r.kind << "," << exact(r.fitness) << "," << exact(r.champion_fitness)
           << "," << exact(r.sigma) << "," << r.evaluations << "\n";
@@ -253,6 +262,8 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
       ++result.champions;
       champion = std::move(c);
     }
+    // On disk as it goes: a process killed (an island's rank) keeps every evaluation up to here.
+    if (!rows.empty()) csv.flush();
     if (!csv) return Error{"cannot write " + (out / "fitness.csv").string()};
     return {};
   };
@@ -392,6 +403,7 @@ kernel::Result<EvolveResult> run_evolution(const EvolveOptions& options) {
   result.evaluations = history.size();
   result.champion_fitness = best;
   result.history_hash = history.hash();
+  result.migrants_taken = watcher.immigrants_taken();
   if (champion) result.champion_genes = champion->genes;
   csv.close();
   if (!csv) return Error{"cannot write " + (out / "fitness.csv").string()};

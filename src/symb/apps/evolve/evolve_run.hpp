@@ -58,7 +58,8 @@ struct EvolveOptions {
   // The island model (islands.hpp): every `migrate_every` of simulated time (0: never) `migrate`
   // is called on the run's thread with this run's champion genes (empty before there is one) and
   // its stored fitness; the genes it returns (empty: none) reach the evolution task as a migrant
-  // (evo::kImmigrantPort), at that virtual instant, so a run stays deterministic.
+  // (evo::kImmigrantPort; one_plus_one or mu_plus_one), at that virtual instant, so a run stays
+  // deterministic.
   kernel::Duration migrate_every{0};
   std::function<std::vector<float>(const std::vector<float>& champion, double fitness)> migrate;
 };
@@ -72,7 +73,9 @@ struct EvolveResult {
   std::uint64_t champions = 0;  // new champions seen
   double champion_fitness = 0;
   std::uint64_t history_hash = 0;
-  std::uint64_t migrants = 0;  // migrants handed to the evolution task
+  std::uint64_t migrants = 0;        // migrants handed to the evolution task
+  std::uint64_t migrants_taken = 0;  // of them, those that entered its population (champion; or
+                                     // for (mu+1) a member, replacing the worst)
   std::vector<float> champion_genes;
   bool resumed = false;
   double resumed_from_seconds = 0;

@@ -1,7 +1,9 @@
 #include "symb/evo/mu_plus_one/mu_plus_one.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace symb::evo {
 
@@ -67,12 +69,28 @@ std::size_t MuPlusOne::worst() const {
   return w;
 }
 
+void MuPlusOne::immigrate(RealGenome genome) { immigrant_ = std::move(genome); }
+
 void MuPlusOne::prepare_next() {
+  candidate_immigrated_ = false;
   if (population_.size() < options_.mu) {
     candidate_ = random_real_genome(options_.genes, random_, options_.lo, options_.hi, options_.sigma);
     candidate_.sigma_min = candidate_.sigma_max = options_.sigma;
     kind_ = MuCandidate::kInitial;
     index_ = population_.size();
+    return;
+  }
+  if (immigrant_) {
+    candidate_ = population_.front().genome;  // the bounds and the fixed sigma
+    candidate_.values.resize(options_.genes, 0.0);
+    for (std::size_t i = 0; i < candidate_.values.size(); ++i)
+      candidate_.values[i] = i < immigrant_->values.size() ? std::clamp(immigrant_->values[i], options_.lo, options_.hi)
+                                                           : candidate_.values[i];
+    immigrant_.reset();
+    candidate_immigrated_ = true;
+    ++counts_.immigrants;
+    kind_ = MuCandidate::kChild;
+    index_ = 0;
     return;
   }
   if (random_.uniform() < options_.rho) {
@@ -118,6 +136,7 @@ void MuPlusOne::report(double fitness) {
       const std::size_t w = worst();
       if (fitness > population_[w].fitness) {
         ++counts_.replacements;
+        if (candidate_immigrated_) ++counts_.immigrants_taken;
         population_[w] = {candidate_, fitness, 1};
       }
       break;

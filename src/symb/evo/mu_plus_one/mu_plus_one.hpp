@@ -12,6 +12,8 @@
 //    first), then Gaussian mutation N(0, sigma) on every gene, reflected into the bounds. sigma is
 //    fixed (the CEC 2010 paper tunes it as a parameter; "of overriding importance");
 //  - a child replaces the population's worst member when it is strictly better; else it is lost;
+//  - an island model's migrant (immigrate()) is evaluated as the next child, in place of a mutant,
+//    and enters the population by the same rule: replacing the worst member if strictly better;
 //  - a re-evaluation's measurement is AVERAGED with the member's earlier ones by default (the
 //    member's fitness is the mean of all its measurements, so a lucky score is diluted but a good
 //    genome's record is not thrown away by one unlucky run); `replace` keeps only the newest, as
@@ -21,6 +23,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "symb/evo/genome/real_genome.hpp"
@@ -50,12 +53,14 @@ enum class MuCandidate : std::uint8_t { kInitial, kChild, kReevaluation };
 const char* to_string(MuCandidate c);
 
 struct MuPlusOneCounts {
-  std::uint64_t evaluations = 0;    // reports
-  std::uint64_t initial = 0;        // random members evaluated to fill the population
-  std::uint64_t children = 0;       // child reports
-  std::uint64_t replacements = 0;   // children that replaced the worst member
-  std::uint64_t reevaluations = 0;  // member re-runs reported
-  std::uint64_t crossovers = 0;     // children made by crossover
+  std::uint64_t evaluations = 0;       // reports
+  std::uint64_t initial = 0;           // random members evaluated to fill the population
+  std::uint64_t children = 0;          // child reports
+  std::uint64_t replacements = 0;      // children that replaced the worst member
+  std::uint64_t reevaluations = 0;     // member re-runs reported
+  std::uint64_t crossovers = 0;        // children made by crossover
+  std::uint64_t immigrants = 0;        // migrants evaluated as children (immigrate())
+  std::uint64_t immigrants_taken = 0;  // of them, those that replaced the worst member
 };
 
 struct Member {
@@ -76,6 +81,13 @@ class MuPlusOne {
   std::size_t candidate_index() const { return index_; }
   // The fitness measured for next(); non-finite values count as the lowest possible.
   void report(double fitness);
+
+  // An island model's migrant: once the population is full, the next candidate is `genome` (its
+  // values put into the bounds, the fixed sigma) as a child instead of a re-evaluation or a mutant
+  // (no random number drawn, so a run stays deterministic given when migrants come); it replaces
+  // the worst member only if strictly better, as any child. Takes effect at the next candidate
+  // (the one under evaluation is not disturbed); a second call before then replaces the first.
+  void immigrate(RealGenome genome);
 
   // The members evaluated so far (mu once the population is full).
   const std::vector<Member>& population() const { return population_; }
@@ -100,6 +112,8 @@ class MuPlusOne {
   RealGenome candidate_;
   MuCandidate kind_ = MuCandidate::kInitial;
   std::size_t index_ = 0;
+  std::optional<RealGenome> immigrant_;
+  bool candidate_immigrated_ = false;  // next() came from immigrate()
   MuPlusOneCounts counts_;
 };
 

@@ -101,6 +101,18 @@ void MuPlusOneTask::start_candidate() {
 }
 
 void MuPlusOneTask::on_message(const os::Message& m) {
+  if (m.port == kImmigrantPort && !m.payload.blob) {
+    const auto genes = m.numbers();
+    if (!algorithm_ || genes.size() != options_.algorithm.genes) {
+      log(os::LogLevel::kWarn, "mu_plus_one: ignored a migrant of " + std::to_string(genes.size()) + " genes (" +
+                                   std::to_string(options_.algorithm.genes) + " expected)");
+      return;
+    }
+    RealGenome g;
+    g.values.assign(genes.begin(), genes.end());
+    algorithm_->immigrate(std::move(g));
+    return;
+  }
   if (state() != EvolutionState::kRunning) return;
   if (auto fitness = swap_.feed(m, now())) finish_evaluation(*fitness);
 }
@@ -126,6 +138,8 @@ void MuPlusOneTask::finish_evaluation(double fitness) {
   probe("best_fitness", {static_cast<float>(best.fitness)});
   probe("mean_fitness", {static_cast<float>(mean)});
   probe("evaluations", {static_cast<float>(a.counts().evaluations)});
+  if (kind == MuCandidate::kChild && a.counts().immigrants > 0)
+    probe("immigrants", {static_cast<float>(a.counts().immigrants), static_cast<float>(a.counts().immigrants_taken)});
   // The best member's genes whenever another genome becomes the best (as floats: what the mlp
   // drove with), so whoever watches the run (symb evolve) can save it.
   if (probing() && best.genome.values != probed_best_) {

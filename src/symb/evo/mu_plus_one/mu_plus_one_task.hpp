@@ -16,7 +16,10 @@
 // Random numbers from the task's own stream (Task::random()).
 // Probes after every evaluation: "fitness" [measured, kind: 0 initial, 1 child, 2 re-evaluation],
 // "best_fitness", "mean_fitness", "evaluations", and "champion" (the best member's genes) when
-// another genome becomes the best.
+// another genome becomes the best; "immigrants" [migrants evaluated or drawn, of them those that
+// replaced the worst member] after a child once migrants came. A migrant for the island model
+// arrives on kImmigrantPort (as for one_plus_one: its numbers are the genes) and becomes the next
+// candidate once the population is full (MuPlusOne::immigrate).
 // A missing task: a warning, then a retry every tick (period 1 s); a controller that cannot be
 // created: the error is logged and evolution stops (state kFailed). Removing the evolution task
 // leaves the candidate of the moment driving.

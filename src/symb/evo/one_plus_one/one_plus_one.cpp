@@ -42,6 +42,7 @@ OnePlusOne::OnePlusOne(OnePlusOneOptions options, kernel::RandomStream random) :
 
 void OnePlusOne::new_challenger() {
   kind_ = Candidate::kChallenger;
+  candidate_immigrated_ = immigrant_.has_value();
   if (immigrant_) {
     candidate_ = champion_;
     for (std::size_t i = 0; i < candidate_.values.size() && i < immigrant_->values.size(); ++i)
@@ -75,6 +76,7 @@ void OnePlusOne::report(double fitness) {
   ++counts_.challengers;
   if (fitness > champion_fitness_) {
     ++counts_.successes;
+    if (candidate_immigrated_) ++counts_.immigrants_taken;
     champion_ = candidate_;
     on_success(champion_);
     champion_fitness_ = champion_sum_ = fitness;

@@ -41,11 +41,12 @@ enum class Candidate : std::uint8_t { kFirst, kChallenger, kReevaluation };
 const char* to_string(Candidate c);
 
 struct OnePlusOneCounts {
-  std::uint64_t evaluations = 0;    // reports
-  std::uint64_t challengers = 0;    // challenger reports
-  std::uint64_t successes = 0;      // challengers that became champion
-  std::uint64_t reevaluations = 0;  // champion re-runs reported
-  std::uint64_t immigrants = 0;     // challengers that came from immigrate()
+  std::uint64_t evaluations = 0;       // reports
+  std::uint64_t challengers = 0;       // challenger reports
+  std::uint64_t successes = 0;         // challengers that became champion
+  std::uint64_t reevaluations = 0;     // champion re-runs reported
+  std::uint64_t immigrants = 0;        // challengers that came from immigrate()
+  std::uint64_t immigrants_taken = 0;  // of them, those that became champion
 };
 
 class OnePlusOne {
@@ -90,6 +91,7 @@ class OnePlusOne {
   double champion_fitness_ = 0;
   double champion_sum_ = 0;
   std::optional<RealGenome> immigrant_;
+  bool candidate_immigrated_ = false;  // next() came from immigrate()
   OnePlusOneCounts counts_;
 };
 

@@ -135,6 +135,8 @@ void OnePlusOneTask::finish_evaluation(double fitness) {
   probe("champion_fitness", {static_cast<float>(a.champion_fitness())});
   probe("sigma", {static_cast<float>(a.sigma())});
   probe("evaluations", {static_cast<float>(a.counts().evaluations)});
+  if (kind == Candidate::kChallenger && a.counts().immigrants > 0)
+    probe("immigrants", {static_cast<float>(a.counts().immigrants), static_cast<float>(a.counts().immigrants_taken)});
   // The champion's genes whenever it changes (as floats: what the mlp drove with), so whoever
   // watches the run (symb evolve) can save it.
   if (probing() && (kind == Candidate::kFirst || a.counts().successes > successes_before)) {

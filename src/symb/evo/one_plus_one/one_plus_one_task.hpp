@@ -24,7 +24,9 @@
 // names). The random numbers come from the task's own stream (Task::random()).
 // Probes after every evaluation: "champion_fitness", "sigma", "evaluations", and "fitness" (the
 // candidate's measured fitness, its kind: 0 first, 1 challenger, 2 re-evaluation); "champion" (the
-// champion's genes as floats) after the evaluation that made a new champion.
+// champion's genes as floats) after the evaluation that made a new champion; "immigrants"
+// [migrants drawn as challengers, of them those that became champion] after a challenger once
+// migrants came.
 // If a task it needs is missing it logs a warning and retries every tick (period 1 s); if a
 // controller cannot be created it logs the error and stops evolving (state kFailed). Removing
 // the evolution task leaves the candidate of the moment driving.
