@@ -32,7 +32,7 @@ constexpr OptionSpec kOptions[] = {
     {"--migrate-every", "D",
      "with --islands: simulated time between migrations along the ring (default 10min; 0: never)"},
     {"--migrant-wait", "D",
-     "with --islands: wall clock to wait for a migrant before its island is taken as gone (default 60s)"},
+     "with --islands: wall clock of silence after which an island is taken as gone (default 60s)"},
     {"--help", "", "this help"},
 };
 
