@@ -16,6 +16,7 @@
 namespace symb::apps::evolve {
 namespace {
 
+constexpr int kReportTag = 15;
 constexpr int kAliveTag = 16;
 constexpr int kFiguresTag = 17;
 constexpr int kNoticeTag = 18;
@@ -25,9 +26,11 @@ constexpr int kMigrantTagBase = 100;
 constexpr std::uint64_t kTagSpan = 30000;
 constexpr std::size_t kMaxGenes = 32;  // one message's inline numbers (os::Payload)
 constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
+constexpr std::uint64_t kLeft = kNever - 1;  // found_at of a rank that left on its own (alive)
 // A migrant on the wire: [gene count, fitness, genes..., zero padding].
 using MigrantBuffer = std::array<double, 2 + kMaxGenes>;
-// A notice to every rank: [rank, first exchange the ring skips it, exchange it was found missing at].
+// A notice to every rank: [rank, first exchange the ring skips it, exchange it was found missing
+// at, or -1: it left on its own, its run failed].
 using Notice = std::array<long long, 3>;
 // What the report's writer hears from every island: seed, evaluations, migrants, migrants taken,
 // champion fitness, history hash (two halves), migrants missing, 1 if the run finished.
@@ -161,7 +164,7 @@ class Ring {
   }
 
   // This rank stops before the end (its run failed): the others stop waiting for it.
-  void leave() { mark_gone(rank_, exchange_, exchange_, true); }
+  void leave() { mark_gone(rank_, exchange_, kLeft, true); }
 
   // Every island's figures to every rank: the report's writer is the lowest rank still there,
   // whichever that is. Returns the figures heard (this rank's own included) if this rank writes
@@ -203,16 +206,45 @@ class Ring {
     }
     // The first rank still there writes the report.
     for (int r = 0; r < rank_; ++r)
-      if (all[static_cast<std::size_t>(r)]) return std::nullopt;
+      if (all[static_cast<std::size_t>(r)]) {
+        writer_ = r;
+        return std::nullopt;
+      }
     for (int r = 0; r < size_; ++r)
       if (!all[static_cast<std::size_t>(r)] && gone_from_[r] == kNever) mark_gone(r, exchange_, exchange_, false);
     return all;
   }
 
+  // The report is written: the others may go. Under plain mpirun the first rank to exit with a
+  // failure stops the job, so none leaves before the report is on disk.
+  void report_written() {
+    for (int q = 0; q < size_; ++q)
+      if (q != rank_ && (gone_from_[q] == kNever || found_at_[q] == kLeft))
+        send(&kAliveWord, 1, MPI_INT, q, kReportTag);
+  }
+  // Waits for the report's writer (the first rank it heard figures from) to say it is written, as
+  // long as the writer is not silent for `wait`.
+  void await_report() {
+    const double since = now_seconds();
+    for (;;) {
+      int waiting = 0;
+      MPI_Status status;
+      if (MPI_Iprobe(MPI_ANY_SOURCE, kReportTag, MPI_COMM_WORLD, &waiting, &status) == MPI_SUCCESS && waiting) {
+        int word = 0;
+        MPI_Recv(&word, 1, MPI_INT, status.MPI_SOURCE, kReportTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        return;
+      }
+      beat();
+      drain();
+      if (writer_ < 0 || now_seconds() - std::max(since, last_heard_[writer_]) > wait_) return;
+      pause_briefly();
+    }
+  }
+
   // Whether a peer is gone (or this rank was taken as gone): then MPI_Finalize is not safe.
   bool lost_any() const {
-    for (std::uint64_t g : gone_from_)
-      if (g != kNever) return true;
+    for (int r = 0; r < size_; ++r)
+      if (gone_from_[r] != kNever && found_at_[r] != kLeft) return true;
     return false;
   }
   // The sends that reached live peers are done (a healthy run's end, before MPI_Finalize).
@@ -267,8 +299,8 @@ class Ring {
     gone_from_[r] = from_exchange;
     found_at_[r] = found;
     if (tell) {
-      Notice& notice =
-          notices_out_.emplace_back(Notice{r, static_cast<long long>(from_exchange), static_cast<long long>(found)});
+      Notice& notice = notices_out_.emplace_back(
+          Notice{r, static_cast<long long>(from_exchange), found == kLeft ? -1LL : static_cast<long long>(found)});
       for (int q = 0; q < size_; ++q)
         if (q != rank_) send(notice.data(), notice.size(), MPI_LONG_LONG, q, kNoticeTag);
     }
@@ -303,8 +335,9 @@ class Ring {
                    MPI_STATUS_IGNORE) != MPI_SUCCESS)
         return any;
       any = true;
-      if (n[0] >= 0 && n[0] < size_ && n[1] >= 0 && n[2] >= 0)
-        mark_gone(static_cast<int>(n[0]), static_cast<std::uint64_t>(n[1]), static_cast<std::uint64_t>(n[2]), false);
+      if (n[0] >= 0 && n[0] < size_ && n[1] >= 0 && n[2] >= -1)
+        mark_gone(static_cast<int>(n[0]), static_cast<std::uint64_t>(n[1]),
+                  n[2] < 0 ? kLeft : static_cast<std::uint64_t>(n[2]), false);
     }
   }
 
@@ -318,6 +351,7 @@ class Ring {
   std::vector<std::uint64_t> gone_from_;  // per rank: the first exchange the ring skips it
   std::vector<std::uint64_t> found_at_;   // per rank: the exchange its migrant was found missing
   std::vector<double> last_heard_;        // per rank: when it last said anything
+  int writer_ = -1;                       // the rank that writes the report, if not this one
   std::deque<MigrantBuffer> sent_;        // by exchange
   std::vector<int> sent_to_;              // by exchange
   std::deque<Notice> notices_out_;
@@ -386,7 +420,10 @@ int run_islands(EvolveOptions options, const IslandOptions& islands, const CliCo
     }
     return status;
   };
-  if (!all) return leave(own_status);
+  if (!all) {
+    ring.await_report();
+    return leave(own_status);
+  }
 
   std::ostringstream text;
   const bool migrating = islands.every.count() > 0 && size > 1;
@@ -447,8 +484,10 @@ int run_islands(EvolveOptions options, const IslandOptions& islands, const CliCo
          << " s); the others finished and are above\n";
   if (!failed.empty()) text << "failed: island " << list(failed) << "\n";
   if (rank != 0) text << "written by rank " << rank << ": the ranks below it are gone\n";
-  if (auto st = write_file(out / "islands.txt", text.str()); !st) {
-    ctx.err << "symb evolve --islands: " << st.error() << "\n";
+  const auto written = write_file(out / "islands.txt", text.str());
+  if (size > 1) ring.report_written();
+  if (!written) {
+    ctx.err << "symb evolve --islands: " << written.error() << "\n";
     return leave(kExitFailure);
   }
   if (!gone.empty())
