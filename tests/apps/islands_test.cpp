@@ -165,6 +165,27 @@ TEST_F(IslandsTest, WhenRankZeroDiesTheNextRankWritesTheReport) {
   EXPECT_NE(report.find("\n2  7  514  "), std::string::npos) << report;
 }
 
+// An island whose run fails (its folder cannot be made) leaves the ring at once; the others finish
+// and the report, written before anyone exits (plain mpirun stops the job at the first failure),
+// says which failed.
+TEST_F(IslandsTest, AFailedIslandIsReportedAndTheOthersFinish) {
+  const fs::path out = dir_ / "failing";
+  fs::create_directories(out);
+  std::ofstream(out / "island_1") << "a file where island 1's folder goes\n";
+  EXPECT_NE(sh(mpirun(3, "") + SYMB_SCENARIO_DIR +
+                   "/evolve_maze.yaml --islands --duration 10min --checkpoint-every 0 --quiet --seed 5 "
+                   "--migrate-every 2min --out " +
+                   out.string(),
+               "failing.log"),
+            0);
+  EXPECT_NE(last_output_.find("rank 1: cannot create"), std::string::npos) << last_output_;
+  const std::string report = read_whole_file(out / "islands.txt");
+  EXPECT_NE(report.find("\n1  6  failed"), std::string::npos) << report << last_output_;
+  EXPECT_NE(report.find("\n0  5  28  "), std::string::npos) << report;
+  EXPECT_NE(report.find("\n2  7  28  "), std::string::npos) << report;
+  EXPECT_NE(report.find("failed: island 1"), std::string::npos) << report;
+}
+
 // (mu+1)-ONLINE islands: the maze with its evolution task swapped for mu_plus_one. A migrant is
 // evaluated as a child and enters the population by replacing the worst member when better.
 TEST_F(IslandsTest, MuPlusOneIslandsTakeMigrantsAndAreDeterministic) {

@@ -28,11 +28,12 @@ constexpr OptionSpec kOptions[] = {
     {"--token", "T", "the web view's token (default: a random one, printed)"},
     {"--quiet", "", "no progress line and no summary"},
     {"--islands", "",
-     "island model under mpirun: an island per rank, seed + rank, OUT/island_<rank>/ (docs/cluster.md)"},
+     "island model under mpirun (--enable-recovery: the others go on if one dies): an island per rank, seed + "
+     "rank, OUT/island_<rank>/ (docs/cluster.md)"},
     {"--migrate-every", "D",
      "with --islands: simulated time between migrations along the ring (default 10min; 0: never)"},
     {"--migrant-wait", "D",
-     "with --islands: wall clock to wait for a migrant before its island is taken as gone (default 60s)"},
+     "with --islands: wall clock of silence after which an island is taken as gone (default 60s)"},
     {"--help", "", "this help"},
 };
 

@@ -16,6 +16,8 @@
 namespace symb::apps::evolve {
 namespace {
 
+constexpr int kReportTag = 15;
+constexpr int kAliveTag = 16;
 constexpr int kFiguresTag = 17;
 constexpr int kNoticeTag = 18;
 // A migrant's tag is its exchange's number (mod kTagSpan; MPI allows tags up to 32767 at least),
@@ -24,9 +26,11 @@ constexpr int kMigrantTagBase = 100;
 constexpr std::uint64_t kTagSpan = 30000;
 constexpr std::size_t kMaxGenes = 32;  // one message's inline numbers (os::Payload)
 constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
+constexpr std::uint64_t kLeft = kNever - 1;  // found_at of a rank that left on its own (alive)
 // A migrant on the wire: [gene count, fitness, genes..., zero padding].
 using MigrantBuffer = std::array<double, 2 + kMaxGenes>;
-// A notice to every rank: [rank, first exchange the ring skips it, exchange it was found missing at].
+// A notice to every rank: [rank, first exchange the ring skips it, exchange it was found missing
+// at, or -1: it left on its own, its run failed].
 using Notice = std::array<long long, 3>;
 // What the report's writer hears from every island: seed, evaluations, migrants, migrants taken,
 // champion fitness, history hash (two halves), migrants missing, 1 if the run finished.
@@ -70,24 +74,47 @@ void pause_briefly() { std::this_thread::sleep_for(std::chrono::microseconds(200
 
 // One rank's view of the ring: who is gone and from which exchange the ring skips them, and the
 // migrants it sent (re-sent to the new neighbour when it learns late that the addressee is gone).
-// A migrant that does not come within `wait` of wall clock is counted missing; its sender is then
-// taken as gone from the next exchange on, and every rank is told, so its predecessor sends to its
-// successor from then on. Which exchange that is depends on when the rank died; given it, every
-// migrant is the one a rank sent at that exchange, whenever it arrives.
+// Every rank says it is alive to the others about once a second (beat(): from the run's progress
+// and from every wait), so a slow rank is told from a dead one. A migrant whose sender has been
+// silent for `wait` of wall clock is counted missing; its sender is then taken as gone from the
+// next exchange on, and every rank is told, so its predecessor sends to its successor from then
+// on. Which exchange that is depends on when the rank died; given it, every migrant is the one a
+// rank sent at that exchange, whenever it arrives.
 class Ring {
  public:
   Ring(int rank, int size, double wait_seconds, const CliContext& ctx)
-      : rank_(rank), size_(size), wait_(wait_seconds), ctx_(ctx), gone_from_(size, kNever), found_at_(size, kNever) {}
+      : rank_(rank),
+        size_(size),
+        wait_(wait_seconds),
+        beat_every_(std::min(1.0, wait_seconds / 4)),
+        ctx_(ctx),
+        gone_from_(size, kNever),
+        found_at_(size, kNever),
+        last_heard_(size, now_seconds()) {}
+
+  // "Alive" to every rank still in the ring, at most every beat_every_.
+  void beat() {
+    const double now = now_seconds();
+    if (now - last_beat_ < beat_every_) return;
+    last_beat_ = now;
+    for (int q = 0; q < size_; ++q) {
+      if (q == rank_ || gone_from_[q] != kNever) continue;
+      MPI_Request request = MPI_REQUEST_NULL;
+      // The word never changes, so the request can go at once (MPI finishes the send on its own).
+      if (MPI_Isend(&kAliveWord, 1, MPI_INT, q, kAliveTag, MPI_COMM_WORLD, &request) == MPI_SUCCESS)
+        MPI_Request_free(&request);
+    }
+  }
 
   std::vector<float> exchange(const std::vector<float>& champion, double fitness) {
     const std::uint64_t k = exchange_++;
-    drain_notices();
+    drain();
     MigrantBuffer& out = sent_.emplace_back();
     const std::size_t n = std::min(champion.size(), kMaxGenes);
     out[0] = static_cast<double>(n);
     out[1] = fitness;
     for (std::size_t i = 0; i < n; ++i) out[2 + i] = champion[i];
-    // A rank the others took as gone (too slow) carries on alone: nobody sends to it any more.
+    // A rank the others took as gone (silent too long) carries on alone: nobody sends to it any more.
     if (gone_from_[rank_] <= k) {
       sent_to_.push_back(rank_);
       return {};
@@ -105,20 +132,23 @@ class Ring {
         lose(from, k);
         return {};
       }
-      double deadline = now_seconds() + wait_;
+      double since = now_seconds();
       for (;;) {
         int done = 0;
         const bool failed = MPI_Test(&request, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS;
         if (done && !failed) {
+          last_heard_[from] = now_seconds();
           const auto count = static_cast<std::size_t>(std::clamp(got[0], 0.0, static_cast<double>(kMaxGenes)));
           std::vector<float> migrant(count);
           for (std::size_t i = 0; i < count; ++i) migrant[i] = static_cast<float>(got[2 + i]);
           return migrant;
         }
-        // A notice means a rank just waited `wait` for a gone one: whoever this rank waits for may
-        // be held up behind it, so the wait starts again.
-        if (drain_notices()) deadline = now_seconds() + wait_;
-        if (failed || gone_from_[from] <= k || gone_from_[rank_] <= k || now_seconds() > deadline) {
+        // A notice means a rank just waited for a gone one: whoever this rank waits for may be
+        // held up behind it, so the wait starts again.
+        beat();
+        if (drain()) since = now_seconds();
+        const bool silent = now_seconds() - std::max(since, last_heard_[from]) > wait_;
+        if (failed || gone_from_[from] <= k || gone_from_[rank_] <= k || silent) {
           cancel(request);
           if (gone_from_[rank_] <= k) return {};
           // Another rank found it gone first: this exchange's migrant comes from the one before.
@@ -134,7 +164,7 @@ class Ring {
   }
 
   // This rank stops before the end (its run failed): the others stop waiting for it.
-  void leave() { mark_gone(rank_, exchange_, exchange_, true); }
+  void leave() { mark_gone(rank_, exchange_, kLeft, true); }
 
   // Every island's figures to every rank: the report's writer is the lowest rank still there,
   // whichever that is. Returns the figures heard (this rank's own included) if this rank writes
@@ -151,9 +181,16 @@ class Ring {
       return true;
     };
     // Every rank listens until all the others finished (or are gone): a rank found gone late may
-    // still need a migrant re-sent to its successor. Quiet for `wait`: whoever has not spoken is gone.
-    double deadline = now_seconds() + wait_;
-    while (!heard_all() && now_seconds() <= deadline) {
+    // still need a migrant re-sent to its successor. Silent for `wait`: gone.
+    double since = now_seconds();
+    const auto waiting_for_someone = [&] {
+      for (int r = 0; r < size_; ++r)
+        if (!all[static_cast<std::size_t>(r)] && gone_from_[r] == kNever &&
+            now_seconds() - std::max(since, last_heard_[r]) <= wait_)
+          return true;
+      return false;
+    };
+    while (!heard_all() && waiting_for_someone()) {
       int waiting = 0;
       MPI_Status status;
       if (MPI_Iprobe(MPI_ANY_SOURCE, kFiguresTag, MPI_COMM_WORLD, &waiting, &status) == MPI_SUCCESS && waiting) {
@@ -161,24 +198,53 @@ class Ring {
         if (MPI_Recv(f.data(), static_cast<int>(f.size()), MPI_DOUBLE, status.MPI_SOURCE, kFiguresTag, MPI_COMM_WORLD,
                      MPI_STATUS_IGNORE) == MPI_SUCCESS)
           all[static_cast<std::size_t>(status.MPI_SOURCE)] = f;
-        deadline = now_seconds() + wait_;
         continue;
       }
-      if (drain_notices()) deadline = now_seconds() + wait_;
+      beat();
+      if (drain()) since = now_seconds();
       pause_briefly();
     }
     // The first rank still there writes the report.
     for (int r = 0; r < rank_; ++r)
-      if (all[static_cast<std::size_t>(r)]) return std::nullopt;
+      if (all[static_cast<std::size_t>(r)]) {
+        writer_ = r;
+        return std::nullopt;
+      }
     for (int r = 0; r < size_; ++r)
       if (!all[static_cast<std::size_t>(r)] && gone_from_[r] == kNever) mark_gone(r, exchange_, exchange_, false);
     return all;
   }
 
+  // The report is written: the others may go. Under plain mpirun the first rank to exit with a
+  // failure stops the job, so none leaves before the report is on disk.
+  void report_written() {
+    for (int q = 0; q < size_; ++q)
+      if (q != rank_ && (gone_from_[q] == kNever || found_at_[q] == kLeft))
+        send(&kAliveWord, 1, MPI_INT, q, kReportTag);
+  }
+  // Waits for the report's writer (the first rank it heard figures from) to say it is written, as
+  // long as the writer is not silent for `wait`.
+  void await_report() {
+    const double since = now_seconds();
+    for (;;) {
+      int waiting = 0;
+      MPI_Status status;
+      if (MPI_Iprobe(MPI_ANY_SOURCE, kReportTag, MPI_COMM_WORLD, &waiting, &status) == MPI_SUCCESS && waiting) {
+        int word = 0;
+        MPI_Recv(&word, 1, MPI_INT, status.MPI_SOURCE, kReportTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        return;
+      }
+      beat();
+      drain();
+      if (writer_ < 0 || now_seconds() - std::max(since, last_heard_[writer_]) > wait_) return;
+      pause_briefly();
+    }
+  }
+
   // Whether a peer is gone (or this rank was taken as gone): then MPI_Finalize is not safe.
   bool lost_any() const {
-    for (std::uint64_t g : gone_from_)
-      if (g != kNever) return true;
+    for (int r = 0; r < size_; ++r)
+      if (gone_from_[r] != kNever && found_at_[r] != kLeft) return true;
     return false;
   }
   // The sends that reached live peers are done (a healthy run's end, before MPI_Finalize).
@@ -222,7 +288,7 @@ class Ring {
   void lose(int from, std::uint64_t k) {
     ++missing_;
     ctx_.err << "symb evolve --islands: rank " << rank_ << ": no migrant from rank " << from << " for exchange "
-             << k + 1 << " within " << fixed(wait_, 1) << " s (--migrant-wait): rank " << from
+             << k + 1 << ", and not a word from it for " << fixed(wait_, 1) << " s (--migrant-wait): rank " << from
              << " is taken as gone; the ring skips it from exchange " << k + 2 << "\n"
              << std::flush;
     mark_gone(from, k + 1, k, true);
@@ -233,8 +299,8 @@ class Ring {
     gone_from_[r] = from_exchange;
     found_at_[r] = found;
     if (tell) {
-      Notice& notice =
-          notices_out_.emplace_back(Notice{r, static_cast<long long>(from_exchange), static_cast<long long>(found)});
+      Notice& notice = notices_out_.emplace_back(
+          Notice{r, static_cast<long long>(from_exchange), found == kLeft ? -1LL : static_cast<long long>(found)});
       for (int q = 0; q < size_; ++q)
         if (q != rank_) send(notice.data(), notice.size(), MPI_LONG_LONG, q, kNoticeTag);
     }
@@ -247,8 +313,17 @@ class Ring {
     }
   }
 
-  // Whether a notice came.
-  bool drain_notices() {
+  // Takes the "alive" words and the notices that came; whether a notice came.
+  bool drain() {
+    for (;;) {
+      int waiting = 0;
+      MPI_Status status;
+      if (MPI_Iprobe(MPI_ANY_SOURCE, kAliveTag, MPI_COMM_WORLD, &waiting, &status) != MPI_SUCCESS || !waiting) break;
+      int word = 0;
+      if (MPI_Recv(&word, 1, MPI_INT, status.MPI_SOURCE, kAliveTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE) != MPI_SUCCESS)
+        break;
+      last_heard_[status.MPI_SOURCE] = now_seconds();
+    }
     bool any = false;
     for (;;) {
       int waiting = 0;
@@ -260,17 +335,23 @@ class Ring {
                    MPI_STATUS_IGNORE) != MPI_SUCCESS)
         return any;
       any = true;
-      if (n[0] >= 0 && n[0] < size_ && n[1] >= 0 && n[2] >= 0)
-        mark_gone(static_cast<int>(n[0]), static_cast<std::uint64_t>(n[1]), static_cast<std::uint64_t>(n[2]), false);
+      if (n[0] >= 0 && n[0] < size_ && n[1] >= 0 && n[2] >= -1)
+        mark_gone(static_cast<int>(n[0]), static_cast<std::uint64_t>(n[1]),
+                  n[2] < 0 ? kLeft : static_cast<std::uint64_t>(n[2]), false);
     }
   }
 
+  static constexpr int kAliveWord = 1;
+
   int rank_, size_;
-  double wait_;
+  double wait_, beat_every_;
+  double last_beat_ = 0;
   const CliContext& ctx_;
   std::uint64_t exchange_ = 0;            // exchanges so far
   std::vector<std::uint64_t> gone_from_;  // per rank: the first exchange the ring skips it
   std::vector<std::uint64_t> found_at_;   // per rank: the exchange its migrant was found missing
+  std::vector<double> last_heard_;        // per rank: when it last said anything
+  int writer_ = -1;                       // the rank that writes the report, if not this one
   std::deque<MigrantBuffer> sent_;        // by exchange
   std::vector<int> sent_to_;              // by exchange
   std::deque<Notice> notices_out_;
@@ -291,7 +372,6 @@ int run_islands(EvolveOptions options, const IslandOptions& islands, const CliCo
   const std::filesystem::path out = options.out_dir;
   options.out_dir = out / ("island_" + std::to_string(rank));
   options.seed = islands.base_seed + static_cast<std::uint64_t>(rank);
-  if (rank != 0) options.on_progress = {};
   const double wait = std::chrono::duration<double>(islands.wait).count();
   if (rank == 0 && size > 1 && !islands.quiet && std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr) {
     const char* recovery = std::getenv("OMPI_MCA_orte_enable_recovery");
@@ -300,6 +380,14 @@ int run_islands(EvolveOptions options, const IslandOptions& islands, const CliCo
               << std::flush;
   }
   Ring ring(rank, size, wait, ctx);
+  if (size > 1) {
+    // The run's progress (every 100 ms of wall clock) carries the "alive" beat; rank 0 shows it.
+    auto show = rank == 0 ? options.on_progress : std::function<void(const EvolveProgress&)>{};
+    options.on_progress = [&ring, show](const EvolveProgress& p) {
+      if (show) show(p);
+      ring.beat();
+    };
+  }
   if (size > 1 && islands.every.count() > 0) {
     options.migrate_every = islands.every;
     options.migrate = [&ring](const std::vector<float>& champion, double fitness) {
@@ -332,7 +420,10 @@ int run_islands(EvolveOptions options, const IslandOptions& islands, const CliCo
     }
     return status;
   };
-  if (!all) return leave(own_status);
+  if (!all) {
+    ring.await_report();
+    return leave(own_status);
+  }
 
   std::ostringstream text;
   const bool migrating = islands.every.count() > 0 && size > 1;
@@ -372,7 +463,7 @@ int run_islands(EvolveOptions options, const IslandOptions& islands, const CliCo
          << "  " << hex64(hash);
     if (v[7] > 0) text << "  (migrants missing: " << static_cast<std::uint64_t>(v[7]) << ")";
     if (ring.gone_from(r) != kNever)
-      text << "  (taken as gone from exchange " << ring.gone_from(r) + 1 << ": too slow; it ran on alone)";
+      text << "  (taken as gone from exchange " << ring.gone_from(r) + 1 << ": silent too long; it ran on alone)";
     text << "\n";
     sum += v[4];
     ++reported;
@@ -389,12 +480,14 @@ int run_islands(EvolveOptions options, const IslandOptions& islands, const CliCo
     return s;
   };
   if (!gone.empty())
-    text << "gone: island " << list(gone) << " (killed, or no word within --migrant-wait " << fixed(wait, 1)
+    text << "gone: island " << list(gone) << " (killed, or silent for --migrant-wait " << fixed(wait, 1)
          << " s); the others finished and are above\n";
   if (!failed.empty()) text << "failed: island " << list(failed) << "\n";
   if (rank != 0) text << "written by rank " << rank << ": the ranks below it are gone\n";
-  if (auto st = write_file(out / "islands.txt", text.str()); !st) {
-    ctx.err << "symb evolve --islands: " << st.error() << "\n";
+  const auto written = write_file(out / "islands.txt", text.str());
+  if (size > 1) ring.report_written();
+  if (!written) {
+    ctx.err << "symb evolve --islands: " << written.error() << "\n";
     return leave(kExitFailure);
   }
   if (!gone.empty())

@@ -8,8 +8,9 @@
 // home-made cluster code.
 //
 // A rank that dies (under `mpirun --enable-recovery`, which keeps the others running): the migrant
-// it owed does not come within `wait` of wall clock, is counted missing, and the ring skips that
-// rank from the next exchange on (its predecessor sends to its successor; every rank is told).
+// it owed does not come and the rank is silent (every live rank says "alive" about once a second)
+// for `wait` of wall clock; the migrant is counted missing, and the ring skips that rank from the
+// next exchange on (its predecessor sends to its successor; every rank is told).
 // The others finish their runs, and the first rank still there writes the report, naming the
 // gone island. Each island's folder keeps what it wrote as it went.
 //
@@ -29,8 +30,7 @@ namespace symb::apps::evolve {
 struct IslandOptions {
   kernel::Duration every = std::chrono::minutes(10);  // migration interval, simulated (0: never)
   std::uint64_t base_seed = 1;
-  // Wall clock a migrant (and, at the end, an island's figures) is waited for before its sender is
-  // taken as gone. Longer than an island's slowest stretch between two exchanges.
+  // Wall clock of silence (no migrant, figures or "alive" word) after which a rank is taken as gone.
   kernel::Duration wait = std::chrono::seconds(60);
   bool quiet = false;
 };
