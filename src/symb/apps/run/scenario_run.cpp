@@ -315,7 +315,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   }
 
   if (remote)
-    if (auto st = remote->wait_for_robots(); !st) return Error{st.error()};
+    if (auto st = remote->wait_for_robots(options.stop_requested); !st) return Error{st.error()};
   const auto wall_start = std::chrono::steady_clock::now();
   const auto wall_seconds = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
