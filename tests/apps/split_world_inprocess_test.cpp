@@ -186,16 +186,18 @@ TEST(HilSplit, ARobotThatStopsAnsweringIsGoneItsWheelsStopAndTheRunGoesOn) {
 }
 
 TEST(HilSplit, TheFramesRefuseWhatIsNotTheirs) {
-  const sim::HilSplitHello h{0x0123'4567'89AB'CDEFull, 4, 12};
+  const sim::HilSplitHello h{0x0123'4567'89AB'CDEFull, 4, 12, 0xDEAD'BEEF};
   const auto back = sim::decode_hello_payload(sim::encode_hello_payload(h));
   ASSERT_TRUE(back.ok()) << back.error();
   EXPECT_EQ(back->seed, h.seed);
   EXPECT_EQ(back->robot, 4u);
   EXPECT_EQ(back->robots, 12u);
+  EXPECT_EQ(back->digest, 0xDEAD'BEEFu);
   const auto numbers = [](std::vector<float> v) { return io::encode_numbers(v); };
-  EXPECT_FALSE(sim::decode_hello_payload(numbers({0, 1, 2, 3, 65536, 0, 2})).ok()) << "a seed piece above 16 bits";
-  EXPECT_FALSE(sim::decode_hello_payload(numbers({0, 1, 2, 3, 4, 2, 2})).ok()) << "robot 2 of 2";
-  EXPECT_FALSE(sim::decode_hello_payload(numbers({1, 1, 2, 3, 4, 0, 2})).ok()) << "a hello's seq is 0";
+  EXPECT_FALSE(sim::decode_hello_payload(numbers({0, 1, 2, 3, 65536, 0, 2, 0, 0})).ok())
+      << "a seed piece above 16 bits";
+  EXPECT_FALSE(sim::decode_hello_payload(numbers({0, 1, 2, 3, 4, 2, 2, 0, 0})).ok()) << "robot 2 of 2";
+  EXPECT_FALSE(sim::decode_hello_payload(numbers({1, 1, 2, 3, 4, 0, 2, 0, 0})).ok()) << "a hello's seq is 0";
   sim::HilSplitSensors f;
   f.seq = 7;
   f.ir[2] = 1234.5f;
@@ -247,7 +249,7 @@ TEST(HilSplit, ARobotRefusesAnotherScenariosHelloAndASecondRun) {
     sim::HilSplitSensors early;
     early.seq = 1;
     send(*world, sim::encode_split_sensors_payload(early));  // before any hello: nothing to run it on
-    send(*world, sim::encode_hello_payload({7, 4, 13}));     // a world of 13 robots
+    send(*world, sim::encode_hello_payload({7, 4, 13, 0}));  // a world of 13 robots
     const auto served = (*robot)->serve(1s);
     ASSERT_FALSE(served.ok());
     EXPECT_NE(served.error().find("the world's scenario has 13 robots and asks for robot 4"), std::string::npos)
@@ -256,10 +258,23 @@ TEST(HilSplit, ARobotRefusesAnotherScenariosHelloAndASecondRun) {
     EXPECT_EQ((*robot)->stats().malformed, 1u);
     EXPECT_EQ((*robot)->system(), nullptr) << "nothing built";
   }
+  {
+    // The same count and index, but another control period: the digest tells.
+    sim::Scenario other = sc;
+    other.control_period = sc.control_period * 2;
+    auto [world, end] = io::make_loopback_pair("digest");
+    auto robot = sim::HilSplitRobot::create(sc, "thymio4", std::shared_ptr<io::IOStream>(std::move(end)));
+    ASSERT_TRUE(robot.ok()) << robot.error();
+    send(*world, sim::encode_hello_payload({7, 4, 12, sim::robot_digest(other, 4)}));
+    const auto served = (*robot)->serve(1s);
+    ASSERT_FALSE(served.ok());
+    EXPECT_NE(served.error().find("the world's robot thymio4 is not"), std::string::npos) << served.error();
+    EXPECT_NE(sim::robot_digest(sc, 4), sim::robot_digest(sc, 5)) << "robots differ by name at least";
+  }
   auto [world, end] = io::make_loopback_pair("again");
   auto robot = sim::HilSplitRobot::create(sc, "thymio4", std::shared_ptr<io::IOStream>(std::move(end)));
   ASSERT_TRUE(robot.ok()) << robot.error();
-  send(*world, sim::encode_hello_payload({99, 4, 12}));
+  send(*world, sim::encode_hello_payload({99, 4, 12, sim::robot_digest(sc, 4)}));
   ASSERT_TRUE((*robot)->serve(1s).ok());
   EXPECT_EQ((*robot)->seed(), std::optional<std::uint64_t>(99)) << "built with the world's seed, not the file's";
   ASSERT_NE((*robot)->system(), nullptr);
@@ -274,7 +289,7 @@ TEST(HilSplit, ARobotRefusesAnotherScenariosHelloAndASecondRun) {
   EXPECT_EQ(st.out_of_order, 1u);
   EXPECT_EQ(st.missed, 2u);
   EXPECT_EQ((*robot)->now(), sc.control_period * 6 - kernel::Duration{1}) << "run up to just before tick 6";
-  send(*world, sim::encode_hello_payload({99, 4, 12}));
+  send(*world, sim::encode_hello_payload({99, 4, 12, sim::robot_digest(sc, 4)}));
   const auto again = (*robot)->serve(1s);
   ASSERT_FALSE(again.ok());
   EXPECT_NE(again.error().find("the world started a new run: this process serves one run"), std::string::npos)

@@ -177,15 +177,16 @@ TEST_F(SplitWorld, ForeignGarbageIsCountedAndDroppedOnBothSides) {
     ASSERT_TRUE((*s)->wait_matched(10s));
     garbage(**s);
   }
+  // On the world's input, while it runs: the stream the robot writes, made before the world, so
+  // that DDS discovers it with the robot's.
+  auto made = (*links)->stream("thymio6", "to_world", "to_robot");
+  ASSERT_TRUE(made.ok()) << made.error();
+  std::shared_ptr<symb::io::DdsFrameStream> foreign = *made;
   auto w = world("thymio6", " --duration 1s --speed 1 --print-hash --quiet");
   wait_for(*w, "robot thymio6: its process answered");
-  {
-    // On the world's input, while it runs: the stream the robot writes.
-    auto s = (*links)->stream("thymio6", "to_world", "to_robot");
-    ASSERT_TRUE(s.ok()) << s.error();
-    ASSERT_TRUE((*s)->wait_matched(5s));
-    garbage(**s);
-  }
+  ASSERT_TRUE(foreign->wait_matched(5s));
+  garbage(*foreign);
+  foreign.reset();
   ASSERT_EQ(w->wait(), 0) << w->output();
   EXPECT_EQ(r->wait(), 0) << r->output();
   EXPECT_TRUE(std::regex_search(r->output(),

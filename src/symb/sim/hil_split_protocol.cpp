@@ -16,12 +16,66 @@ std::optional<std::uint32_t> whole_number(float v, std::uint32_t most) {
 
 }  // namespace
 
+namespace {
+
+struct Fnv1a {
+  std::uint32_t h = 2166136261u;
+  void add(std::string_view s) {
+    for (char c : s) {
+      h ^= static_cast<std::uint8_t>(c);
+      h *= 16777619u;
+    }
+    h ^= 0xFF;  // a separator, so that "ab","c" and "a","bc" differ
+    h *= 16777619u;
+  }
+  void add(std::int64_t v) { add(std::to_string(v)); }
+  void add(double v) { add(std::to_string(v)); }
+};
+
+}  // namespace
+
+std::uint32_t robot_digest(const Scenario& sc, std::size_t index) {
+  Fnv1a f;
+  f.add(static_cast<std::int64_t>(sc.control_period.count()));
+  f.add(sc.world.width);
+  f.add(sc.world.height);
+  f.add(static_cast<std::int64_t>(sc.robots.size()));
+  if (index >= sc.robots.size()) return f.h;
+  const RobotSpec& r = sc.robots[index];
+  f.add(r.name);
+  f.add(static_cast<std::int64_t>(r.kind));
+  for (const TaskSpec& t : r.tasks) {
+    f.add(t.name);
+    f.add(t.type);
+    for (const os::ParamAssignment& p : t.params) {
+      f.add(p.name);
+      f.add(p.value);
+    }
+    f.add(static_cast<std::int64_t>(t.priority.value_or(-1)));
+    f.add(static_cast<std::int64_t>(t.period ? t.period->count() : -1));
+    f.add(static_cast<std::int64_t>(t.queue_capacity ? static_cast<std::int64_t>(*t.queue_capacity) : -1));
+    f.add(static_cast<std::int64_t>(t.autostart));
+  }
+  for (const HookSpec& k : r.hooks) {
+    f.add(k.from);
+    f.add(k.to);
+    f.add(static_cast<std::int64_t>(k.options.priority));
+    f.add(static_cast<std::int64_t>(k.options.policy));
+    f.add(static_cast<std::int64_t>(k.options.enabled));
+    f.add(static_cast<std::int64_t>(k.options.port));
+    f.add(static_cast<std::int64_t>(k.options.suppress_window.count()));
+  }
+  return f.h;
+}
+
 std::vector<std::byte> encode_hello_payload(const HilSplitHello& h) {
   float v[kHilHelloValues];
   v[0] = 0;
   for (int k = 0; k < 4; ++k) v[1 + k] = static_cast<float>((h.seed >> (16 * k)) & 0xFFFF);
   v[5] = static_cast<float>(h.robot);
   v[6] = static_cast<float>(h.robots);
+  v[7] = static_cast<float>(h.digest & 0xFFFF);
+  v[8] = static_cast<float>(h.digest >> 16);
   return io::encode_numbers(v);
 }
 
@@ -64,6 +118,11 @@ kernel::Result<HilSplitHello> decode_hello_payload(std::span<const std::byte> pa
     return kernel::Error{"hello frame: robot index " + std::to_string((*n)[5]) + " of " + std::to_string((*n)[6])};
   h.robot = *robot;
   h.robots = *robots;
+  for (int k = 0; k < 2; ++k) {
+    const auto piece = whole_number((*n)[7 + k], 0xFFFF);
+    if (!piece) return kernel::Error{"hello frame: digest piece " + std::to_string(k) + " is not a 16-bit integer"};
+    h.digest |= *piece << (16 * k);
+  }
   return h;
 }
 

@@ -2,9 +2,10 @@
 // the 2D hardware-in-the-loop protocol (hil_protocol.hpp) with the two things a robot's node in
 // another process needs beyond a board's IR, both io number frames:
 //
-//   world -> robot   hello    [0, seed0, seed1, seed2, seed3, robot index, robot count]
-//                             the run's seed in four 16-bit pieces (a float32 carries 24 bits
-//                             exactly), repeated every period until the robot answers
+//   world -> robot   hello    [0, seed0, seed1, seed2, seed3, robot index, robot count, digest0,
+//                             digest1]  the run's seed and the robot's digest (robot_digest) in
+//                             16-bit pieces (a float32 carries 24 bits exactly), repeated every
+//                             period until the robot answers
 //   world -> robot   sensors  [seq, ir0..ir6, x, y, heading, ground_left, ground_right]
 //                             after world step seq (1, 2, ...): every reading the world runner
 //                             publishes to a robot's devices, as the floats it publishes
@@ -16,8 +17,8 @@
 //                             answer, which is never applied)
 //
 // The hello is what makes the robot's node the in-process one: it is built with the run's seed
-// (robot_node_seed(seed, index)), and the index and count check that both sides read the same
-// scenario.
+// (robot_node_seed(seed, index)), and the index, the count and the digest check that both sides
+// read the same scenario.
 #pragma once
 
 #include <cstddef>
@@ -29,18 +30,26 @@
 #include "symb/kernel/result.hpp"
 #include "symb/sim/ground_model.hpp"
 #include "symb/sim/hil_protocol.hpp"
+#include "symb/sim/scenario.hpp"
 #include "symb/sim/world.hpp"
 
 namespace symb::sim {
 
-inline constexpr std::size_t kHilHelloValues = 7;
+inline constexpr std::size_t kHilHelloValues = 9;
 inline constexpr std::size_t kHilSplitSensorValues = 1 + kIrCount + 3 + kGroundCount;
 
 struct HilSplitHello {
   std::uint64_t seed = 0;
   std::uint32_t robot = 0;  // its index in the scenario
   std::uint32_t robots = 0;
+  std::uint32_t digest = 0;  // robot_digest of the world's scenario
 };
+
+// FNV-1a over what makes robot `index`'s node and its inputs: the control period, the arena, the
+// robot count, and the robot's name, kind, tasks (name, type, parameters as written, priority,
+// period, queue, autostart) and hooks. Two scenario files that differ there give different digests
+// (program files a parameter names are not read).
+std::uint32_t robot_digest(const Scenario& scenario, std::size_t index);
 
 struct HilSplitSensors {
   std::uint32_t seq = 0;

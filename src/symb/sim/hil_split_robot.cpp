@@ -179,6 +179,10 @@ kernel::Status HilSplitRobot::handle(std::span<const std::byte> payload, std::si
                            std::to_string(h->robot) + "; " + scenario_.file + " has " +
                            std::to_string(scenario_.robots.size()) + ", robot " + name + " being robot " +
                            std::to_string(index_) + ": do both read the same scenario?"};
+    if (h->digest != robot_digest(scenario_, index_))
+      return kernel::Error{"the world's robot " + name + " is not " + scenario_.file +
+                           "'s (another control period, arena, task, parameter or hook): do both read the same "
+                           "scenario?"};
     if (!system_) {
       if (auto st = build(h->seed); !st) return st;
       event("robot " + name + ": built with the world's seed " + std::to_string(h->seed));

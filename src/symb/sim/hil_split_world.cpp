@@ -163,7 +163,7 @@ bool HilSplitWorld::read(Robot& r, kernel::Duration wait, std::uint32_t step) {
   return answered || hello;
 }
 
-kernel::Status HilSplitWorld::wait_for_robots(kernel::Duration timeout) {
+kernel::Status HilSplitWorld::wait_for_robots(kernel::Duration timeout, const std::function<bool()>& stopped) {
   const auto deadline = Wall::now() + timeout;
   const kernel::Duration period = session_.scenario().control_period;
   for (;;) {
@@ -171,7 +171,8 @@ kernel::Status HilSplitWorld::wait_for_robots(kernel::Duration timeout) {
     for (auto& r : robots_)
       if (!r->stats.answered && !r->stats.gone)
         send(*r, encode_hello_payload({session_.seed(), static_cast<std::uint32_t>(r->stats.index),
-                                       static_cast<std::uint32_t>(session_.robot_count())}));
+                                       static_cast<std::uint32_t>(session_.robot_count()),
+                                       robot_digest(session_.scenario(), r->stats.index)}));
     for (;;) {
       bool pending = false;
       for (auto& r : robots_) {
@@ -198,6 +199,7 @@ kernel::Status HilSplitWorld::wait_for_robots(kernel::Duration timeout) {
     }
     if (!dead.empty()) return kernel::Error{"remote robot " + dead};
     if (missing.empty()) return {};
+    if (stopped && stopped()) return kernel::Error{"stopped while waiting for remote robot " + missing};
     if (Wall::now() >= deadline)
       return kernel::Error{"no answer from the process of remote robot " + missing + " within " + ms_text(timeout) +
                            " (is `symb serve --scenario ... --robot NAME` running for it, on the same DDS domain and "

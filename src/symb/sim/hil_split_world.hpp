@@ -4,7 +4,7 @@
 // talk to the world over a stream each (a DdsFrameStream; any io::IOStream) in the
 // hardware-in-the-loop frames (hil_split_protocol.hpp), in lockstep:
 //
-//   hello       [0, seed, index, count] every period until every remote robot answered; the
+//   hello       [0, seed, index, count, digest] every period until every remote robot answered; the
 //               answer's wheels (what the node set before the first step) go to its SimWheels
 //   each world step k (a runner observer, after the step, on the runner's context):
 //     1. [k, the readings the runner published for step k] to every remote robot;
@@ -95,8 +95,8 @@ class HilSplitWorld {
   HilSplitWorld& operator=(const HilSplitWorld&) = delete;
 
   // The hello, once per control period, until every remote robot answered or `timeout` of wall
-  // time: then fails naming those that did not.
-  kernel::Status wait_for_robots(kernel::Duration timeout);
+  // time: then fails naming those that did not. `stopped` (polled each period) ends it early.
+  kernel::Status wait_for_robots(kernel::Duration timeout, const std::function<bool()>& stopped = {});
 
   // Tells every remote robot not gone that the run ended after `steps` steps (the bye frame).
   void say_bye(std::uint64_t steps);

@@ -50,7 +50,9 @@ RemoteRobots::~RemoteRobots() {
   links_.reset();
 }
 
-kernel::Status RemoteRobots::wait_for_robots() { return world_->wait_for_robots(options_.wait); }
+kernel::Status RemoteRobots::wait_for_robots(const std::function<bool()>& stopped) {
+  return world_->wait_for_robots(options_.wait, stopped);
+}
 
 void RemoteRobots::finish(std::uint64_t steps) {
   world_->say_bye(steps);

@@ -40,8 +40,8 @@ class RemoteRobots {
                                                               std::function<void(const std::string&)> on_event);
   ~RemoteRobots();
 
-  // The hello, until every robot's process answered (options.wait).
-  kernel::Status wait_for_robots();
+  // The hello, until every robot's process answered (options.wait) or `stopped` (Ctrl-C).
+  kernel::Status wait_for_robots(const std::function<bool()>& stopped);
   // After the run of `steps` steps: the bye frame to every robot not gone, acknowledged, then the
   // streams' writers go; the robots' processes end.
   void finish(std::uint64_t steps);

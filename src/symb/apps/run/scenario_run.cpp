@@ -317,7 +317,7 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   }
 
   if (remote)
-    if (auto st = remote->wait_for_robots(); !st) return Error{st.error()};
+    if (auto st = remote->wait_for_robots(options.stop_requested); !st) return Error{st.error()};
   // Built: a big swarm's heap goes onto huge pages before the first step (not timed as stepping).
   if (lockstep != nullptr && session->robot_count() >= kParallelRobots) result.heap = back_heap_with_huge_pages().note;
   const auto wall_start = std::chrono::steady_clock::now();
