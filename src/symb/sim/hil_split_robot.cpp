@@ -194,7 +194,7 @@ void HilSplitRobot::answer(std::uint32_t seq) {
   std::uint64_t radio = 0;
   if (radio_)
     if (const auto blob = radio_->take_pending(index_))
-      if (const io::Bytes* bytes = os::blob_as<io::Bytes>(blob.get())) {
+      if (const auto* bytes = os::blob_as<io::Bytes>(blob.get())) {
         encode_radio_payload(seq, static_cast<std::uint32_t>(index_), bytes->data, radio_payload_);
         io::encode_frame(radio_payload_, frame_);
         radio = 1;

@@ -119,7 +119,7 @@ void HilSplitWorld::send(Robot& r, const std::vector<std::byte>& payload, std::u
   frame_.clear();
   std::uint64_t radio = 0;
   for (const auto& [sender, blob] : r.heard) {
-    const io::Bytes* bytes = os::blob_as<io::Bytes>(blob.get());
+    const auto* bytes = os::blob_as<io::Bytes>(blob.get());
     if (bytes == nullptr) continue;  // the radio puts none such on air
     encode_radio_payload(step, sender, bytes->data, radio_payload_);
     io::encode_frame(radio_payload_, frame_);
