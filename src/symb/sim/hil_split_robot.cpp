@@ -111,8 +111,8 @@ kernel::Result<std::unique_ptr<HilSplitRobot>> HilSplitRobot::create(const Scena
                                                                      HilSplitRobotOptions options) {
   if (scenario.world_kind != WorldKind::kEnki)
     return kernel::Error{scenario.file +
-                         ": a 3D world's modules cannot run in other processes yet (one module can: "
-                         "symb board --robot, docs/hil.md)"};
+                         ": a 3D world's modules do not run as remote robots (one module can run in another "
+                         "process: symb board --robot NAME --dds, docs/hil.md)"};
   std::size_t index = scenario.robots.size();
   for (std::size_t i = 0; i < scenario.robots.size(); ++i)
     if (scenario.robots[i].name == robot) index = i;

@@ -49,8 +49,8 @@ std::string describe(const HilSplitRobotStats& s) {
 kernel::Status HilSplitWorld::check(const Scenario& sc, std::size_t robot) {
   if (sc.world_kind != WorldKind::kEnki)
     return kernel::Error{sc.file +
-                         ": a 3D world's modules cannot run in other processes yet (one module can: symb sim "
-                         "--board, docs/hil.md)"};
+                         ": a 3D world's modules do not run as remote robots (one module can run in another "
+                         "process: symb sim --board NAME --dds, docs/hil.md)"};
   if (robot >= sc.robots.size()) return kernel::Error{sc.file + ": no robot " + count_text(robot)};
   const RobotSpec& spec = sc.robots[robot];
   for (const EventSpec& e : sc.events)
