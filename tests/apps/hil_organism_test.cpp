@@ -4,18 +4,21 @@
 // Checked: in lockstep the organism's trajectory hash equals `symb run`'s (the same run, bit for
 // bit); at wall-clock pace with 5% of the sensor frames corrupted the run completes and the
 // board's bad-frame count equals the injector's count exactly; a wrong or missing --board is a
-// usage error naming the modules, and --board on a 2D scenario is refused.
+// usage error naming the modules, and --board on a 2D scenario is refused. Over DDS instead of the
+// pseudo-terminals (--dds), the lockstep run is `symb run`'s too.
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -183,7 +186,7 @@ TEST(Hil3CliUsage, TheBoardsModuleIsNamedAndChecked) {
   {
     Hil3Child c("sim '" + std::string(SYMB_SCENARIO_DIR) + "/maze.yaml' --serial /nonexistent/tty --board r1", log);
     EXPECT_EQ(c.wait(), 2);
-    EXPECT_NE(c.output().find("--board and --lockstep are for 3D scenarios"), std::string::npos) << c.output();
+    EXPECT_NE(c.output().find("--board, --lockstep and --dds are for 3D scenarios"), std::string::npos) << c.output();
   }
   {
     // An event on the board's module: refused at its place in the file, before any line is opened.
@@ -191,7 +194,65 @@ TEST(Hil3CliUsage, TheBoardsModuleIsNamedAndChecked) {
     EXPECT_EQ(c.wait(), 1);
     EXPECT_NE(c.output().find("organism_chain.yaml:"), std::string::npos) << c.output();
   }
+  const std::pair<std::string, std::string> dds_cases[] = {
+      {"sim '" + kChain + "' --board m4 --dds --serial /nonexistent/tty", "--dds or --serial"},
+      {"sim '" + kChain + "' --board m4 --serial /nonexistent/tty --domain 3", "--domain is for --dds"},
+      {"sim '" + kChain + "' --board m4 --dds --domain 233", "--domain"},
+      {"sim '" + kChain + "' --board m4 --dds --lease 0s", "--lease: '0s' is out of range"},
+      {"board '" + kChain + "' --robot m4 --dds --serial /nonexistent/tty", "--dds or --serial"},
+      {"board '" + kChain + "' --robot m4 --prefix 'a b' --dds", "--prefix 'a b': not a name"},
+      {"sim '" + std::string(SYMB_SCENARIO_DIR) + "/maze.yaml' --dds", "--dds are for 3D scenarios"},
+  };
+  for (const auto& [args, says] : dds_cases) {
+    Hil3Child c(args, log);
+    EXPECT_EQ(c.wait(), 2) << args << "\n" << c.output();
+    EXPECT_NE(c.output().find(says), std::string::npos) << args << "\n" << c.output();
+  }
   fs::remove(log);
+}
+
+// The board's module in another process over DDS (`--dds` on both sides: the split world's frame
+// stream, rt/<prefix>/m4/to_robot and .../to_world, found by discovery with no configuration).
+// In lockstep the organism is `symb run`'s bit for bit, and the board ends when the simulator's
+// run does. Release build only, as the other DDS process tests.
+TEST(Hil3Dds, InLockstepOverDdsTheOrganismIsTheInProcessOneBitForBit) {
+#ifdef SYMB_SANITIZER
+  GTEST_SKIP() << "processes over DDS: release build only";
+#endif
+  const fs::path dir = fs::temp_directory_path() / ("symb-hil3-dds-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string prefix = "hil3_" + std::to_string(::getpid());
+  const std::string bus =
+      " --dds --domain " + std::to_string(10 + ::getpid() % 200) + " --prefix " + prefix + " --lease 300ms";
+  Hil3Child run("run '" + kChain + "' --quiet --duration 3s --out '" + (dir / "inproc").string() + "'",
+                dir / "inproc.log");
+  ASSERT_EQ(run.wait(), 0) << run.output();
+  Hil3Child board("board '" + kChain + "' --robot m4 --quiet" + bus, dir / "board.log");
+  Hil3Child sim("sim '" + kChain + "' --board m4 --lockstep --quiet --duration 3s" + bus + " --out '" +
+                    (dir / "hil").string() + "'",
+                dir / "hil.log");
+  ASSERT_EQ(sim.wait(), 0) << sim.output();
+  ASSERT_EQ(board.wait(), 0) << board.output();
+  EXPECT_NE(board.output().find("board m4: the simulator ended its run"), std::string::npos) << board.output();
+  const std::string in = symb::test_support::read_whole_file(dir / "inproc" / "summary.txt");
+  const std::string hil = symb::test_support::read_whole_file(dir / "hil" / "summary.txt");
+  const std::string in_hash = hil3_line_value(in, "trajectory hash");
+  ASSERT_FALSE(in_hash.empty()) << in;
+  std::printf("in process %s, module m4 over DDS %s\n", in_hash.c_str(),
+              hil3_line_value(hil, "trajectory hash").c_str());
+  EXPECT_EQ(hil3_line_value(hil, "trajectory hash"), in_hash) << hil;
+  EXPECT_NE(hil.find("transport: DDS rt/" + prefix + "/m4/to_world"), std::string::npos) << hil;
+  const auto link = hil3_fields(hil, "link-stats:");
+  EXPECT_EQ(link.at("applied"), 99);
+  EXPECT_EQ(link.at("late"), 0);
+  EXPECT_EQ(link.at("bad"), 0);
+  EXPECT_EQ(link.at("line_open"), 1);
+  const auto bs = hil3_fields(board.output(), "board-stats:");
+  EXPECT_EQ(bs.at("good"), 100);
+  EXPECT_EQ(bs.at("bad"), 0);
+  EXPECT_EQ(bs.at("missed"), 0);
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
 }
 
 }  // namespace

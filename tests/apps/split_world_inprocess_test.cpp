@@ -1,9 +1,9 @@
 // The split world's pieces in one process (docs/bus.md "A world split over processes"), so the
 // sanitizer builds check them too: HilSplitWorld and HilSplitRobot over a loopback stream give the
-// in-process swarm bit for bit; a robot that stops answering is gone after the answer wait and its
-// wheels stop while the run goes on; the split frames refuse what is not theirs; DdsFrameStream
-// carries bytes both ways between two ends of one process and tells a peer that left from one that
-// is alive, a foreign writer that came and went not ending the stream for good.
+// in-process swarm bit for bit, and the in-process mEDEA swarm with the world's radio carried; a robot that stops
+// answering is gone after the answer wait and its wheels stop while the run goes on; the split frames refuse what is
+// not theirs; DdsFrameStream carries bytes both ways between two ends of one process and tells a peer that left from
+// one that is alive, a foreign writer that came and went not ending the stream for good.
 #include <unistd.h>
 
 #include <atomic>
@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include "symb/io/bytes.hpp"
 #include "symb/io/dds/dds_frame_stream.hpp"
 #include "symb/io/frame_codec.hpp"
 #include "symb/io/loopback_stream.hpp"
@@ -65,15 +66,16 @@ kernel::LockstepExecutor::Options lockstep(const sim::Scenario& sc) {
   return {.threads = 1, .quantum = sc.control_period};
 }
 
-Trajectory in_process(const sim::Scenario& sc) {
+Trajectory in_process(const sim::Scenario& sc, std::uint64_t steps = kSteps, sim::RadioCounts* radio = nullptr) {
   kernel::LockstepExecutor ex(lockstep(sc));
   auto s = sim::ScenarioSession::create(sc, ex);
   EXPECT_TRUE(s.ok()) << s.error();
   Trajectory t;
   record(**s, t);
   (*s)->start();
-  ex.run_until(sc.control_period * static_cast<std::int64_t>(kSteps) + 1ms);
+  ex.run_until(sc.control_period * static_cast<std::int64_t>(steps) + 1ms);
   (*s)->stop();
+  if (radio != nullptr && (*s)->radio() != nullptr) *radio = (*s)->radio()->counts();
   return t;
 }
 
@@ -150,6 +152,73 @@ TEST(HilSplit, RemoteRobotsOverStreamsRunTheSwarmBitForBit) {
   }
 }
 
+// mEDEA over the world's radio, its lifetime cut to 1.5 s: by step 100 (3 s) every robot has
+// twice picked its next genome among those it heard, so the trajectories depend on what the radio
+// carried both ways between the world and the two remote robots.
+TEST(HilSplit, RemoteRobotsCarryTheWorldsRadioBitForBit) {
+  auto loaded = sim::load_scenario(std::string(SYMB_SCENARIO_DIR) + "/medea_swarm.yaml");
+  ASSERT_TRUE(loaded.ok()) << loaded.error();
+  sim::Scenario sc = std::move(loaded).value();
+  ASSERT_TRUE(sc.world.radio.has_value());
+  for (sim::RobotSpec& r : sc.robots)
+    for (sim::TaskSpec& t : r.tasks)
+      for (os::ParamAssignment& p : t.params)
+        if (p.name == "lifetime") p.value = "1.5s";
+  constexpr std::uint64_t kRadioSteps = 100;
+  sim::RadioCounts reference_radio;
+  const Trajectory reference = in_process(sc, kRadioSteps, &reference_radio);
+  ASSERT_EQ(reference.size(), kRadioSteps);
+  EXPECT_GT(reference_radio.delivered, 50u) << "the robots meet over the radio";
+
+  kernel::LockstepExecutor ex(lockstep(sc));
+  auto s = sim::ScenarioSession::create(sc, ex);
+  ASSERT_TRUE(s.ok()) << s.error();
+  Trajectory split;
+  record(**s, split);
+  std::vector<std::unique_ptr<RobotThread>> robots;
+  std::vector<sim::HilSplitWorld::Remote> remotes;
+  for (std::size_t i : {4u, 13u}) {
+    auto [a, b] = io::make_loopback_pair("radio" + std::to_string(i));
+    remotes.push_back({i, std::shared_ptr<io::IOStream>(std::move(a))});
+    robots.push_back(std::make_unique<RobotThread>(sc, sc.robots[i].name, std::shared_ptr<io::IOStream>(std::move(b))));
+  }
+  auto world = sim::HilSplitWorld::create(**s, std::move(remotes), {.answer_wait = 10s, .on_event = {}});
+  ASSERT_TRUE(world.ok()) << world.error();
+  ASSERT_TRUE((*world)->wait_for_robots(10s).ok());
+  (*s)->start();
+  ex.run_until(sc.control_period * static_cast<std::int64_t>(kRadioSteps) + 1ms);
+  (*s)->stop();
+  (*world)->say_bye(kRadioSteps);
+  for (auto& r : robots) r->join();
+  ASSERT_EQ(split.size(), kRadioSteps);
+  EXPECT_TRUE(split == reference) << "the split mEDEA swarm must be the in-process one";
+  const sim::RadioCounts radio = (*s)->radio()->counts();
+  EXPECT_EQ(radio.transmitted, reference_radio.transmitted);
+  EXPECT_EQ(radio.delivered, reference_radio.delivered);
+  EXPECT_EQ(radio.dropped, reference_radio.dropped);
+  EXPECT_EQ(radio.out_of_range, reference_radio.out_of_range);
+  for (const auto& st : (*world)->stats()) {
+    EXPECT_FALSE(st.gone) << st.why;
+    EXPECT_EQ(st.applied, kRadioSteps);
+    EXPECT_EQ(st.bad_frames(), 0u);
+    EXPECT_GT(st.radio_received, 5u) << st.robot << ": its genome went on air";
+    EXPECT_EQ((*s)->radio()->received_by(st.index), st.radio_sent) << st.robot;
+    EXPECT_NE(sim::describe(st).find("; radio: "), std::string::npos) << sim::describe(st);
+  }
+  std::uint64_t heard = 0;
+  for (auto& r : robots) {
+    const auto st = r->robot().stats();
+    EXPECT_EQ(st.frames, kRadioSteps);
+    EXPECT_EQ(st.bad_frames(), 0u);
+    EXPECT_EQ(st.radio_stale + st.radio_dropped, 0u);
+    heard += st.radio_in;
+  }
+  EXPECT_GT(heard, 0u) << "the remote robots heard others";
+  std::uint64_t to_remote = 0;
+  for (const auto& st : (*world)->stats()) to_remote += st.radio_sent;
+  EXPECT_EQ(heard, to_remote) << "every message the world's radio delivered to them was posted";
+}
+
 TEST(HilSplit, ARobotThatStopsAnsweringIsGoneItsWheelsStopAndTheRunGoesOn) {
   const sim::Scenario sc = swarm();
   kernel::LockstepExecutor ex(lockstep(sc));
@@ -217,16 +286,127 @@ TEST(HilSplit, TheFramesRefuseWhatIsNotTheirs) {
   EXPECT_FALSE(sim::decode_split_sensors_payload(numbers({1, 2, 3})).ok()) << "a count of 3";
   EXPECT_EQ(sim::decode_bye_payload(sim::encode_bye_payload(166)), std::optional<std::uint32_t>(166));
   EXPECT_FALSE(sim::decode_bye_payload(numbers({1, 166})).has_value());
+
+  const std::vector<std::byte> message{std::byte{0}, std::byte{'R'}, std::byte{0xFF}};
+  std::vector<std::byte> radio;
+  sim::encode_radio_payload(0x00AB'CDEF, 19, message, radio);
+  ASSERT_TRUE(sim::is_radio_payload(radio));
+  const auto r = sim::decode_radio_payload(radio);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_EQ(r->seq, 0x00AB'CDEFu);
+  EXPECT_EQ(r->robot, 19u);
+  EXPECT_TRUE(std::equal(r->bytes.begin(), r->bytes.end(), message.begin(), message.end()));
+  EXPECT_FALSE(sim::is_radio_payload(numbers({1, 2, 3}))) << "a number frame";
+  sim::encode_radio_payload(4, 1, {}, radio);
+  EXPECT_FALSE(sim::decode_radio_payload(radio).ok()) << "no message";
+  sim::encode_radio_payload(4, 1, message, radio);
+  EXPECT_FALSE(sim::decode_radio_payload(std::span<const std::byte>(radio).first(6)).ok()) << "a header cut short";
+  sim::encode_radio_payload(sim::kHilMaxSequence + 1, 1, message, radio);
+  EXPECT_FALSE(sim::decode_radio_payload(radio).ok()) << "beyond the sequence numbers";
+}
+
+// The world's side of the radio, fed by hand: a remote robot's answer to the hello puts its radio
+// message on air once; radio frames that are not its own, or empty, are malformed, a second one
+// for the same answer stale.
+TEST(HilSplit, TheWorldPutsARemoteRobotsRadioMessageOnAirOnceAndCountsTheRest) {
+  auto medea = sim::load_scenario(std::string(SYMB_SCENARIO_DIR) + "/medea_swarm.yaml");
+  ASSERT_TRUE(medea.ok()) << medea.error();
+  kernel::LockstepExecutor ex(lockstep(*medea));
+  auto s = sim::ScenarioSession::create(*medea, ex);
+  ASSERT_TRUE(s.ok()) << s.error();
+  auto [a, robot] = io::make_loopback_pair("radio_world");
+  auto world = sim::HilSplitWorld::create(**s, {{7, std::shared_ptr<io::IOStream>(std::move(a))}},
+                                          {.answer_wait = 1s, .on_event = {}});
+  ASSERT_TRUE(world.ok()) << world.error();
+  std::vector<std::byte> frames, payload;
+  const auto add = [&frames](const std::vector<std::byte>& p) { io::encode_frame(p, frames); };
+  const std::string hi = "genome of 7", other = "another";
+  const auto bytes = [](const std::string& t) {
+    return std::span<const std::byte>(reinterpret_cast<const std::byte*>(t.data()), t.size());
+  };
+  sim::encode_radio_payload(0, 6, bytes(hi), payload);  // robot 6's, not its own
+  add(payload);
+  sim::encode_radio_payload(0, 7, {}, payload);  // empty
+  add(payload);
+  sim::encode_radio_payload(0, 7, bytes(hi), payload);
+  add(payload);
+  sim::encode_radio_payload(0, 7, bytes(other), payload);  // a second one for the same answer
+  add(payload);
+  add(sim::encode_wheel_payload({0, 0.0f, 0.0f}));
+  ASSERT_TRUE(robot->write_all(frames).ok());
+  ASSERT_TRUE((*world)->wait_for_robots(5s).ok());
+  const auto st = (*world)->stats().at(0);
+  EXPECT_EQ(st.malformed, 2u);
+  EXPECT_EQ(st.stale, 1u);
+  EXPECT_EQ(st.radio_received, 1u);
+  EXPECT_TRUE(st.answered);
+  const auto on_air = (*s)->radio()->take_pending(7);
+  ASSERT_NE(on_air, nullptr) << "on air at the world's first step";
+  const io::Bytes* got = os::blob_as<io::Bytes>(on_air.get());
+  ASSERT_NE(got, nullptr);
+  EXPECT_EQ(got->text(), hi);
+}
+
+// The robot's side: radio frames come before the sensor frame of their step and are posted into
+// its radio task at that tick; what is not a message of another robot of the world is malformed,
+// what no sensor frame of its own followed is stale.
+TEST(HilSplit, ARobotTakesTheRadioFramesOfItsNextSensorFrameAndCountsTheRest) {
+  auto medea = sim::load_scenario(std::string(SYMB_SCENARIO_DIR) + "/medea_swarm.yaml");
+  ASSERT_TRUE(medea.ok()) << medea.error();
+  auto [world, end] = io::make_loopback_pair("radio_robot");
+  auto robot = sim::HilSplitRobot::create(*medea, "thymio3", std::shared_ptr<io::IOStream>(std::move(end)));
+  ASSERT_TRUE(robot.ok()) << robot.error();
+  std::vector<std::byte> frames, payload;
+  const auto add = [&frames](const std::vector<std::byte>& p) { io::encode_frame(p, frames); };
+  const std::vector<std::byte> msg{std::byte{1}, std::byte{2}, std::byte{3}};
+  sim::encode_radio_payload(1, 5, msg, payload);  // before the hello: nothing to post it to
+  add(payload);
+  add(sim::encode_hello_payload({1, 3, 20, sim::robot_digest(*medea, 3)}));
+  for (const auto& [seq, sender] :
+       std::vector<std::pair<std::uint32_t, std::uint32_t>>{{1, 3},     // its own
+                                                            {1, 20},    // no such robot
+                                                            {0, 5},     // the hello's
+                                                            {1, 5},     // good
+                                                            {1, 12},    // good
+                                                            {3, 8}}) {  // for a frame that does not come next
+    sim::encode_radio_payload(seq, sender, msg, payload);
+    add(payload);
+  }
+  add({std::byte{'R'}, std::byte{1}});  // cut short
+  sim::HilSplitSensors f;
+  f.seq = 1;
+  add(sim::encode_split_sensors_payload(f));
+  sim::encode_radio_payload(1, 9, msg, payload);  // after its frame
+  add(payload);
+  f.seq = 2;
+  add(sim::encode_split_sensors_payload(f));
+  ASSERT_TRUE(world->write_all(frames).ok());
+  for (int k = 0; k < 3 && (*robot)->stats().frames < 2; ++k) ASSERT_TRUE((*robot)->serve(200ms).ok());
+  const auto st = (*robot)->stats();
+  EXPECT_EQ(st.frames, 2u);
+  EXPECT_EQ(st.malformed, 5u);
+  EXPECT_EQ(st.radio_stale, 2u);
+  EXPECT_EQ(st.radio_in, 2u) << "robots 5 and 12's messages, posted at tick 1";
+  EXPECT_EQ(st.radio_dropped, 0u);
+  EXPECT_NE(sim::describe(st).find("radio 2 in (0 dropped, 2 stale)"), std::string::npos) << sim::describe(st);
 }
 
 TEST(HilSplit, WhatCannotRunApartIsRefusedAtItsPlace) {
   auto medea = sim::load_scenario(std::string(SYMB_SCENARIO_DIR) + "/medea_swarm.yaml");
   ASSERT_TRUE(medea.ok()) << medea.error();
-  const auto radio = sim::HilSplitWorld::check(*medea, 2);
-  ASSERT_FALSE(radio.ok());
-  EXPECT_NE(radio.error().find("robot thymio2 cannot run in another process: the world has a radio"), std::string::npos)
-      << radio.error();
-  EXPECT_NE(radio.error().find("medea_swarm.yaml:"), std::string::npos) << "at its place: " << radio.error();
+  EXPECT_TRUE(sim::HilSplitWorld::check(*medea, 2).ok()) << "the world's radio is carried";
+  sim::Scenario evented = swarm();
+  sim::EventSpec e;
+  e.robot = 5;
+  e.where = {evented.file, 40, 7};
+  evented.events.push_back(e);
+  const auto named = sim::HilSplitWorld::check(evented, 5);
+  ASSERT_FALSE(named.ok());
+  EXPECT_NE(named.error().find("robot thymio5 runs in another process: its events belong to that process's shell"),
+            std::string::npos)
+      << named.error();
+  EXPECT_NE(named.error().find("swarm.yaml:40:7"), std::string::npos) << "at its place: " << named.error();
+  EXPECT_TRUE(sim::HilSplitWorld::check(evented, 4).ok());
   auto [a, b] = io::make_loopback_pair("refused");
   const auto unknown = sim::HilSplitRobot::create(swarm(), "thymio12", std::shared_ptr<io::IOStream>(std::move(b)));
   ASSERT_FALSE(unknown.ok());

@@ -187,6 +187,65 @@ TEST(LocalRadioGrid, AQueueHoldsKMaxQueueMessagesAndTheRestAreDroppedAndCounted)
   for (auto& node : nodes) node->clear();
 }
 
+// A split world's two media (sim/hil_split_world.hpp): the world's relays what it delivers to a
+// robot whose node runs elsewhere and puts that robot's messages on air with transmit(); the
+// robot's own medium gives what its radio task sent to take_pending() and posts what the world's
+// delivered with deliver(), as step() would have.
+TEST(LocalRadioGrid, ARelayedRobotHearsAndSpeaksThroughAnotherMedium) {
+  auto world = LocalRadio::create(3, {.range = 10});
+  auto apart = LocalRadio::create(3, {.range = 10});  // robot 1's, in its own process
+  ASSERT_TRUE(world.ok() && apart.ok());
+  kernel::VirtualTimeExecutor ex;
+  std::vector<std::unique_ptr<os::Node>> nodes;
+  std::vector<Heard*> heard;
+  std::vector<Say*> say;
+  for (std::size_t i = 0; i < 3; ++i) {
+    nodes.push_back(std::make_unique<os::Node>(ex, os::NodeConfig{.name = "m" + std::to_string(i)}));
+    const auto r = (i == 1 ? **apart : **world).add_to(*nodes.back(), i);
+    ASSERT_TRUE(r.ok());
+    auto h = std::make_unique<Heard>();
+    auto sy = std::make_unique<Say>();
+    heard.push_back(h.get());
+    say.push_back(sy.get());
+    const auto hid = *nodes.back()->create("heard", std::move(h));
+    const auto sid = *nodes.back()->create("say", std::move(sy), {.period = 1s});
+    ASSERT_TRUE(nodes.back()->hook(*r, hid).ok());
+    ASSERT_TRUE(nodes.back()->hook(sid, *r).ok());
+  }
+  std::vector<std::pair<std::size_t, std::string>> relayed;
+  (*world)->relay(1, [&relayed](std::size_t sender, const std::shared_ptr<const os::Blob>& blob) {
+    relayed.emplace_back(sender, std::string(os::blob_as<io::Bytes>(blob.get())->text()));
+    return true;
+  });
+  say[0]->to_say = {"from 0"};
+  say[1]->to_say = {"from 1, overwritten", "from 1"};
+  ex.run_for(1010ms);
+  // Robot 1's process takes what its radio task sent; the world puts it on air.
+  const auto pending = (*apart)->take_pending(1);
+  ASSERT_NE(pending, nullptr);
+  EXPECT_EQ((*apart)->take_pending(1), nullptr) << "taken once";
+  EXPECT_EQ((*apart)->counts().overwritten, 1u) << "counted where its radio task is";
+  (*world)->transmit(1, pending);
+  (*world)->step(record_of({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}));
+  ex.run_for(1ms);
+  EXPECT_EQ(relayed, (std::vector<std::pair<std::size_t, std::string>>{{0, "from 0"}}));
+  EXPECT_EQ(heard[2]->heard, (std::vector<std::pair<float, std::string>>{{0.0f, "from 0"}, {1.0f, "from 1"}}));
+  EXPECT_EQ(heard[0]->heard, (std::vector<std::pair<float, std::string>>{{1.0f, "from 1"}}));
+  const RadioCounts c = (*world)->counts();
+  EXPECT_EQ(c.transmitted, 2u);
+  EXPECT_EQ(c.delivered, 4u) << "the relayed one counted delivered";
+  EXPECT_EQ((*world)->received_by(1), 1u);
+  // What the world relayed, posted into robot 1's radio task as the world would have.
+  EXPECT_TRUE((*apart)->deliver(1, 0, io::text_payload("from 0").blob));
+  EXPECT_FALSE((*apart)->deliver(2, 0, io::text_payload("x").blob)) << "no radio task for robot 2 there";
+  EXPECT_FALSE((*apart)->deliver(7, 0, io::text_payload("x").blob)) << "no robot 7";
+  ex.run_for(1ms);
+  EXPECT_EQ(heard[1]->heard, (std::vector<std::pair<float, std::string>>{{0.0f, "from 0"}}));
+  EXPECT_EQ((*apart)->counts().delivered, 1u);
+  EXPECT_EQ((*apart)->counts().dropped, 1u);
+  for (auto& node : nodes) node->clear();
+}
+
 // Sends `limit` messages, one a tick, then stops; counts them.
 class Chatter : public os::Task {
  public:

@@ -40,6 +40,12 @@ std::uint32_t robot_digest(const Scenario& sc, std::size_t index) {
   f.add(sc.world.width);
   f.add(sc.world.height);
   f.add(static_cast<std::int64_t>(sc.robots.size()));
+  if (sc.world.radio) {
+    f.add(sc.world.radio->range);
+    f.add(static_cast<std::int64_t>(sc.world.radio->max_message_bytes));
+  } else {
+    f.add(std::string_view("no radio"));
+  }
   if (index >= sc.robots.size()) return f.h;
   const RobotSpec& r = sc.robots[index];
   f.add(r.name);
@@ -144,6 +150,43 @@ kernel::Result<HilSplitSensors> decode_split_sensors_payload(std::span<const std
     if (std::isnan((*n)[i]))
       return kernel::Error{"sensor frame " + std::to_string(f.seq) + ": value " + std::to_string(i) + " is NaN"};
   return f;
+}
+
+namespace {
+
+void put_u32(std::uint32_t v, std::vector<std::byte>& out) {
+  for (int k = 0; k < 4; ++k) out.push_back(static_cast<std::byte>((v >> (8 * k)) & 0xFF));
+}
+
+std::uint32_t get_u32(std::span<const std::byte> b) {
+  std::uint32_t v = 0;
+  for (int k = 0; k < 4; ++k) v |= static_cast<std::uint32_t>(b[static_cast<std::size_t>(k)]) << (8 * k);
+  return v;
+}
+
+}  // namespace
+
+void encode_radio_payload(std::uint32_t seq, std::uint32_t robot, std::span<const std::byte> bytes,
+                          std::vector<std::byte>& out) {
+  out.clear();
+  out.reserve(kHilRadioHeader + bytes.size());
+  out.push_back(kHilRadioTag);
+  put_u32(seq, out);
+  put_u32(robot, out);
+  out.insert(out.end(), bytes.begin(), bytes.end());
+}
+
+kernel::Result<HilSplitRadio> decode_radio_payload(std::span<const std::byte> payload) {
+  if (!is_radio_payload(payload)) return kernel::Error{"radio frame: no 'R' tag"};
+  if (payload.size() <= kHilRadioHeader)
+    return kernel::Error{"radio frame: " + std::to_string(payload.size()) + " bytes, no message after its " +
+                         std::to_string(kHilRadioHeader) + "-byte header"};
+  HilSplitRadio r;
+  r.seq = get_u32(payload.subspan(1, 4));
+  r.robot = get_u32(payload.subspan(5, 4));
+  r.bytes = payload.subspan(kHilRadioHeader);
+  if (r.seq > kHilMaxSequence) return kernel::Error{"radio frame: sequence number " + std::to_string(r.seq)};
+  return r;
 }
 
 }  // namespace symb::sim

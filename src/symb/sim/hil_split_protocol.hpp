@@ -16,6 +16,17 @@
 //                             world's first step, which step 1 applies (unlike a board's hello
 //                             answer, which is never applied)
 //
+// In a world with a radio (world.radio, local_radio.hpp) one more frame, a byte frame, carries a
+// radio message of a step, just before the frame it belongs to and in the same write:
+//
+//   either way       radio    'R' | seq (uint32 LE) | robot (uint32 LE) | the message's bytes
+//                             world -> robot: a message the world's radio delivered to the robot
+//                             at step seq, robot = its sender's index; zero or more before sensor
+//                             frame seq, in the order the radio delivered them (senders by index).
+//                             robot -> world: what the robot's radio task has to put on air at
+//                             the world's next step (the newest message since its last answer),
+//                             robot = its own index; at most one, before its answer to seq.
+//
 // The hello is what makes the robot's node the in-process one: it is built with the run's seed
 // (robot_node_seed(seed, index)), and the index, the count and the digest check that both sides
 // read the same scenario.
@@ -36,6 +47,8 @@
 namespace symb::sim {
 
 inline constexpr std::size_t kHilHelloValues = 9;
+inline constexpr std::byte kHilRadioTag{'R'};  // number frames begin with 'N' (io::encode_numbers)
+inline constexpr std::size_t kHilRadioHeader = 9;
 inline constexpr std::size_t kHilSplitSensorValues = 1 + kIrCount + 3 + kGroundCount;
 
 struct HilSplitHello {
@@ -46,8 +59,8 @@ struct HilSplitHello {
 };
 
 // FNV-1a over what makes robot `index`'s node and its inputs: the control period, the arena, the
-// robot count, and the robot's name, kind, tasks (name, type, parameters as written, priority,
-// period, queue, autostart) and hooks. Two scenario files that differ there give different digests
+// robot count, the radio (range, longest message), and the robot's name, kind, tasks (name, type, parameters as
+// written, priority, period, queue, autostart) and hooks. Two scenario files that differ there give different digests
 // (program files a parameter names are not read).
 std::uint32_t robot_digest(const Scenario& scenario, std::size_t index);
 
@@ -56,6 +69,13 @@ struct HilSplitSensors {
   IrReadings ir{};
   float pose[3] = {0, 0, 0};  // x, y (cm), heading (rad): as SimPoseSensor publishes them
   GroundReadings ground{};
+};
+
+// A radio frame; `bytes` views the payload it was decoded from.
+struct HilSplitRadio {
+  std::uint32_t seq = 0;
+  std::uint32_t robot = 0;
+  std::span<const std::byte> bytes;
 };
 
 std::vector<std::byte> encode_hello_payload(const HilSplitHello& h);
@@ -67,5 +87,15 @@ std::vector<std::byte> encode_split_sensors_payload(const HilSplitSensors& f);
 // frame's at least 1), seed pieces that are not integers in [0, 65535], NaN readings.
 kernel::Result<HilSplitHello> decode_hello_payload(std::span<const std::byte> payload);
 kernel::Result<HilSplitSensors> decode_split_sensors_payload(std::span<const std::byte> payload);
+void encode_radio_payload(std::uint32_t seq, std::uint32_t robot, std::span<const std::byte> bytes,
+                          std::vector<std::byte>& out);
+// Whether `payload` claims to be a radio frame (its first byte): then decode_radio_payload() says
+// whether it is a good one.
+inline bool is_radio_payload(std::span<const std::byte> payload) {
+  return !payload.empty() && payload[0] == kHilRadioTag;
+}
+// Refused: not a radio frame, shorter than its header, no bytes (a radio sends none such), a
+// sequence number beyond kHilMaxSequence.
+kernel::Result<HilSplitRadio> decode_radio_payload(std::span<const std::byte> payload);
 
 }  // namespace symb::sim

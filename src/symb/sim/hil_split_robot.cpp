@@ -1,5 +1,9 @@
 #include "symb/sim/hil_split_robot.hpp"
 
+#include <algorithm>
+#include <atomic>
+
+#include "symb/io/bytes.hpp"
 #include "symb/io/plugin_library.hpp"
 #include "symb/sim/hil_protocol.hpp"
 #include "symb/sim/hil_split_protocol.hpp"
@@ -29,6 +33,18 @@ struct HilSplitRobot::Shared {
   std::shared_ptr<SimPoseSensor> pose;
   std::shared_ptr<SimGroundSensor> ground = std::make_shared<SimGroundSensor>("ground");
   std::optional<HilSplitSensors> pending;  // the newest sensor frame, for its tick
+  // World.radio: the robot's medium and index; what the world's radio delivered, by radio frames
+  // not yet followed by their sensor frame (incoming), and those of the pending frame (heard).
+  struct Heard {
+    std::uint32_t seq = 0;
+    std::uint32_t sender = 0;
+    std::shared_ptr<const os::Blob> bytes;
+  };
+  LocalRadio* radio = nullptr;
+  std::size_t robot = 0;
+  std::vector<Heard> incoming;
+  std::vector<Heard> heard;
+  std::atomic<std::uint64_t> radio_in{0}, radio_dropped{0};
 };
 
 // Where the world runner stands in process: its period and priority; tick k publishes sensor
@@ -45,6 +61,11 @@ class HilSplitRobot::Clock final : public PeriodicRunner {
     if (!shared_->pending || shared_->pending->seq != tick_) return {};
     const HilSplitSensors f = *shared_->pending;
     shared_->pending.reset();
+    // The world's radio posts in phase A of the step's sync instant, before the robot's lane
+    // publishes the readings at the start of its window.
+    for (const Shared::Heard& h : shared_->heard)
+      ++(shared_->radio->deliver(shared_->robot, h.sender, h.bytes) ? shared_->radio_in : shared_->radio_dropped);
+    shared_->heard.clear();
     shared_->ir->publish_readings(f.ir, now);
     if (shared_->pose->has_listener()) shared_->pose->publish_pose(Pose{f.pose[0], f.pose[1], f.pose[2]}, now);
     if (shared_->ground->has_listener()) shared_->ground->publish_readings(f.ground, now);
@@ -60,7 +81,9 @@ std::string describe(const HilSplitRobotBoardStats& s) {
          std::to_string(s.out_of_order) + " out of order), hellos " + std::to_string(s.hellos) + ", bad " +
          std::to_string(s.bad_frames()) + " (crc " + std::to_string(s.decoder.crc_errors) + ", framing " +
          std::to_string(s.decoder.dropped() - s.decoder.crc_errors) + ", malformed " + std::to_string(s.malformed) +
-         "); answers " + std::to_string(s.answers) + " (" + std::to_string(s.write_errors) + " not taken)";
+         "); answers " + std::to_string(s.answers) + " (" + std::to_string(s.write_errors) + " not taken); radio " +
+         std::to_string(s.radio_in) + " in (" + std::to_string(s.radio_dropped) + " dropped, " +
+         std::to_string(s.radio_stale) + " stale), " + std::to_string(s.radio_out) + " out";
 }
 
 HilSplitRobot::HilSplitRobot(Scenario scenario, std::size_t index, std::shared_ptr<io::IOStream> port,
@@ -70,6 +93,10 @@ HilSplitRobot::HilSplitRobot(Scenario scenario, std::size_t index, std::shared_p
       port_(std::move(port)),
       options_(std::move(options)),
       shared_(std::make_shared<Shared>()),
+      // A radio frame holds a whole message: the decoder takes the longest the radio sends.
+      decoder_(scenario_.world.radio
+                   ? std::max<std::size_t>(1024, kHilRadioHeader + scenario_.world.radio->max_message_bytes)
+                   : std::size_t{1024}),
       buf_(4096) {
   shared_->pose = std::make_shared<SimPoseSensor>("pose", scenario_.world.width, scenario_.world.height);
 }
@@ -84,8 +111,8 @@ kernel::Result<std::unique_ptr<HilSplitRobot>> HilSplitRobot::create(const Scena
                                                                      HilSplitRobotOptions options) {
   if (scenario.world_kind != WorldKind::kEnki)
     return kernel::Error{scenario.file +
-                         ": a 3D world's modules cannot run in other processes yet (one module can: "
-                         "symb board --robot, docs/hil.md)"};
+                         ": a 3D world's modules do not run as remote robots (one module can run in another "
+                         "process: symb board --robot NAME --dds, docs/hil.md)"};
   std::size_t index = scenario.robots.size();
   for (std::size_t i = 0; i < scenario.robots.size(); ++i)
     if (scenario.robots[i].name == robot) index = i;
@@ -139,9 +166,16 @@ kernel::Status HilSplitRobot::build(std::uint64_t seed) {
   ro.seed = robot_node_seed(seed, index_);
   ro.log_capacity = options_.log_capacity;
   ro.read_program = read;
+  if (const auto& spec = scenario_.world.radio) {
+    auto radio = LocalRadio::create(scenario_.robots.size(), {spec->range, spec->max_message_bytes});
+    if (!radio) return kernel::Error{scenario_.file + ": radio: " + radio.error()};
+    radio_ = std::move(radio).value();
+    shared_->radio = radio_.get();
+    shared_->robot = index_;
+  }
   auto built = RobotSystem::build(
       executor_, scenario_.robots[index_],
-      RobotDevices{shared_->ir, shared_->wheels, shared_->pose, shared_->ground, nullptr, 0, std::nullopt},
+      RobotDevices{shared_->ir, shared_->wheels, shared_->pose, shared_->ground, radio_.get(), index_, std::nullopt},
       std::move(ro));
   if (!built) return kernel::Error{built.error()};
   system_ = std::move(built).value();
@@ -156,14 +190,41 @@ kernel::Status HilSplitRobot::build(std::uint64_t seed) {
 void HilSplitRobot::answer(std::uint32_t seq) {
   const std::vector<float> out = shared_->wheels->output();
   frame_.clear();
+  // What its radio task sent since the last answer: on air at the world's next step.
+  std::uint64_t radio = 0;
+  if (radio_)
+    if (const auto blob = radio_->take_pending(index_))
+      if (const auto* bytes = os::blob_as<io::Bytes>(blob.get())) {
+        encode_radio_payload(seq, static_cast<std::uint32_t>(index_), bytes->data, radio_payload_);
+        io::encode_frame(radio_payload_, frame_);
+        radio = 1;
+      }
   io::encode_frame(encode_wheel_payload({seq, out.at(0), out.at(1)}), frame_);
   const bool ok = port_->write_all(frame_).ok();
   std::lock_guard lock(stats_mu_);
   ++(ok ? stats_.answers : stats_.write_errors);
+  if (ok) stats_.radio_out += radio;
 }
 
 kernel::Status HilSplitRobot::handle(std::span<const std::byte> payload, std::size_t& handled) {
   const std::string& name = scenario_.robots[index_].name;
+  if (is_radio_payload(payload)) {
+    auto m = decode_radio_payload(payload);
+    std::lock_guard lock(stats_mu_);
+    // A message from another robot of the world, for a sensor frame still to come; at most one per
+    // other robot and step.
+    if (!m || !radio_ || !system_ || m->robot >= scenario_.robots.size() || m->robot == index_ || m->seq == 0 ||
+        shared_->incoming.size() >= scenario_.robots.size()) {
+      ++stats_.malformed;
+      return {};
+    }
+    if (m->seq <= stats_.last_seq) {
+      ++stats_.radio_stale;
+      return {};
+    }
+    shared_->incoming.push_back({m->seq, m->robot, std::make_shared<const io::Bytes>(m->bytes)});
+    return {};
+  }
   if (auto h = decode_hello_payload(payload)) {
     std::uint32_t last = 0;
     {
@@ -217,6 +278,15 @@ kernel::Status HilSplitRobot::handle(std::span<const std::byte> payload, std::si
     }
     stats_.missed += f->seq - stats_.last_seq - 1;
     stats_.last_seq = f->seq;
+    // Its radio frames came just before it; others are of frames that never came.
+    shared_->heard.clear();
+    for (Shared::Heard& h : shared_->incoming) {
+      if (h.seq == f->seq)
+        shared_->heard.push_back(std::move(h));
+      else
+        ++stats_.radio_stale;
+    }
+    shared_->incoming.clear();
   }
   shared_->pending = *f;
   // Everything the node does before the world's next step: up to just before tick seq + 1.
@@ -247,7 +317,10 @@ kernel::Result<std::size_t> HilSplitRobot::serve(kernel::Duration timeout) {
 
 HilSplitRobotBoardStats HilSplitRobot::stats() const {
   std::lock_guard lock(stats_mu_);
-  return stats_;
+  HilSplitRobotBoardStats s = stats_;
+  s.radio_in = shared_->radio_in.load();
+  s.radio_dropped = shared_->radio_dropped.load();
+  return s;
 }
 
 }  // namespace symb::sim

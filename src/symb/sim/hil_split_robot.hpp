@@ -19,11 +19,21 @@
 // wheels then, which the world's step 1 applies, as in process. One run per robot process: the node's time
 // cannot go back, so a second hello after sensor frames is refused (finished() with the reason).
 //
+// In a world with a radio (world.radio) the robot's radio task is made on a LocalRadio of this
+// process that never steps: what a hooked task sends it goes to the world in a radio frame before
+// the next answer (LocalRadio::take_pending), and the radio frames that came before sensor frame k
+// (what the world's radio delivered at step k) are posted into the radio task at tick k, before
+// the readings, in the order they came (LocalRadio::deliver): where and when the world's radio
+// posts them in process under the lockstep executor (at the step's sync instant, before the
+// robot's window, whose first act is publishing the readings).
+//
 // The world's bye frame ends the run cleanly (ended()); a stream that ends without it is a world
 // lost.
 //
 // Bad input: garbage on the stream is counted by the frame decoder (CRC, framing) and dropped;
-// good frames that are neither a hello nor a sensor frame are malformed; a sensor frame not newer
+// good frames that are neither a hello, a sensor frame nor a good radio frame (its sender another
+// robot of the world) are malformed; radio frames that no sensor frame of theirs followed are
+// stale; a sensor frame not newer
 // than the last is out of order (dropped); skipped sequence numbers are missed.
 //
 // Threads: everything runs on the caller's thread (serve() drives the executor); stats() may be
@@ -46,6 +56,7 @@
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
+#include "symb/sim/local_radio.hpp"
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 #include "symb/sim/scenario_session.hpp"
@@ -61,14 +72,18 @@ struct HilSplitRobotOptions {
 };
 
 struct HilSplitRobotBoardStats {
-  io::FrameStats decoder;          // dropped(): frames the CRC or the framing refused
-  std::uint64_t hellos = 0;        // hellos answered
-  std::uint64_t frames = 0;        // sensor frames passed to the node
-  std::uint64_t malformed = 0;     // good frames that are neither
-  std::uint64_t out_of_order = 0;  // sequence not newer than the last one: dropped
-  std::uint64_t missed = 0;        // sequence numbers skipped
-  std::uint64_t answers = 0;       // wheel frames the stream took
-  std::uint64_t write_errors = 0;  // ... it refused
+  io::FrameStats decoder;           // dropped(): frames the CRC or the framing refused
+  std::uint64_t hellos = 0;         // hellos answered
+  std::uint64_t frames = 0;         // sensor frames passed to the node
+  std::uint64_t malformed = 0;      // good frames that are neither
+  std::uint64_t out_of_order = 0;   // sequence not newer than the last one: dropped
+  std::uint64_t missed = 0;         // sequence numbers skipped
+  std::uint64_t answers = 0;        // wheel frames the stream took
+  std::uint64_t write_errors = 0;   // ... it refused
+  std::uint64_t radio_in = 0;       // radio messages from the world posted into its radio task
+  std::uint64_t radio_dropped = 0;  // ... refused by it (its queue full)
+  std::uint64_t radio_stale = 0;    // radio frames dropped: their sensor frame did not follow
+  std::uint64_t radio_out = 0;      // radio messages its radio task sent, carried to the world
   std::uint32_t last_seq = 0;
 
   std::uint64_t bad_frames() const { return decoder.dropped() + malformed; }
@@ -116,6 +131,7 @@ class HilSplitRobot {
 
   Scenario scenario_;
   std::size_t index_;
+  std::unique_ptr<LocalRadio> radio_;  // world.radio: its radio task's medium; outlives system_
   std::shared_ptr<io::IOStream> port_;
   HilSplitRobotOptions options_;
   std::vector<RegisterTaskTypes> extra_types_;  // options' and the scenario's plugins
@@ -128,6 +144,7 @@ class HilSplitRobot {
   io::FrameDecoder decoder_{1024};
   std::vector<std::byte> buf_;
   std::vector<std::byte> frame_;
+  std::vector<std::byte> radio_payload_;
   mutable std::mutex stats_mu_;
   HilSplitRobotBoardStats stats_;
 };

@@ -2,10 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <optional>
 #include <thread>
+#include <utility>
 
+#include "symb/io/bytes.hpp"
 #include "symb/sim/hil_protocol.hpp"
 #include "symb/sim/hil_split_protocol.hpp"
+#include "symb/sim/local_radio.hpp"
 
 namespace symb::sim {
 
@@ -22,9 +26,13 @@ std::string ms_text(kernel::Duration d) {
 }  // namespace
 
 struct HilSplitWorld::Robot {
+  explicit Robot(std::size_t max_payload) : decoder(max_payload) {}
   std::shared_ptr<io::IOStream> port;
-  io::FrameDecoder decoder{256};
+  io::FrameDecoder decoder;
   HilSplitRobotStats stats;
+  // What the world's radio delivered to it at the step under way (its relay): sender, bytes.
+  std::vector<std::pair<std::uint32_t, std::shared_ptr<const os::Blob>>> heard;
+  std::optional<std::uint32_t> radio_seq;  // the answer whose radio message went on air last
 };
 
 std::string describe(const HilSplitRobotStats& s) {
@@ -32,6 +40,8 @@ std::string describe(const HilSplitRobotStats& s) {
                      " not taken), received " + count_text(s.received) + " good, " + count_text(s.bad_frames()) +
                      " bad; applied " + count_text(s.applied) + ", " + count_text(s.stale) + " stale; waited " +
                      count_text(static_cast<std::uint64_t>(s.waited_s * 1000)) + " ms";
+  if (s.radio)
+    text += "; radio: " + count_text(s.radio_sent) + " messages to it, " + count_text(s.radio_received) + " from it";
   if (s.gone) text += "; GONE at step " + count_text(s.gone_at) + ": " + s.why;
   return text;
 }
@@ -39,14 +49,10 @@ std::string describe(const HilSplitRobotStats& s) {
 kernel::Status HilSplitWorld::check(const Scenario& sc, std::size_t robot) {
   if (sc.world_kind != WorldKind::kEnki)
     return kernel::Error{sc.file +
-                         ": a 3D world's modules cannot run in other processes yet (one module can: symb sim "
-                         "--board, docs/hil.md)"};
+                         ": a 3D world's modules do not run as remote robots (one module can run in another "
+                         "process: symb sim --board NAME --dds, docs/hil.md)"};
   if (robot >= sc.robots.size()) return kernel::Error{sc.file + ": no robot " + count_text(robot)};
   const RobotSpec& spec = sc.robots[robot];
-  if (sc.world.radio)
-    return kernel::Error{spec.where.str() + ": robot " + spec.name +
-                         " cannot run in another process: the world has a radio (world.radio in " + sc.file +
-                         "), whose traffic is not carried between processes"};
   for (const EventSpec& e : sc.events)
     if (e.robot == robot)
       return kernel::Error{e.where.str() + ": robot " + spec.name +
@@ -57,7 +63,10 @@ kernel::Status HilSplitWorld::check(const Scenario& sc, std::size_t robot) {
 HilSplitWorld::HilSplitWorld(ScenarioSession& session, HilSplitWorldOptions options)
     : session_(session), options_(std::move(options)), buf_(4096) {}
 
-HilSplitWorld::~HilSplitWorld() = default;
+HilSplitWorld::~HilSplitWorld() {
+  if (LocalRadio* radio = session_.radio())
+    for (const auto& r : robots_) radio->relay(r->stats.index, {});
+}
 
 kernel::Result<std::unique_ptr<HilSplitWorld>> HilSplitWorld::create(ScenarioSession& session,
                                                                      std::vector<Remote> remotes,
@@ -71,7 +80,11 @@ kernel::Result<std::unique_ptr<HilSplitWorld>> HilSplitWorld::create(ScenarioSes
     if (taken[r.robot]) return kernel::Error{"robot " + session.robot(r.robot).name() + " is remote twice"};
     if (!r.port) return kernel::Error{"robot " + session.robot(r.robot).name() + ": no stream"};
     taken[r.robot] = true;
-    auto robot = std::make_unique<Robot>();
+    // A radio frame holds a whole message: the decoder takes the longest the radio sends.
+    const auto& radio = session.scenario().world.radio;
+    auto robot = std::make_unique<Robot>(radio ? std::max<std::size_t>(256, kHilRadioHeader + radio->max_message_bytes)
+                                               : std::size_t{256});
+    robot->stats.radio = radio.has_value();
     robot->port = std::move(r.port);
     robot->stats.robot = session.robot(r.robot).name();
     robot->stats.index = r.robot;
@@ -87,6 +100,12 @@ kernel::Result<std::unique_ptr<HilSplitWorld>> HilSplitWorld::create(ScenarioSes
     // Its node runs in the other process; here its devices answer to the stream.
     session.robot(r->stats.index).node().clear();
     (void)session.runner().wheels(r->stats.index)->open();
+    if (LocalRadio* radio = session.radio())
+      radio->relay(r->stats.index, [raw = r.get()](std::size_t sender, const std::shared_ptr<const os::Blob>& blob) {
+        if (raw->stats.gone) return false;
+        raw->heard.emplace_back(static_cast<std::uint32_t>(sender), blob);
+        return true;
+      });
   }
   session.runner().add_observer([raw = w.get()](const StepRecord& record) { raw->on_step(record); });
   return w;
@@ -96,16 +115,27 @@ void HilSplitWorld::event(const std::string& text) {
   if (options_.on_event) options_.on_event(text);
 }
 
-void HilSplitWorld::send(Robot& r, const std::vector<std::byte>& payload) {
+void HilSplitWorld::send(Robot& r, const std::vector<std::byte>& payload, std::uint32_t step) {
   frame_.clear();
+  std::uint64_t radio = 0;
+  for (const auto& [sender, blob] : r.heard) {
+    const auto* bytes = os::blob_as<io::Bytes>(blob.get());
+    if (bytes == nullptr) continue;  // the radio puts none such on air
+    encode_radio_payload(step, sender, bytes->data, radio_payload_);
+    io::encode_frame(radio_payload_, frame_);
+    ++radio;
+  }
+  r.heard.clear();
   io::encode_frame(payload, frame_);
   const bool ok = r.port->write_all(frame_).ok();
   std::lock_guard lock(stats_mu_);
   ++(ok ? r.stats.frames_sent : r.stats.write_errors);
+  if (ok) r.stats.radio_sent += radio;
 }
 
 void HilSplitWorld::lose(Robot& r, std::uint64_t step, const std::string& why) {
   (void)session_.runner().wheels(r.stats.index)->set(std::array<float, 2>{0.0f, 0.0f});
+  r.heard.clear();
   {
     std::lock_guard lock(stats_mu_);
     if (r.stats.gone) return;
@@ -130,10 +160,28 @@ bool HilSplitWorld::read(Robot& r, kernel::Duration wait, std::uint32_t step) {
     return false;
   }
   bool answered = false;
-  std::uint64_t received = 0, malformed = 0, stale = 0;
+  std::uint64_t received = 0, malformed = 0, stale = 0, on_air = 0;
   bool hello = false;
   std::array<float, 2> wheels{};
+  LocalRadio* radio = session_.radio();
   r.decoder.feed(std::span<const std::byte>(buf_.data(), *got), [&](std::span<const std::byte> payload) {
+    if (is_radio_payload(payload)) {
+      auto m = decode_radio_payload(payload);
+      if (!m || radio == nullptr || m->robot != r.stats.index) {
+        ++malformed;
+        return;
+      }
+      // What its radio task sent before its answer to this step (the hello's: seq 0), once: on air
+      // at the world's next step, as an in-process radio task's message.
+      if (m->seq != step || answered || r.radio_seq == step) {
+        ++stale;
+        return;
+      }
+      r.radio_seq = step;
+      radio->transmit(r.stats.index, std::make_shared<const io::Bytes>(m->bytes));
+      ++on_air;
+      return;
+    }
     auto f = decode_wheel_payload(payload);
     if (!f) {
       ++malformed;
@@ -157,6 +205,7 @@ bool HilSplitWorld::read(Robot& r, kernel::Duration wait, std::uint32_t step) {
   r.stats.received += received;
   r.stats.malformed += malformed;
   r.stats.stale += stale;
+  r.stats.radio_received += on_air;
   r.stats.applied += answered ? 1 : 0;
   r.stats.decoder = r.decoder.stats();
   if (hello) r.stats.answered = true;
@@ -224,7 +273,7 @@ void HilSplitWorld::on_step(const StepRecord& record) {
     f.pose[1] = static_cast<float>(s.state.pose.y);
     f.pose[2] = static_cast<float>(s.state.pose.theta);
     f.ground = s.ground;
-    send(*r, encode_split_sensors_payload(f));
+    send(*r, encode_split_sensors_payload(f), f.seq);
   }
   const auto start = Wall::now();
   const auto deadline = start + options_.answer_wait;

@@ -13,6 +13,13 @@
 //        world's step k + 1 applies, as it applies the command an in-process node gave in step
 //        k's window.
 //
+// In a world with a radio (world.radio), the radio crosses in radio frames: what the world's radio
+// delivers to a remote robot at step k (a LocalRadio relay) goes before sensor frame k, and what
+// the robot's radio task sent in its window comes before its answer, which puts it on air for the
+// world's step k + 1 (LocalRadio::transmit), as an in-process robot's radio task does. The radio
+// observes the runner before this does (the session attached it first), so step k's deliveries are
+// all there when frame k goes.
+//
 // A remote robot runs its node on a virtual-time executor whose clock these frames drive
 // (HilSplitRobot), so the robot computes what its node computes in process, and the run is the
 // in-process one bit for bit: the same trajectory hash (tests/apps/split_world_test.cpp).
@@ -23,8 +30,8 @@
 // why. Garbage on a robot's stream is counted (CRC and framing by the decoder, malformed payloads)
 // and dropped; answers to older steps are counted stale.
 //
-// Limits (check() says so at the scenario's place): 2D worlds; no remote robot in a world with a
-// radio (world.radio: its traffic is not carried) and none that scenario events name.
+// Limits (check() says so at the scenario's place): 2D worlds; no remote robot that scenario
+// events name.
 //
 // Threads: the observer runs on the runner's context; wait_for_robots() on the caller's, before
 // the session starts; stats() from any thread.
@@ -56,18 +63,21 @@ struct HilSplitWorldOptions {
 struct HilSplitRobotStats {
   std::string robot;
   std::size_t index = 0;
-  std::uint64_t frames_sent = 0;   // hello and sensor frames the stream took
-  std::uint64_t write_errors = 0;  // frames it refused
-  std::uint64_t received = 0;      // good wheel frames
-  std::uint64_t malformed = 0;     // good frames that are no wheel frame
-  io::FrameStats decoder;          // dropped(): bad frames (CRC, framing)
-  std::uint64_t applied = 0;       // steps that took the answer to that step
-  std::uint64_t stale = 0;         // answers to an older step (a hello repeated, a late one)
-  double waited_s = 0;             // wall time the steps spent waiting for this robot's answers
-  bool answered = false;           // the hello was answered
-  bool gone = false;               // no longer followed: its wheels stopped
-  std::uint64_t gone_at = 0;       // the step it was declared gone at
-  std::string why;                 // ... and why
+  std::uint64_t frames_sent = 0;     // hello and sensor frames the stream took
+  std::uint64_t write_errors = 0;    // frames it refused
+  std::uint64_t received = 0;        // good wheel frames
+  std::uint64_t malformed = 0;       // good frames that are no wheel frame nor a good radio frame
+  std::uint64_t radio_sent = 0;      // radio frames sent: messages the world's radio delivered to it
+  std::uint64_t radio_received = 0;  // radio frames put on air
+  bool radio = false;                // the world has a radio
+  io::FrameStats decoder;            // dropped(): bad frames (CRC, framing)
+  std::uint64_t applied = 0;         // steps that took the answer to that step
+  std::uint64_t stale = 0;           // answers to an older step (a hello repeated, a late one)
+  double waited_s = 0;               // wall time the steps spent waiting for this robot's answers
+  bool answered = false;             // the hello was answered
+  bool gone = false;                 // no longer followed: its wheels stopped
+  std::uint64_t gone_at = 0;         // the step it was declared gone at
+  std::string why;                   // ... and why
 
   std::uint64_t bad_frames() const { return decoder.dropped() + malformed; }
 };
@@ -82,8 +92,8 @@ class HilSplitWorld {
     std::shared_ptr<io::IOStream> port;
   };
 
-  // Whether robot `robot` of `scenario` can run in another process: a 2D world without a radio,
-  // and no event of the scenario names it. An error at its place in the file.
+  // Whether robot `robot` of `scenario` can run in another process: a 2D world, and no event of the scenario names it.
+  // An error at its place in the file.
   static kernel::Status check(const Scenario& scenario, std::size_t robot);
   // `session` is created and not started. Empties the remote robots' nodes (their devices answer
   // to the streams now) and observes the runner. Fails on check(), a robot out of range or named
@@ -109,7 +119,8 @@ class HilSplitWorld {
   struct Robot;
   HilSplitWorld(ScenarioSession& session, HilSplitWorldOptions options);
   void on_step(const StepRecord& record);
-  void send(Robot& r, const std::vector<std::byte>& payload);
+  // Sends `payload` after the radio frames of robot r's messages heard at step `step` (if any).
+  void send(Robot& r, const std::vector<std::byte>& payload, std::uint32_t step = 0);
   // Reads what robot r sent for up to `wait`; applies an answer to `step` (returns true then).
   bool read(Robot& r, kernel::Duration wait, std::uint32_t step);
   void lose(Robot& r, std::uint64_t step, const std::string& why);
@@ -119,6 +130,7 @@ class HilSplitWorld {
   HilSplitWorldOptions options_;
   std::vector<std::unique_ptr<Robot>> robots_;
   std::vector<std::byte> frame_;
+  std::vector<std::byte> radio_payload_;
   std::vector<std::byte> buf_;
   mutable std::mutex stats_mu_;
 };

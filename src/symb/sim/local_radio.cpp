@@ -129,21 +129,47 @@ void LocalRadio::step(const StepRecord& record) {
     receivers_.clear();
     find_receivers(s);
     counts_.out_of_range += (n - 1) - receivers_.size();
-    for (std::size_t r : receivers_) {
-      Robot& receiver = robots_[r];
-      if (receiver.node == nullptr) {
-        ++counts_.dropped;
-        continue;
-      }
-      m.time = receiver.node->now();
-      if (receiver.node->post(receiver.task, m).ok()) {
-        ++counts_.delivered;
-        ++receiver.received;
-      } else {
-        ++counts_.dropped;
-      }
-    }
+    for (std::size_t r : receivers_) deliver_locked(r, s, m);
   }
+}
+
+void LocalRadio::deliver_locked(std::size_t r, std::size_t sender, os::Message& m) {
+  Robot& receiver = robots_[r];
+  bool delivered = false;
+  if (receiver.relay) {
+    delivered = receiver.relay(sender, m.payload.blob);
+  } else if (receiver.node != nullptr) {
+    m.time = receiver.node->now();
+    delivered = receiver.node->post(receiver.task, m).ok();
+  }
+  if (delivered) {
+    ++counts_.delivered;
+    ++receiver.received;
+  } else {
+    ++counts_.dropped;
+  }
+}
+
+void LocalRadio::relay(std::size_t robot, Relay relay) {
+  std::lock_guard lock(mu_);
+  robots_.at(robot).relay = std::move(relay);
+}
+
+std::shared_ptr<const os::Blob> LocalRadio::take_pending(std::size_t robot) {
+  Slot& slot = slots_.at(robot);
+  std::lock_guard lock(slot.mu);
+  return std::exchange(slot.pending, nullptr);
+}
+
+bool LocalRadio::deliver(std::size_t robot, std::size_t sender, std::shared_ptr<const os::Blob> blob) {
+  std::lock_guard lock(mu_);
+  if (robot >= robots_.size()) return false;
+  os::Message m;
+  m.payload = os::Payload{static_cast<float>(sender)};
+  m.payload.blob = std::move(blob);
+  const std::uint64_t before = counts_.delivered;
+  deliver_locked(robot, sender, m);
+  return counts_.delivered != before;
 }
 
 RadioCounts LocalRadio::counts() const {

@@ -17,6 +17,11 @@
 // A step finds each sender's receivers on a spatial grid of the positions (spatial_grid.hpp), cells
 // as wide as the range: its cost grows with the messages and the robots in range of their senders,
 // not with the square of the swarm (out_of_range is counted, not enumerated).
+// A world split over processes (hil_split_world.hpp) carries the radio to robots whose nodes run
+// elsewhere: the world's medium hands what it delivers to such a robot to a relay() instead of a
+// radio task, and puts what the robot sent on air with transmit(); in the robot's process a medium
+// that never steps holds the robot's radio task, take_pending() takes what it sent and deliver()
+// posts what the world's medium delivered, as step() posts it.
 // Lifetime: the LocalRadio must outlive the runner it is attached to and every RadioTask made from
 // it (declare it before the ScenarioSession). Thread-safe: tasks and the runner may run on
 // different threads (ThreadExecutor). Transmitting touches only the robot's own slot (its own
@@ -26,6 +31,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -96,6 +102,24 @@ class LocalRadio {
 
   static constexpr std::size_t kMaxQueue = 128;
 
+  // What the medium delivers to robot `robot` (a robot whose node runs in another process) goes to
+  // `relay` from now on, in step()'s order, on step()'s thread, instead of to a radio task: the
+  // sender's index and the bytes; it returns whether it took them (counted delivered, else
+  // dropped). Called under the medium's lock: it must not call back into the medium.
+  using Relay = std::function<bool(std::size_t sender, const std::shared_ptr<const os::Blob>& bytes)>;
+  void relay(std::size_t robot, Relay relay);
+  // Robot `robot`'s message for the next step, as its radio task hands one over when a hooked task
+  // sends it: refused (too_long) without io::Bytes or beyond max_message_bytes; a newer one
+  // overwrites it until the step.
+  void transmit(std::size_t robot, std::shared_ptr<const os::Blob> blob);
+  // Takes robot `robot`'s message waiting for the next step (null when none), for a medium in
+  // another process to put on air.
+  std::shared_ptr<const os::Blob> take_pending(std::size_t robot);
+  // Posts into robot `robot`'s radio task what another process's medium delivered to it from
+  // `sender`, as step() posts (at the node's time; counted delivered, or dropped when the robot
+  // has no radio task or its queue is full). Returns whether it was delivered.
+  bool deliver(std::size_t robot, std::size_t sender, std::shared_ptr<const os::Blob> blob);
+
   std::size_t robot_count() const { return robots_.size(); }
   const LocalRadioOptions& options() const { return options_; }
   RadioCounts counts() const;
@@ -107,13 +131,15 @@ class LocalRadio {
   LocalRadio(std::size_t robots, LocalRadioOptions options) : options_(options), robots_(robots), slots_(robots) {}
   void connect(std::size_t robot, os::Node* node, os::TaskId task);
   void disconnect(std::size_t robot, os::TaskId task);
-  void transmit(std::size_t robot, std::shared_ptr<const os::Blob> bytes);
+  // Delivers `m` to `receiver`, under mu_: its relay, or its radio task.
+  void deliver_locked(std::size_t receiver, std::size_t sender, os::Message& m);
   // Appends to receivers_ the robots in range of `sender`, in index order.
   void find_receivers(std::size_t sender);
 
   struct Robot {               // guarded by mu_
     os::Node* node = nullptr;  // while its radio task runs
     os::TaskId task;
+    Relay relay;  // set: its node is in another process
     std::uint64_t received = 0;
   };
   // What transmit() touches, guarded by its own mutex: one robot's node never waits for another's.

@@ -27,6 +27,10 @@ constexpr OptionSpec kBoardOptions[] = {
     {"--serial", "PATH", "the data line to the simulator"},
     {"--shell", "PATH", "a second serial line for the command shell (symb shell --serial ...)"},
     {"--robot", "NAME", "the scenario's robot this board runs (default: the first; 3D: required)"},
+    {"--dds", "", "3D scenarios: reach the simulator over DDS (symb sim --dds) instead of --serial"},
+    {"--domain", "N", "--dds: the DDS domain id, 0..232 (default 0)"},
+    {"--prefix", "NAME", "--dds: the first name of every topic, rt/NAME/... (default symb)"},
+    {"--lease", "D", "--dds: a simulator silent this long is lost (default 1s)"},
     {"--playground", "OUT", "write the scenario's world as an Aseba Playground file and exit (docs/thymio.md)"},
     {"--port", "N", "--playground: the first robot's port (default 33333)"},
     {"--speed-scale", "X", "aseba: Thymio motor target per wheel unit (default 1 on tcp, 0.83 on serial)"},
@@ -72,7 +76,17 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   std::optional<double> speed_scale;
   view::ViewRequest view_request;
   std::optional<std::string> token;
+  std::optional<io::DdsFrameOptions> dds;
+  io::DdsFrameOptions dds_options;
+  std::string dds_option;  // the last DDS option given
   for (const ParsedOption& o : a.options) {
+    if (o.name == "--dds") {
+      dds = io::DdsFrameOptions{};
+      continue;
+    }
+    auto link_option = parse_dds_option(o, dds_options, dds_option);
+    if (auto* e = std::get_if<UsageError>(&link_option)) return usage_error(ctx, kBoardCommand, *e);
+    if (std::get<bool>(link_option)) continue;
     if (o.name == "--serial" || o.name == "--shell" || o.name == "--robot") {
       if (o.value.empty()) return usage_error(ctx, kBoardCommand, UsageError{std::string(o.name) + ": empty value"});
       (o.name == "--serial" ? serial : o.name == "--shell" ? shell_path : robot_name) = o.value;
@@ -122,7 +136,16 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   if (token) view_request.token = *token;
   if (view_request.on && !playground.empty())
     return usage_error(ctx, kBoardCommand, UsageError{"--view: --playground writes a file and exits"});
-  if (serial.empty() && !aseba && playground.empty())
+  if (dds) {
+    if (!serial.empty())
+      return usage_error(ctx, kBoardCommand, UsageError{"--dds or --serial: the simulator is on one link"});
+    if (aseba || !playground.empty())
+      return usage_error(ctx, kBoardCommand, UsageError{"--dds is for a module of a 3D scenario"});
+    dds = dds_options;
+  } else if (!dds_option.empty()) {
+    return usage_error(ctx, kBoardCommand, UsageError{dds_option + " is for --dds"});
+  }
+  if (serial.empty() && !dds && !aseba && playground.empty())
     return usage_error(ctx, kBoardCommand, UsageError{"missing --serial PATH (the data line)"});
 
   auto loaded = sim::load_scenario(std::string(a.positional.front()));
@@ -148,6 +171,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     BoardOrganismArgs oa;
     oa.view = view_request;
     oa.serial = serial;
+    oa.dds = dds;
     oa.shell = shell_path;
     oa.robot = robot_name;
     oa.seed = seed;

@@ -18,6 +18,7 @@
 
 #include "symb/apps/cli_args.hpp"
 #include "symb/apps/view/view_request.hpp"
+#include "symb/io/dds/dds_frame_stream.hpp"
 #include "symb/kernel/time.hpp"
 #include "symb/sim/scenario.hpp"
 
@@ -28,10 +29,13 @@ int run_link_command(std::span<const std::string_view> args, const CliContext& c
 int run_sim_command(std::span<const std::string_view> args, const CliContext& ctx);
 int run_board_command(std::span<const std::string_view> args, const CliContext& ctx);
 
-// The 3D forms (hil_organism_commands.cpp): one module of the organism on the board.
+// The 3D forms (hil_organism_commands.cpp): one module of the organism on the board, at the
+// other end of a serial line or of a DDS frame stream (--dds: topics rt/<prefix>/<module>/to_robot
+// and .../to_world, found by discovery with no configuration).
 struct SimOrganismArgs {
-  std::vector<std::string> serial;  // exactly one
-  std::string board;                // --board: the module on the board
+  std::vector<std::string> serial;  // exactly one, or none with dds
+  std::optional<io::DdsFrameOptions> dds;
+  std::string board;  // --board: the module on the board
   std::optional<std::uint64_t> seed;
   kernel::Duration duration{0};
   kernel::Duration hold = std::chrono::milliseconds(300);
@@ -44,7 +48,8 @@ struct SimOrganismArgs {
 int run_sim_organism(const sim::Scenario& scenario, const SimOrganismArgs& args, const CliContext& ctx);
 
 struct BoardOrganismArgs {
-  std::string serial, shell, robot;
+  std::string serial, shell, robot;  // serial: empty with dds
+  std::optional<io::DdsFrameOptions> dds;
   std::optional<std::uint64_t> seed;
   std::optional<kernel::Duration> duration;
   kernel::Duration stats_every = std::chrono::seconds(5);

@@ -1,9 +1,32 @@
 #include "symb/apps/hil/hil_common.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 
+#include "symb/os/param.hpp"
+
 namespace symb::apps::hil {
+
+std::variant<bool, UsageError> parse_dds_option(const ParsedOption& o, io::DdsFrameOptions& options,
+                                                std::string& given) {
+  if (o.name == "--domain") {
+    auto v = parse_count("--domain", o.value, 0, 232);
+    if (auto* e = std::get_if<UsageError>(&v)) return *e;
+    options.domain = static_cast<std::uint32_t>(std::get<std::uint64_t>(v));
+  } else if (o.name == "--prefix") {
+    if (!os::is_valid_name(o.value)) return UsageError{"--prefix " + quote_arg(o.value) + ": not a name"};
+    options.prefix = o.value;
+  } else if (o.name == "--lease") {
+    auto v = parse_duration(o.name, o.value, std::chrono::hours(1));  // refuses 0
+    if (auto* e = std::get_if<UsageError>(&v)) return *e;
+    options.lease = std::get<kernel::Duration>(v);
+  } else {
+    return false;
+  }
+  given = o.name;
+  return true;
+}
 
 void PrefixedLogSink::write(const os::LogEntry& e) {
   std::lock_guard lock(mu_);

@@ -19,12 +19,19 @@
 #include "symb/apps/interrupt_flag.hpp"
 #include "symb/apps/view/live_view.hpp"
 #include "symb/apps/view/view_request.hpp"
+#include "symb/io/dds/dds_frame_stream.hpp"
 #include "symb/os/node.hpp"
 #include "symb/os/syslog.hpp"
 
 namespace symb::apps::hil {
 
 using apps::InterruptFlag;
+
+// `--domain N`, `--prefix NAME` and `--lease D` of a 3D HIL command's `--dds` link (as `symb run
+// --bus dds`'s): true when `o` is one of them, read into `options` and named in `given`; false for
+// another option; an error for a bad value.
+std::variant<bool, UsageError> parse_dds_option(const ParsedOption& o, io::DdsFrameOptions& options,
+                                                std::string& given);
 
 // Writes a node's log entries to a stream, one line each, prefixed with the node's name;
 // serialised, as tasks on several threads log at once.

@@ -2,8 +2,11 @@
 // one module of the organism on the board (docs/hil.md, "3D: one module on a board"). The
 // simulator runs the organism in process (OrganismSession) with the board's module's node
 // replaced by the serial line (HilOrganism); the board runs that module's node over the line's
-// devices (HilModuleBoard). Called by run_sim_command and run_board_command once the scenario is
-// loaded and found to be 3D.
+// devices (HilModuleBoard). With --dds the line is a DDS frame stream instead (io::DdsFrameStream,
+// the split world's: topics rt/<prefix>/<module>/to_robot and .../to_world), so the module runs in
+// another process of this machine or the network; a board over DDS ends when the simulator's
+// stream does. Called by run_sim_command and run_board_command once the scenario is loaded and
+// found to be 3D.
 #include <chrono>
 #include <sstream>
 #include <thread>
@@ -12,6 +15,7 @@
 #include "symb/apps/hil/hil_common.hpp"
 #include "symb/apps/progress_line.hpp"
 #include "symb/apps/run/organism_recorder.hpp"
+#include "symb/apps/run/remote_robots.hpp"
 #include "symb/io/reopen_backoff.hpp"
 #include "symb/io/serial_port.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
@@ -37,12 +41,54 @@ std::variant<std::size_t, std::string> module_index(const sim::Scenario& sc, con
   return std::string(option) + ": the scenario has no module " + quote_arg(name) + " (it has " + names + ")";
 }
 
+// The module's DDS frame stream as the line the simulator watches (HilOrganism): a peer gone
+// (its process killed, or ended) is a line down, whose open() fails until a writer of the peer's
+// topic is back, as a serial device's path that is not there; so a dead board is reported once,
+// retried with backoff and, still gone at the end, a dead link.
+class DdsLine final : public io::IOStream {
+ public:
+  explicit DdsLine(std::shared_ptr<io::DdsFrameStream> stream)
+      : Device(stream->name()), IOStream(stream->name()), s_(std::move(stream)) {}
+  kernel::Status open() override {
+    if (s_->is_open()) return s_->open();
+    return kernel::Error{"the peer on " + s_->read_topic() + " is " + io::to_string(s_->peer())};
+  }
+  void close() override { s_->close(); }
+  bool is_open() const override { return s_->is_open(); }
+  kernel::Result<std::size_t> read_some(std::span<std::byte> buf, kernel::Duration timeout) override {
+    return s_->read_some(buf, timeout);
+  }
+  kernel::Status write_all(std::span<const std::byte> data) override { return s_->write_all(data); }
+
+ private:
+  std::shared_ptr<io::DdsFrameStream> s_;
+};
+
+// The module's DDS frame stream: the simulator writes to_robot and reads to_world, the board the
+// other way round.
+struct DdsLink {
+  std::shared_ptr<io::DdsFrameLinks> links;
+  std::shared_ptr<io::DdsFrameStream> stream;
+  std::string what;  // "DDS rt/symb/m4/to_world (domain 0)": where it listens
+};
+
+kernel::Result<DdsLink> open_dds_link(const io::DdsFrameOptions& options, const std::string& module, bool simulator) {
+  auto links = io::DdsFrameLinks::create(options);
+  if (!links) return kernel::Error{"--dds: " + links.error()};
+  auto stream = simulator ? (*links)->stream(module, run::kToRobot, run::kToWorld)
+                          : (*links)->stream(module, run::kToWorld, run::kToRobot);
+  if (!stream) return kernel::Error{"--dds: " + stream.error()};
+  DdsLink l{*links, *stream, {}};
+  l.what = "DDS " + l.stream->read_topic() + " (domain " + std::to_string(options.domain) + ")";
+  return l;
+}
+
 }  // namespace
 
 int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const CliContext& ctx) {
   constexpr std::string_view kCommand = "symb sim";
-  if (args.serial.size() != 1) {
-    ctx.err << kCommand << ": a 3D scenario runs one module on a board: give one --serial path\n";
+  if (args.serial.size() != (args.dds ? 0u : 1u)) {
+    ctx.err << kCommand << ": a 3D scenario runs one module on a board: give one --serial path (or --dds)\n";
     return kExitUsage;
   }
   if (args.board.empty()) {
@@ -69,12 +115,28 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
     return kExitFailure;
   }
   sim::mujoco::OrganismSession& session = **made;
-  auto port = std::make_shared<io::SerialPort>("data." + args.board, args.serial.front());
-  if (auto st = port->open(); !st) {
-    ctx.err << kCommand << ": " << st.error() << "\n";
-    return kExitFailure;
+  std::shared_ptr<io::IOStream> port;
+  std::optional<DdsLink> dds;
+  std::string where;
+  if (args.dds) {
+    auto l = open_dds_link(*args.dds, args.board, true);
+    if (!l) {
+      ctx.err << kCommand << ": " << l.error() << "\n";
+      return kExitFailure;
+    }
+    dds = std::move(l).value();
+    port = std::make_shared<DdsLine>(dds->stream);
+    where = dds->what;
+  } else {
+    auto serial = std::make_shared<io::SerialPort>("data." + args.board, args.serial.front());
+    if (auto st = serial->open(); !st) {
+      ctx.err << kCommand << ": " << st.error() << "\n";
+      return kExitFailure;
+    }
+    (void)serial->ioctl("flush");
+    port = serial;
+    where = args.serial.front();
   }
-  (void)port->ioctl("flush");
   sim::mujoco::HilOrganismOptions ho;
   ho.paced = !args.lockstep;
   ho.answer_wait = args.lockstep ? std::chrono::duration_cast<kernel::Duration>(1s) : sc.control_period;
@@ -91,8 +153,8 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
   ro.caption = sc.name + " (module " + args.board + " on the board), seed " + std::to_string(seed);
   run::OrganismRecorder recorder(session.runner(), ro);
 
-  ctx.err << "sim: " << sc.name << ", seed " << seed << ": waiting for the board (" << args.board << ") on "
-          << args.serial.front() << "\n"
+  ctx.err << "sim: " << sc.name << ", seed " << seed << ": waiting for the board (" << args.board << ") on " << where
+          << "\n"
           << std::flush;
   if (auto st = (*hil)->wait_for_board(args.wait); !st) {
     ctx.err << kCommand << ": " << st.error() << "\n";
@@ -114,6 +176,11 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
     progress.update(static_cast<double>(done) / static_cast<double>(std::max<std::uint64_t>(ticks, 1)),
                     "sim: tick " + std::to_string(done) + " / " + std::to_string(ticks));
   }
+  if (dds) {
+    // Everything sent reaches the board, then it sees this end leave, not get lost: its run ended.
+    (void)dds->stream->flush(std::chrono::seconds(2));
+    dds->stream->finish_sending();
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   const double simulated = std::chrono::duration<double>(sc.control_period).count() * static_cast<double>(done);
   progress.finish("sim: " + fixed(simulated, 1) + " s simulated in " + fixed(wall, 1) + " s");
@@ -123,6 +190,7 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
          << "world: MuJoCo (3D), " << sc.robots.size() << " modules, " << args.board << " on the board\n"
          << "seed: " << seed << "\n"
          << "executor: hardware-in-the-loop, " << (args.lockstep ? "lockstep" : "wall clock") << "\n"
+         << "transport: " << (dds ? "" : "serial line ") << where << "\n"
          << "control period: " << fixed(std::chrono::duration<double>(sc.control_period).count() * 1000, 1) << " ms\n"
          << "simulated: " << fixed(simulated, 2) << " s\n"
          << "wall clock: " << fixed(wall, 3) << " s\n"
@@ -139,7 +207,8 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
                                         : args.board + " (down " +
                                               fixed(std::chrono::duration<double>(st.line_down).count(), 1) +
                                               " s in all, " + std::to_string(st.line_losses) + " loss(es))";
-  if (!dead.empty()) header << "dead link: the serial line was down at the end of the run: " << dead << "\n";
+  const std::string line = dds ? "the DDS link" : "the serial line";
+  if (!dead.empty()) header << "dead link: " << line << " was down at the end of the run: " << dead << "\n";
   const std::filesystem::path dir = args.out_dir.value_or(std::filesystem::path("out") / (sc.name + "-hil"));
   auto files = recorder.finish(dir, header.str());
   if (!files) {
@@ -152,7 +221,7 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
           << "  trajectory hash: " << hex64(recorder.summary().hash) << "\n"
           << "results in " << dir.string() << "/\n";
   if (!dead.empty()) {
-    ctx.err << kCommand << ": dead link: the serial line was down at the end of the run: " << dead << "\n";
+    ctx.err << kCommand << ": dead link: " << line << " was down at the end of the run: " << dead << "\n";
     return kExitFailure;
   }
   return kExitOk;
@@ -171,12 +240,26 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
   }
   const std::size_t module = std::get<std::size_t>(index);
   const sim::RobotSpec& spec = sc.robots[module];
-  auto port = std::make_shared<io::SerialPort>("uart0", args.serial);
-  if (auto st = port->open(); !st) {
-    ctx.err << kCommand << ": " << st.error() << "\n";
-    return kExitFailure;
+  std::shared_ptr<io::IOStream> port;
+  std::optional<DdsLink> dds;
+  std::string where = args.serial;
+  if (args.dds) {
+    auto l = open_dds_link(*args.dds, spec.name, false);
+    if (!l) {
+      ctx.err << kCommand << ": " << l.error() << "\n";
+      return kExitFailure;
+    }
+    dds = std::move(l).value();
+    port = dds->stream;
+    where = dds->what;
+  } else {
+    port = std::make_shared<io::SerialPort>("uart0", args.serial);
+    if (auto st = port->open(); !st) {
+      ctx.err << kCommand << ": " << st.error() << "\n";
+      return kExitFailure;
+    }
+    (void)port->ioctl("flush");
   }
-  (void)port->ioctl("flush");
   std::shared_ptr<io::SerialPort> shell_port;
   if (!args.shell.empty()) {
     shell_port = std::make_shared<io::SerialPort>("uart1", args.shell);
@@ -233,14 +316,15 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
     return kExitFailure;
   }
   BoardView board_view = std::move(view_started).value();
-  ctx.out << "board: module " << spec.name << " of " << sc.name << " on " << args.serial
+  ctx.out << "board: module " << spec.name << " of " << sc.name << " on " << where
           << (shell_port ? ", shell on " + args.shell : std::string()) << "; " << system->node().task_count()
           << " tasks; its clock follows the simulator's frames; Ctrl-C to stop\n"
           << std::flush;
   InterruptFlag interrupt;
   const auto start = std::chrono::steady_clock::now();
   auto next_stats = start + args.stats_every;
-  std::string cycle;
+  std::string cycle, ended;
+  bool lost = false;
   io::ReopenBackoff backoff;
   const auto steady = [] {
     return std::chrono::duration_cast<kernel::Time>(std::chrono::steady_clock::now().time_since_epoch());
@@ -263,6 +347,19 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
       }
       if (backoff.down()) std::this_thread::sleep_for(20ms);
     } else if (auto served = board.serve(20ms); !served) {
+      if (dds && board.stats().handshakes == 0) {
+        // Not the simulator (a foreign writer that came and went): wait on for it.
+        std::this_thread::sleep_for(20ms);
+        continue;
+      }
+      if (dds) {
+        // Over DDS the simulator's stream ends with its run (it left) or with its process (lost).
+        lost = dds->stream->peer() != io::DdsPeerState::kLeft;
+        ended = lost ? "the simulator is gone without ending the run (" + served.error() + ")"
+                     : "the simulator ended its run";
+        ctx.err << "board " << spec.name << ": " << ended << "\n" << std::flush;
+        break;
+      }
       backoff.lost(steady());
       ctx.err << "board " << spec.name << ": " << served.error() << ": reopening it with backoff\n" << std::flush;
     }
@@ -290,6 +387,10 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
   if (shell_port) shell_port->close();
   if (!cycle.empty()) {
     ctx.err << kCommand << ": " << cycle << "\n";
+    return kExitFailure;
+  }
+  if (lost) {
+    ctx.err << kCommand << ": " << ended << "\n";
     return kExitFailure;
   }
   if (backoff.down()) {

@@ -39,6 +39,10 @@ constexpr OptionSpec kSimOptions[] = {
     {"--wait", "D", "how long to wait for the boards' first answer (default 60s)"},
     {"--board", "NAME", "3D scenarios: the module that runs on the board (the others run here)"},
     {"--lockstep", "", "3D scenarios: wait for every answer (up to 1 s) instead of the wall-clock pace"},
+    {"--dds", "", "3D scenarios: reach the board over DDS (symb board --dds) instead of --serial"},
+    {"--domain", "N", "--dds: the DDS domain id, 0..232 (default 0)"},
+    {"--prefix", "NAME", "--dds: the first name of every topic, rt/NAME/... (default symb)"},
+    {"--lease", "D", "--dds: a board process silent this long is lost (default 1s)"},
     {"--quiet", "", "no progress line"},
     {"--help", "", "this help"},
 };
@@ -73,7 +77,17 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   bool quiet = false;
   std::string board;
   bool lockstep = false;
+  std::optional<io::DdsFrameOptions> dds;
+  io::DdsFrameOptions dds_options;
+  std::string dds_option;  // the last DDS option given
   for (const ParsedOption& o : a.options) {
+    if (o.name == "--dds") {
+      dds = io::DdsFrameOptions{};
+      continue;
+    }
+    auto link_option = parse_dds_option(o, dds_options, dds_option);
+    if (auto* e = std::get_if<UsageError>(&link_option)) return usage_error(ctx, kSimCommand, *e);
+    if (std::get<bool>(link_option)) continue;
     if (o.name == "--board") {
       if (o.value.empty()) return usage_error(ctx, kSimCommand, UsageError{"--board: empty module name"});
       board = o.value;
@@ -115,7 +129,15 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
       quiet = true;
     }
   }
-  if (serial.empty()) return usage_error(ctx, kSimCommand, UsageError{"missing --serial PATH (the board's data line)"});
+  if (dds) {
+    if (!serial.empty())
+      return usage_error(ctx, kSimCommand, UsageError{"--dds or --serial: the board is on one link"});
+    dds = dds_options;
+  } else if (!dds_option.empty()) {
+    return usage_error(ctx, kSimCommand, UsageError{dds_option + " is for --dds"});
+  }
+  if (serial.empty() && !dds)
+    return usage_error(ctx, kSimCommand, UsageError{"missing --serial PATH (the board's data line)"});
 
   auto loaded = sim::load_scenario(std::string(a.positional.front()));
   if (!loaded) {
@@ -126,6 +148,7 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   if (sc.world_kind == sim::WorldKind::kMujoco) {
     SimOrganismArgs oa;
     oa.serial = serial;
+    oa.dds = dds;
     oa.board = board;
     oa.seed = seed;
     oa.duration = duration.value_or(sc.duration);
@@ -137,9 +160,9 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
     oa.out_dir = out_dir;
     return run_sim_organism(sc, oa, ctx);
   }
-  if (!board.empty() || lockstep) {
-    ctx.err << kSimCommand << ": --board and --lockstep are for 3D scenarios; " << sc.file
-            << " describes a 2D world (one --serial path per robot)\n";
+  if (!board.empty() || lockstep || dds) {
+    ctx.err << kSimCommand << ": --board, --lockstep and --dds are for 3D scenarios; " << sc.file
+            << " describes a 2D world (one --serial path per robot; over DDS: symb run --bus dds --remote)\n";
     return kExitUsage;
   }
   if (serial.size() != sc.robots.size()) {

@@ -77,7 +77,9 @@ int run_serve_robot(const ServeRobotArgs& args, const CliContext& ctx) {
   ctx.out << who << ": " << ended << " at " << std::chrono::duration<double>(robot.now()).count() << " s of node time\n"
           << "serve-stats: frames=" << st.frames << " missed=" << st.missed << " out_of_order=" << st.out_of_order
           << " hellos=" << st.hellos << " bad=" << st.bad_frames() << " crc=" << st.decoder.crc_errors
-          << " malformed=" << st.malformed << " answers=" << st.answers << " not_taken=" << st.write_errors << "\n";
+          << " malformed=" << st.malformed << " answers=" << st.answers << " not_taken=" << st.write_errors
+          << " radio_in=" << st.radio_in << " radio_dropped=" << st.radio_dropped << " radio_stale=" << st.radio_stale
+          << " radio_out=" << st.radio_out << "\n";
   if (sim::RobotSystem* system = robot.system())
     for (const os::LogEntry& e : system->node().log().since(0))
       if (e.level >= os::LogLevel::kWarn) ctx.out << "log: " << os::format_log_entry(e) << "\n";
