@@ -51,6 +51,22 @@ class DdsCount final : public os::Task {
   }
 };
 
+// An echo that counts the messages it handled on a thread other than its own (the one its
+// on_start ran on): the DDS listener's, when it was idle (kernel::RunWakesHere).
+class DdsEchoNotingThread final : public os::Task {
+ public:
+  std::atomic<std::thread::id> own{};
+  std::atomic<int> handled{0}, elsewhere{0};
+
+ protected:
+  void on_start() override { own.store(std::this_thread::get_id()); }
+  void on_message(const os::Message& m) override {
+    if (std::this_thread::get_id() != own.load()) elsewhere.fetch_add(1);
+    handled.fetch_add(1);
+    send(m.port, m.payload);
+  }
+};
+
 os::Message numbers_on(os::Port port, os::Payload payload) {
   os::Message m;
   m.port = port;
@@ -349,6 +365,38 @@ TEST(DdsBus, ASenderThatStopsIsReportedAndTheHookGoesDown) {
   ASSERT_TRUE(eventually([&] { return bus->counts().peers_left == 1; }));
   EXPECT_EQ(bus->hooks()[0].state, LinkState::kDown);
   EXPECT_EQ(bus->counts().peers_lost, 0u);  // a clean leave is not a loss
+}
+
+TEST(DdsBus, AnIdleReceiverHandlesOnTheListenersThreadAndMayAnswerOverDdsFromThere) {
+  kernel::ThreadExecutor ex;
+  os::Node r1{ex, {"r1"}};
+  os::Node r2{ex, {"r2"}};
+  const TaskId src = *r1.create("src", std::make_unique<DdsEcho>(), {});
+  auto c = std::make_unique<DdsCount>();
+  DdsCount& count = *c;
+  const TaskId sink = *r1.create("sink", std::move(c), {});
+  auto e = std::make_unique<DdsEchoNotingThread>();
+  DdsEchoNotingThread& echo = *e;
+  ASSERT_TRUE(r2.create("echo", std::move(e), {}).ok());
+  (void)sink;
+  auto bus = DdsBus::create({&r1, &r2}, own_bus("guest")).value();
+  ASSERT_TRUE(bus->hook("r1/src", "r2/echo").ok());
+  ASSERT_TRUE(bus->hook("r2/echo", "r1/sink").ok());
+  ASSERT_TRUE(bus->wait_linked(5s));
+  constexpr int kMessages = 20;
+  for (int i = 0; i < kMessages; ++i) {
+    ASSERT_TRUE(r1.post(src, numbers_on(0, os::Payload({float(i)}))).ok());
+    ASSERT_TRUE(eventually([&] { return count.count.load() == std::uint64_t(i + 1); }));
+    std::this_thread::sleep_for(2ms);  // every task idle again
+  }
+  EXPECT_EQ(count.last.load(), float(kMessages - 1));
+  EXPECT_EQ(echo.handled.load(), kMessages);
+  // Each message finds `echo` idle; a few may still find it finishing the one before.
+  EXPECT_GE(echo.elsewhere.load(), kMessages / 2);
+  for (const RemoteHookInfo& h : bus->hooks()) {
+    EXPECT_EQ(h.books.delivered, std::uint64_t(kMessages)) << h.sender << " -> " << h.receiver;
+    EXPECT_TRUE(h.books.closes());
+  }
 }
 
 }  // namespace

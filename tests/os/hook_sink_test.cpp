@@ -95,6 +95,7 @@ TEST(HookSink, IsHandedWhatTheHookLetsThroughAndCountsIt) {
   ASSERT_NE(b, nullptr);
   EXPECT_FALSE(a->receiver.valid());
   EXPECT_EQ(a->receiver_name, "wire.port1");
+  EXPECT_EQ(a->sink, on_port1);
   EXPECT_EQ(a->sender_name, "tx");
   EXPECT_EQ(a->accounting.sent, 5u);
   EXPECT_EQ(a->accounting.skipped, 1u);
@@ -117,6 +118,32 @@ TEST(HookSink, IsHandedWhatTheHookLetsThroughAndCountsIt) {
   EXPECT_TRUE(all.closes());
   EXPECT_EQ(all.traffic.delivered, 3u + 4u + 5u);  // port1, any, and `local` (all but the inhibited one)
   EXPECT_EQ(all.traffic.inhibited, 3u);
+}
+
+// More sinks than a send keeps at hand: each is handed the message once, in hook order.
+TEST(HookSink, ManySinksOfOneSenderEachGetEveryMessage) {
+  kernel::VirtualTimeExecutor ex;
+  Node node(ex, {"n", 1});
+  auto script = std::make_unique<Scripted>();
+  Scripted* tx_task = script.get();
+  const TaskId tx = *node.create("tx", std::move(script));
+  std::vector<std::shared_ptr<RecordingSink>> sinks;
+  std::vector<int> order;
+  for (int k = 0; k < 7; ++k) {
+    sinks.push_back(std::make_shared<RecordingSink>("wire" + std::to_string(k)));
+    sinks.back()->on_each = [&order, k](const Message&) { order.push_back(k); };
+    ASSERT_TRUE(node.hook(tx, sinks.back(), {.priority = k}));
+  }
+  ex.run_until_idle();
+  tx_task->send(0, {1.0f});
+  tx_task->send(0, {2.0f});
+  for (const auto& sink : sinks) EXPECT_EQ(sink->firsts(), (std::vector<float>{1, 2}));
+  EXPECT_EQ(order, (std::vector<int>{6, 5, 4, 3, 2, 1, 0, 6, 5, 4, 3, 2, 1, 0}));  // highest priority first
+  EXPECT_TRUE(node.hook_traffic().closes());
+  ASSERT_TRUE(node.remove(tx));  // its sink hooks go with it, their counts kept
+  const HookTraffic all = node.hook_traffic();
+  EXPECT_EQ(all.traffic.delivered, 14u);
+  EXPECT_TRUE(all.closes());
 }
 
 TEST(HookSink, RefusesAWindowADuplicateAndNoSink) {
@@ -206,7 +233,7 @@ class Forward final : public Task {
 TEST(HookSink, CarriesMessagesBetweenNodesOnTheSendersThreadBothWays) {
   kernel::ThreadExecutor ex;
   Node a(ex, {"a", 1}), b(ex, {"b", 2});
-  constexpr int kEach = 2000;
+  constexpr int kEach = 500;
   struct Side {
     TaskId tx, inlet, rx;
     Collector* got = nullptr;

@@ -75,7 +75,7 @@ kernel::Result<HookFrame> parse_hook_frame(std::span<const std::byte> payload);
 
 // Why a message of a remote hook did not arrive.
 enum class HookDrop : std::uint8_t {
-  kSender,     // the outbound proxy's queue dropped it (the local hook's policy)
+  kSender,     // the sender's side dropped it: the outbound proxy's queue (the hook's policy), an inhibition
   kBlob,       // it carried a blob: not carried over a bus
   kQueueFull,  // the sending module's transmit queue was full
   kLinkDown,   // the ends were apart when it was sent, or came apart while it travelled

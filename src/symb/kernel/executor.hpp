@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "symb/kernel/clock.hpp"
 #include "symb/kernel/time.hpp"
@@ -21,7 +22,9 @@ struct ActivityOptions {
 };
 
 // Implemented by whatever an executor runs. Every call for one activity happens on that
-// activity's own execution context, one at a time, never two at once.
+// activity's own execution context, one at a time, never two at once; the one exception is an
+// input handler that the thread which woke the activity runs itself (RunWakesHere), still one
+// handler at a time, with all the activity's earlier handlers' effects visible to it.
 class ActivitySlot;
 class ParallelFor;  // kernel/parallel_for.hpp
 
@@ -46,10 +49,13 @@ class Activity {
 // activity's on_activity_released(); every method may be called from any thread (and from inside
 // any activity's handler), except under the single-threaded virtual-time executor where all
 // calls come from its thread.
+class RunWakesHere;
+
 class ActivitySlot {
  public:
   virtual ~ActivitySlot() = default;
-  // Input is pending: on_activity_input() will run soon (once for any number of wakes).
+  // Input is pending: on_activity_input() will run soon (once for any number of wakes). Within a
+  // RunWakesHere on the calling thread, an executor that can may run it on that thread instead.
   virtual void wake() = 0;
   // No handler runs while suspended; wakes are remembered; ticks resume one period after resume.
   virtual void suspend() = 0;
@@ -59,6 +65,63 @@ class ActivitySlot {
   // Stops the activity: on_activity_stop() then on_activity_released(), after any handler that is
   // running returns. Safe to call from the activity's own handler.
   virtual void detach() = 0;
+
+ protected:
+  friend class RunWakesHere;
+  // For a slot whose wake() claimed its activity for the thread's RunWakesHere (see there): runs
+  // on_activity_input() on the calling thread, then gives the activity back to its executor.
+  virtual void run_claimed_input() {}
+};
+
+// While alive on a thread that is outside every executor and has just made input pending (a
+// network listener handing messages to tasks), lets the executors run the woken activities' input
+// handlers on this thread when it ends, instead of waking their own: the hand-over of a wake
+// costs a context switch on each side, and this thread has nothing else to do. An executor whose
+// slots support it (the thread executor, not in realtime mode) claims an activity in wake() when
+// the activity is idle: started, not suspended, not detached and running no handler on any
+// thread; it then runs no handler of that activity (nor stops it) until the claimed run is done,
+// so handlers still run one at a time, and input arriving meanwhile is its own thread's to
+// handle. A busy activity, or one of any other executor, is woken as usual. Wakes made by the
+// handlers it runs are plain wakes (they run on their own threads, as they would have). A scope
+// may be opened inside a handler it runs (a listener called on that thread); it then handles its
+// own wakes.
+class RunWakesHere {
+ public:
+  RunWakesHere() : outer_(current_) { current_ = this; }
+  ~RunWakesHere() {
+    current_ = nullptr;
+    for (std::size_t i = 0; i < count_; ++i) at(i)->run_claimed_input();
+    current_ = outer_;
+  }
+  RunWakesHere(const RunWakesHere&) = delete;
+  RunWakesHere& operator=(const RunWakesHere&) = delete;
+
+  // For an executor's wake(): the scope open on this thread, or null.
+  static RunWakesHere* current() { return current_; }
+  // Whether `slot` is claimed here already (a second wake needs nothing: its run takes all input).
+  bool holds(const ActivitySlot* slot) const {
+    for (std::size_t i = 0; i < count_; ++i)
+      if (at(i) == slot) return true;
+    return false;
+  }
+  // For an executor's wake() that claimed `slot`'s activity: its input handler runs here.
+  void add(ActivitySlot& slot) {
+    if (count_ < kInline)
+      inline_[count_] = &slot;
+    else
+      more_.push_back(&slot);
+    ++count_;
+  }
+
+ private:
+  static constexpr std::size_t kInline = 4;  // a listener wakes one receiver, seldom a few
+  ActivitySlot* at(std::size_t i) const { return i < kInline ? inline_[i] : more_[i - kInline]; }
+
+  static inline thread_local RunWakesHere* current_ = nullptr;
+  RunWakesHere* outer_;
+  ActivitySlot* inline_[kInline] = {};
+  std::size_t count_ = 0;
+  std::vector<ActivitySlot*> more_;
 };
 
 class Executor {

@@ -22,11 +22,23 @@ class ThreadExecutor::Worker final : public ActivitySlot {
   bool finished() const { return finished_.load(std::memory_order_acquire); }
 
   void wake() override {
+    // Under SCHED_FIFO a handler must run at its own thread's priority: no guests then.
+    RunWakesHere* here = exec_.options_.realtime ? nullptr : RunWakesHere::current();
+    if (here != nullptr && here->holds(this)) return;
+    bool notify = true;
     {
       std::lock_guard lock(mu_);
+      // Not while this thread waits for a guest to finish: a stream of guests must not starve its
+      // ticks (nor a wake already on its way to it).
+      if (here != nullptr && started_ && !busy_ && !input_ && !worker_waits_ && !suspended_ && !detach_) {
+        busy_ = guest_ = true;
+        here->add(*this);
+        return;
+      }
       input_ = true;
+      notify = !guest_;  // a guest's run ends by handing what came meanwhile to this thread
     }
-    cv_.notify_one();
+    if (notify) cv_.notify_one();
   }
   void suspend() override {
     std::lock_guard lock(mu_);
@@ -62,6 +74,15 @@ class ThreadExecutor::Worker final : public ActivitySlot {
     cv_.notify_one();
   }
 
+ protected:
+  void run_claimed_input() override {
+    activity_.on_activity_input();
+    std::lock_guard lock(mu_);
+    busy_ = guest_ = false;
+    // Notified under the lock: once this thread lets go, the worker may finish and be freed.
+    if (worker_waits_ || input_) cv_.notify_one();
+  }
+
  private:
   void apply_priority(int priority) {
     if (!exec_.options_.realtime || !exec_.realtime_ok_.load()) return;
@@ -82,6 +103,13 @@ class ThreadExecutor::Worker final : public ActivitySlot {
     apply_priority(first_priority);
     if (!stop) activity_.on_activity_start();
     lock.lock();
+    started_ = true;
+    // Waits while a guest runs the input handler (RunWakesHere): handlers run one at a time.
+    const auto wait_for_guest = [&] {
+      worker_waits_ = true;
+      cv_.wait(lock, [&] { return !busy_; });
+      worker_waits_ = false;
+    };
     while (!detach_) {
       const auto ready = [&] { return detach_ || resumed_ || period_dirty_ || (!suspended_ && input_); };
       if (suspended_ || next_tick == kTimeNever) {
@@ -90,6 +118,7 @@ class ThreadExecutor::Worker final : public ActivitySlot {
         const auto deadline = exec_.clock_.epoch() + next_tick;
         cv_.wait_until(lock, deadline, ready);
       }
+      if (busy_) wait_for_guest();
       if (detach_) break;
       if (priority_dirty_) {
         priority_dirty_ = false;
@@ -110,11 +139,15 @@ class ThreadExecutor::Worker final : public ActivitySlot {
         next_tick += period_;
         if (next_tick <= now) next_tick = now + period_;  // overrun: skip missed ticks, keep going
       }
+      if (!input && !tick) continue;
+      busy_ = true;
       lock.unlock();
       if (input) activity_.on_activity_input();
       if (tick) activity_.on_activity_tick();
       lock.lock();
+      busy_ = false;
     }
+    if (busy_) wait_for_guest();  // stopped while a guest runs: it finishes first
     lock.unlock();
     if (!stop) activity_.on_activity_stop();
     activity_.on_activity_released();
@@ -134,6 +167,10 @@ class ThreadExecutor::Worker final : public ActivitySlot {
   bool priority_dirty_ = false;
   bool period_dirty_ = false;
   bool detach_ = false;
+  bool started_ = false;       // on_activity_start() returned: a guest may run input
+  bool busy_ = false;          // a handler runs (this thread's, or a guest's claimed run)
+  bool guest_ = false;         // busy_ with a guest's run
+  bool worker_waits_ = false;  // this thread waits for the guest's run to end
   std::atomic<bool> finished_{false};
   std::thread thread_;
 };

@@ -3,7 +3,9 @@
 // then handles pending input and due ticks. With Options::realtime the threads run under
 // SCHED_FIFO at priorities mapped from the activities' priorities where the process is allowed
 // to; otherwise (the default, and the fallback when refused) all threads share SCHED_OTHER and
-// priority only orders events under the virtual-time executor: a documented best effort.
+// priority only orders events under the virtual-time executor: a documented best effort. Outside
+// realtime mode, a thread that wakes an idle activity within a RunWakesHere (executor.hpp) runs
+// its input handler itself, still one handler at a time: no context switch to hand it over.
 #pragma once
 
 #include <atomic>

@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -107,7 +108,8 @@ struct HookInfo {
   TaskId sender;
   TaskId receiver;  // invalid for a hook to a HookSink
   std::string sender_name;
-  std::string receiver_name;  // the sink's name for a hook to a HookSink
+  std::string receiver_name;       // the sink's name for a hook to a HookSink
+  std::shared_ptr<HookSink> sink;  // that sink (to hook it again elsewhere); null for a task
   HookOptions options;
   kernel::Time inhibited_until{0};
   HookTraffic accounting;

@@ -792,6 +792,7 @@ std::vector<HookInfo> Node::hooks() const {
       i.sender_name = s.record->name;
       if (h.to_sink) {
         i.receiver_name = h.sink->sink->name();
+        i.sink = h.sink->sink;
       } else {
         i.receiver = h.receiver->id;
         i.receiver_name = h.receiver->name;

@@ -9,9 +9,8 @@
 
 #include <dds/dds.h>
 
-#include "symb/io/bytes.hpp"
 #include "symb/io/dds/dds_participant.hpp"
-#include "symb/io/frame_codec.hpp"
+#include "symb/kernel/executor.hpp"
 #include "symb/os/node.hpp"
 
 #include "HookFrame.h"
@@ -121,10 +120,14 @@ using ListenerArg = DdsBus::ListenerArg;
 
 // Takes what DDS holds for a receiving end, checks each sample, counts it, and has the stand-in
 // send the good ones on to the receiver: on this listener thread under the thread executor (its
-// inject() runs at once), so a message reaches the receiver's queue with no thread between.
+// inject() runs at once), so a message reaches the receiver's queue with no thread between. An
+// idle receiver then handles it on this thread too (kernel::RunWakesHere), as a raw DDS program
+// answers in its listener; its handler runs after this listener's locks are released, so that
+// it may write to DDS and be delivered to on this thread.
 void on_data(dds_entity_t reader, void* arg) {
   auto* a = static_cast<ListenerArg*>(arg);
   DdsBus::Core& core = *a->core;
+  const kernel::RunWakesHere here;
   std::lock_guard order(a->deliver);
   std::vector<std::pair<os::Port, os::Payload>> posts;
   std::vector<std::string> warnings;
