@@ -2,6 +2,7 @@
 // tasks feed them, a recording task stands for the wheels. Checks suppression through hook
 // priority and windows (to the millisecond), inhibition, a layer added, removed and replaced at
 // runtime, the layers' own rules, the task types and their parameter errors.
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <memory>
@@ -243,10 +244,23 @@ TEST(Subsumption, LayersAddedRemovedAndReplacedAtRuntime) {
   EXPECT_EQ(rig.first_from(*avoid, ms(0)), ms(300));
   EXPECT_TRUE(rig.from(rig.wander, ms(300), ms(450)).empty());
 
-  // Replaced at runtime by a sharper avoid: it takes over the hooks with their options.
+  // avoid's commands also leave the node (a hook to a sink, as a DDS bus's remote hook is).
+  struct Remote final : os::HookSink {
+    Remote() : os::HookSink("dds_to.1") {}
+    void on_message(const os::Message& m) override { sources.push_back(m.source); }
+    std::vector<os::TaskId> sources;
+  };
+  auto remote = std::make_shared<Remote>();
+  ASSERT_TRUE(rig.node.hook(*avoid, remote).ok());
+
+  // Replaced at runtime by a sharper avoid: it takes over the hooks with their options, the one
+  // out of the node included.
   auto sharper = rig.node.create("avoid", "avoid2", std::vector<os::ParamAssignment>{{"turn", "300"}});
   ASSERT_TRUE(sharper.ok());
   ASSERT_TRUE(replace_task(rig.node, *avoid, *sharper).ok());
+  int to_remote = 0;
+  for (const auto& h : rig.node.hooks()) to_remote += h.sender == *sharper && h.sink == remote;
+  EXPECT_EQ(to_remote, 1);
   EXPECT_FALSE(rig.node.info(*avoid).has_value());
   int into = 0, out = 0;
   for (const auto& h : rig.node.hooks()) {
@@ -264,6 +278,9 @@ TEST(Subsumption, LayersAddedRemovedAndReplacedAtRuntime) {
   ASSERT_EQ(turns.size(), 9u);  // 480 .. 720: every reading
   for (const auto& c : turns) EXPECT_EQ(c.left, 300.0f);
   EXPECT_TRUE(rig.from(rig.wander, ms(450), ms(750)).empty());  // never a gap for the lower layer
+  // The remote end had every command the wheels had, 480 .. 750.
+  EXPECT_EQ(std::count(remote->sources.begin(), remote->sources.end(), *sharper), 10);
+  EXPECT_EQ(rig.from(*sharper, ms(450), ms(751)).size(), 10u);
 
   // Removed at runtime (after its reading at 750): wander drives again once that last window,
   // [750, 850), has passed.

@@ -340,6 +340,8 @@ TEST(LockstepExecutor, WorkBesideTheLanesRunsInTheNextWindowAndBeforeReturning) 
 TEST(LockstepExecutor, CallsBeforeALanesWindowComeFirstInItOnItsThreadAndBeforeReturning) {
   LockstepExecutor ex({.threads = 2, .quantum = 30ms});
   LockstepProbe world(ex), first(ex.lane(0)), second(ex.lane(1));
+  // lane() is the executor's thread's to call (not a lane's, during its window): taken here.
+  Executor* const lanes[2] = {&ex.lane(0), &ex.lane(1)};
   // What each lane saw, in its own order: "call@ms" for a call made for it, "tick@ms" for its tick.
   std::vector<std::string> seen[2];
   std::atomic<int> calls_off_context{0};
@@ -352,7 +354,7 @@ TEST(LockstepExecutor, CallsBeforeALanesWindowComeFirstInItOnItsThreadAndBeforeR
     ex.for_each_lane_before_its_window(3, [&, at](std::size_t i) {
       made.fetch_add(1);
       if (i < 2) {
-        if (!ex.lane(i).on_own_context()) calls_off_context.fetch_add(1);
+        if (!lanes[i]->on_own_context()) calls_off_context.fetch_add(1);
         seen[i].push_back("call@" + std::to_string(at));
       }
     });

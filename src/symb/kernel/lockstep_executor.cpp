@@ -181,7 +181,9 @@ std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {
     if (due_by(main_, limit) || lanes_pending_by(until_idle ? main_.now() : limit)) continue;
     break;
   }
-  // A run that stopped before another window still finishes what was to run beside it.
+  // A run that stopped before another window still finishes what was to run beside it, on this
+  // thread with no window open: as outside a run (a call made from these runs at once).
+  running_ = false;
   flush_before_window();
   while (!alongside_.empty()) {
     std::vector<std::function<void()>> jobs;

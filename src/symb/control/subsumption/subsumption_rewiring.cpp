@@ -29,7 +29,9 @@ kernel::Status replace_task(os::Node& node, os::TaskId old_task, os::TaskId repl
   std::vector<os::HookId> made;
   for (const os::HookInfo& h : node.hooks()) {
     kernel::Result<os::HookId> r = kernel::Error{""};
-    if (h.sender == old_task && h.receiver != replacement) {
+    if (h.sender == old_task && h.sink) {
+      r = node.hook(replacement, h.sink, h.options);  // a hook out of the node (a DDS writer)
+    } else if (h.sender == old_task && h.receiver != replacement) {
       r = node.hook(replacement, h.receiver, h.options);
     } else if (h.receiver == old_task && h.sender != replacement) {
       r = node.hook(h.sender, replacement, h.options);
