@@ -113,39 +113,56 @@ class RobotThread {
   std::thread thread_;
 };
 
+// The world of `sc` in this process with the robots of `remote` (indices) each served by a
+// RobotThread over a loopback stream, run for `steps` steps in lockstep, then told bye.
+struct SplitRun {
+  SplitRun(const sim::Scenario& sc, std::initializer_list<std::size_t> remote, std::uint64_t steps) : ex(lockstep(sc)) {
+    auto made = sim::ScenarioSession::create(sc, ex);
+    EXPECT_TRUE(made.ok()) << made.error();
+    if (!made.ok()) return;
+    session = std::move(made).value();
+    record(*session, trajectory);
+    std::vector<sim::HilSplitWorld::Remote> remotes;
+    for (std::size_t i : remote) {
+      auto [a, b] = io::make_loopback_pair("split" + std::to_string(i));
+      remotes.push_back({i, std::shared_ptr<io::IOStream>(std::move(a))});
+      robots.push_back(
+          std::make_unique<RobotThread>(sc, sc.robots[i].name, std::shared_ptr<io::IOStream>(std::move(b))));
+    }
+    auto w = sim::HilSplitWorld::create(*session, std::move(remotes), {.answer_wait = 10s, .on_event = {}});
+    EXPECT_TRUE(w.ok()) << w.error();
+    if (!w.ok()) return;
+    world = std::move(w).value();
+    EXPECT_TRUE(world->wait_for_robots(10s).ok());
+    session->start();
+    ex.run_until(sc.control_period * static_cast<std::int64_t>(steps) + 1ms);
+    session->stop();
+    world->say_bye(steps);
+    for (auto& r : robots) r->join();
+  }
+  kernel::LockstepExecutor ex;
+  std::unique_ptr<sim::ScenarioSession> session;
+  Trajectory trajectory;
+  std::vector<std::unique_ptr<RobotThread>> robots;
+  std::unique_ptr<sim::HilSplitWorld> world;
+};
+
 TEST(HilSplit, RemoteRobotsOverStreamsRunTheSwarmBitForBit) {
   const sim::Scenario sc = swarm();
   const Trajectory reference = in_process(sc);
   ASSERT_EQ(reference.size(), kSteps);
 
-  kernel::LockstepExecutor ex(lockstep(sc));
-  auto s = sim::ScenarioSession::create(sc, ex);
-  ASSERT_TRUE(s.ok()) << s.error();
-  Trajectory split;
-  record(**s, split);
-  std::vector<std::unique_ptr<RobotThread>> robots;
-  std::vector<sim::HilSplitWorld::Remote> remotes;
-  for (std::size_t i : {1u, 6u}) {
-    auto [a, b] = io::make_loopback_pair("split" + std::to_string(i));
-    remotes.push_back({i, std::shared_ptr<io::IOStream>(std::move(a))});
-    robots.push_back(std::make_unique<RobotThread>(sc, sc.robots[i].name, std::shared_ptr<io::IOStream>(std::move(b))));
-  }
-  auto world = sim::HilSplitWorld::create(**s, std::move(remotes), {.answer_wait = 10s, .on_event = {}});
-  ASSERT_TRUE(world.ok()) << world.error();
-  ASSERT_TRUE((*world)->wait_for_robots(10s).ok());
-  (*s)->start();
-  ex.run_until(sc.control_period * static_cast<std::int64_t>(kSteps) + 1ms);
-  (*s)->stop();
-  (*world)->say_bye(kSteps);
-  for (auto& r : robots) r->join();
+  SplitRun run(sc, {1, 6}, kSteps);
+  ASSERT_NE(run.world, nullptr);
+  const Trajectory& split = run.trajectory;
   ASSERT_EQ(split.size(), kSteps);
   EXPECT_TRUE(split == reference) << "the split swarm must be the in-process one";
-  for (const auto& st : (*world)->stats()) {
+  for (const auto& st : run.world->stats()) {
     EXPECT_FALSE(st.gone) << st.why;
     EXPECT_EQ(st.applied, kSteps);
     EXPECT_EQ(st.bad_frames(), 0u);
   }
-  for (auto& r : robots) {
+  for (auto& r : run.robots) {
     EXPECT_EQ(r->robot().stats().frames, kSteps);
     EXPECT_EQ(r->robot().ended(), std::optional<std::uint32_t>(kSteps));
     EXPECT_EQ(r->robot().seed(), std::optional<std::uint64_t>(sc.seed));
@@ -170,43 +187,26 @@ TEST(HilSplit, RemoteRobotsCarryTheWorldsRadioBitForBit) {
   ASSERT_EQ(reference.size(), kRadioSteps);
   EXPECT_GT(reference_radio.delivered, 50u) << "the robots meet over the radio";
 
-  kernel::LockstepExecutor ex(lockstep(sc));
-  auto s = sim::ScenarioSession::create(sc, ex);
-  ASSERT_TRUE(s.ok()) << s.error();
-  Trajectory split;
-  record(**s, split);
-  std::vector<std::unique_ptr<RobotThread>> robots;
-  std::vector<sim::HilSplitWorld::Remote> remotes;
-  for (std::size_t i : {4u, 13u}) {
-    auto [a, b] = io::make_loopback_pair("radio" + std::to_string(i));
-    remotes.push_back({i, std::shared_ptr<io::IOStream>(std::move(a))});
-    robots.push_back(std::make_unique<RobotThread>(sc, sc.robots[i].name, std::shared_ptr<io::IOStream>(std::move(b))));
-  }
-  auto world = sim::HilSplitWorld::create(**s, std::move(remotes), {.answer_wait = 10s, .on_event = {}});
-  ASSERT_TRUE(world.ok()) << world.error();
-  ASSERT_TRUE((*world)->wait_for_robots(10s).ok());
-  (*s)->start();
-  ex.run_until(sc.control_period * static_cast<std::int64_t>(kRadioSteps) + 1ms);
-  (*s)->stop();
-  (*world)->say_bye(kRadioSteps);
-  for (auto& r : robots) r->join();
+  SplitRun run(sc, {4, 13}, kRadioSteps);
+  ASSERT_NE(run.world, nullptr);
+  const Trajectory& split = run.trajectory;
   ASSERT_EQ(split.size(), kRadioSteps);
   EXPECT_TRUE(split == reference) << "the split mEDEA swarm must be the in-process one";
-  const sim::RadioCounts radio = (*s)->radio()->counts();
+  const sim::RadioCounts radio = run.session->radio()->counts();
   EXPECT_EQ(radio.transmitted, reference_radio.transmitted);
   EXPECT_EQ(radio.delivered, reference_radio.delivered);
   EXPECT_EQ(radio.dropped, reference_radio.dropped);
   EXPECT_EQ(radio.out_of_range, reference_radio.out_of_range);
-  for (const auto& st : (*world)->stats()) {
+  for (const auto& st : run.world->stats()) {
     EXPECT_FALSE(st.gone) << st.why;
     EXPECT_EQ(st.applied, kRadioSteps);
     EXPECT_EQ(st.bad_frames(), 0u);
     EXPECT_GT(st.radio_received, 5u) << st.robot << ": its genome went on air";
-    EXPECT_EQ((*s)->radio()->received_by(st.index), st.radio_sent) << st.robot;
+    EXPECT_EQ(run.session->radio()->received_by(st.index), st.radio_sent) << st.robot;
     EXPECT_NE(sim::describe(st).find("; radio: "), std::string::npos) << sim::describe(st);
   }
   std::uint64_t heard = 0;
-  for (auto& r : robots) {
+  for (auto& r : run.robots) {
     const auto st = r->robot().stats();
     EXPECT_EQ(st.frames, kRadioSteps);
     EXPECT_EQ(st.bad_frames(), 0u);
@@ -215,7 +215,7 @@ TEST(HilSplit, RemoteRobotsCarryTheWorldsRadioBitForBit) {
   }
   EXPECT_GT(heard, 0u) << "the remote robots heard others";
   std::uint64_t to_remote = 0;
-  for (const auto& st : (*world)->stats()) to_remote += st.radio_sent;
+  for (const auto& st : run.world->stats()) to_remote += st.radio_sent;
   EXPECT_EQ(heard, to_remote) << "every message the world's radio delivered to them was posted";
 }
 
