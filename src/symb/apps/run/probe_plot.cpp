@@ -15,8 +15,8 @@ namespace symb::apps::run {
 
 namespace {
 
-constexpr double kWidth = 900, kHeight = 360;
-constexpr double kLeft = 70, kRight = 150, kTop = 36, kBottom = 44;  // room for axes and legend
+constexpr double kChartWidth = 900, kChartHeight = 360;
+constexpr double kChartLeft = 70, kChartRight = 150, kChartTop = 36, kChartBottom = 44;  // room for axes and legend
 constexpr std::size_t kMaxLegend = 16;
 
 // The kinds of series (task and channel) whose channel starts with `channel_prefix`, in order of
@@ -65,39 +65,39 @@ void write_probe_svg(std::ostream& out, const ProbeSeries& s) {
   const double pad = 0.05 * (hi - lo);
   lo -= pad;
   hi += pad;
-  const double pw = kWidth - kLeft - kRight, ph = kHeight - kTop - kBottom;
-  const auto px = [&](double t) { return kLeft + (t - t0) / (t1 - t0) * pw; };
-  const auto py = [&](double v) { return kTop + (hi - v) / (hi - lo) * ph; };
+  const double pw = kChartWidth - kChartLeft - kChartRight, ph = kChartHeight - kChartTop - kChartBottom;
+  const auto px = [&](double t) { return kChartLeft + (t - t0) / (t1 - t0) * pw; };
+  const auto py = [&](double v) { return kChartTop + (hi - v) / (hi - lo) * ph; };
   char buf[256];
 
-  out << svg_plot_open(kWidth, kHeight);
-  out << "<text x=\"" << kLeft << "\" y=\"22\" font-size=\"14\" fill=\"#222\">"
+  out << svg_plot_open(kChartWidth, kChartHeight);
+  out << "<text x=\"" << kChartLeft << "\" y=\"22\" font-size=\"14\" fill=\"#222\">"
       << svg_escape(s.robot + " / " + s.task + " / " + s.channel) << " (" << s.samples << " samples)</text>\n";
   // Grid and ticks.
   out << "<g stroke=\"#ddd\" fill=\"#444\">\n";
   const double vstep = svg_tick_step(hi - lo, 5);
   for (double v = std::ceil(lo / vstep) * vstep; v <= hi; v += vstep) {
-    std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>", kLeft, py(v), kLeft + pw,
-                  py(v));
+    std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>", kChartLeft, py(v),
+                  kChartLeft + pw, py(v));
     out << buf;
-    std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\" stroke=\"none\">", kLeft - 6,
+    std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\" stroke=\"none\">", kChartLeft - 6,
                   py(v) + 4);
     out << buf << svg_number(v) << "</text>\n";
   }
   const double tstep = svg_tick_step(t1 - t0, 8);
   for (double t = std::ceil(t0 / tstep) * tstep; t <= t1; t += tstep) {
-    std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>", px(t), kTop, px(t),
-                  kTop + ph);
+    std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>", px(t), kChartTop, px(t),
+                  kChartTop + ph);
     out << buf;
     std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" stroke=\"none\">", px(t),
-                  kTop + ph + 16);
+                  kChartTop + ph + 16);
     out << buf << svg_number(t) << "</text>\n";
   }
   out << "</g>\n";
   std::snprintf(buf, sizeof buf,
                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" stroke=\"#333\"/>\n"
                 "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" fill=\"#444\">time (s)</text>\n",
-                kLeft, kTop, pw, ph, kLeft + pw / 2, kHeight - 8);
+                kChartLeft, kChartTop, pw, ph, kChartLeft + pw / 2, kChartHeight - 8);
   out << buf;
   // One polyline per value index; a NaN (a shorter sample) breaks the line.
   out << "<g fill=\"none\" stroke-width=\"1.5\" stroke-linejoin=\"round\">\n";
@@ -123,18 +123,18 @@ void write_probe_svg(std::ostream& out, const ProbeSeries& s) {
   out << "</g>\n";
   // Legend: value indices.
   for (std::size_t k = 0; k < std::min(s.width, kMaxLegend); ++k) {
-    const double y = kTop + 8 + 16 * static_cast<double>(k);
+    const double y = kChartTop + 8 + 16 * static_cast<double>(k);
     std::snprintf(buf, sizeof buf,
                   "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" stroke-width=\"3\"/>"
                   "<text x=\"%.1f\" y=\"%.1f\" fill=\"#222\">",
-                  kLeft + pw + 12, y, kLeft + pw + 32, y, svg_colour(k).c_str(), kLeft + pw + 38, y + 4);
+                  kChartLeft + pw + 12, y, kChartLeft + pw + 32, y, svg_colour(k).c_str(), kChartLeft + pw + 38, y + 4);
     out << buf
         << (k < s.labels.size() ? svg_escape(s.labels[k]) : svg_escape(s.channel) + "[" + std::to_string(k) + "]")
         << "</text>\n";
   }
   if (s.width > kMaxLegend) {
-    std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" fill=\"#222\">", kLeft + pw + 12,
-                  kTop + 8 + 16 * static_cast<double>(kMaxLegend) + 4);
+    std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" fill=\"#222\">", kChartLeft + pw + 12,
+                  kChartTop + 8 + 16 * static_cast<double>(kMaxLegend) + 4);
     out << buf << "+" << s.width - kMaxLegend << " more</text>\n";
   }
   out << "</svg>\n";
