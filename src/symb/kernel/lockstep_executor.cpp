@@ -98,44 +98,59 @@ void LockstepExecutor::flush_before_window() {
 }
 
 std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
-  // The jobs are the first items of the pool's run: the thread that takes them takes fewer lanes.
-  std::vector<std::function<void()>> jobs;
-  jobs.swap(alongside_);
+  // This window's calls move to scratch vectors that keep their storage from window to window:
+  // a swap with empty ones would make every window allocate them again.
+  jobs_.swap(alongside_);
+  before_.swap(before_window_);
+  struct Clear {
+    LockstepExecutor& ex;
+    ~Clear() {
+      ex.jobs_.clear();
+      ex.before_.clear();
+    }
+  } clear{*this};
   if (lanes_.empty()) {
-    for (auto& job : jobs) job();
+    for (auto& job : jobs_) job();
     return 0;
   }
-  std::vector<std::pair<std::size_t, std::function<void(std::size_t)>>> before;
-  before.swap(before_window_);
   const auto started = std::chrono::steady_clock::now();
   ++stats_.windows;
-  std::atomic<std::uint64_t> handled{0};
-  const std::size_t first_lane = jobs.size();
-  pool_.run(first_lane + lanes_.size(), [&](std::size_t begin, std::size_t stop) {
+  struct Window {
+    LockstepExecutor& ex;
+    Time end;
+    bool inclusive, idle;
+    std::size_t first_lane;  // the jobs are the first items of the pool's run: the thread that
+                             // takes them takes fewer lanes
+    std::atomic<std::uint64_t> handled{0};
+  } w{*this, end, inclusive, idle, jobs_.size()};
+  // The pool's std::function holds one pointer, so it lives in the function object itself: a
+  // closure capturing each variable would be allocated on the heap at every window.
+  pool_.run(w.first_lane + lanes_.size(), [w = &w](std::size_t begin, std::size_t stop) {
     std::uint64_t n = 0;
     for (std::size_t i = begin; i < stop; ++i) {
-      if (i < first_lane) {
-        jobs[i]();
+      if (i < w->first_lane) {
+        w->ex.jobs_[i]();
         continue;
       }
-      VirtualTimeExecutor& lane = *lanes_[i - first_lane];
-      if (!before.empty()) {
+      const std::size_t index = i - w->first_lane;
+      VirtualTimeExecutor& lane = *w->ex.lanes_[index];
+      if (!w->ex.before_.empty()) {
         lane.set_guest(std::this_thread::get_id());
-        for (const auto& [count, fn] : before)
-          if (i - first_lane < count) fn(i - first_lane);
+        for (const auto& [count, fn] : w->ex.before_)
+          if (index < count) fn(index);
         lane.set_guest(std::thread::id{});
       }
-      if (idle)
-        n += lane.run_until_idle(end);
-      else if (inclusive)
-        n += lane.run_until(end);
+      if (w->idle)
+        n += lane.run_until_idle(w->end);
+      else if (w->inclusive)
+        n += lane.run_until(w->end);
       else
-        n += lane.run_before(end);
+        n += lane.run_before(w->end);
     }
-    handled.fetch_add(n, std::memory_order_relaxed);
+    w->handled.fetch_add(n, std::memory_order_relaxed);
   });
   stats_.lanes_wall += std::chrono::steady_clock::now() - started;
-  return handled.load(std::memory_order_relaxed);
+  return w.handled.load(std::memory_order_relaxed);
 }
 
 std::uint64_t LockstepExecutor::run(Time limit, bool until_idle) {

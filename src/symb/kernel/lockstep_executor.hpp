@@ -120,6 +120,9 @@ class LockstepExecutor final : public Executor {
   std::vector<std::function<void()>> alongside_;  // run_alongside_lanes(), for the next window
   // for_each_lane_before_its_window(), for the next window: each with its count of lanes.
   std::vector<std::pair<std::size_t, std::function<void(std::size_t)>>> before_window_;
+  // The window under way's share of the two above (run_lanes).
+  std::vector<std::function<void()>> jobs_;
+  std::vector<std::pair<std::size_t, std::function<void(std::size_t)>>> before_;
   std::atomic<bool> stop_requested_{false};
   bool running_ = false;
   Stats stats_;
