@@ -1,5 +1,8 @@
 #include "symb/os/node.hpp"
 
+#include <atomic>
+#include <chrono>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -339,6 +342,79 @@ TEST(Node, NotifyFromAnotherThreadUnderTheThreadExecutor) {
   // Each notification is followed by waiting for its send: every one must run on_notify.
   for (int i = 0; i < 50; ++i) {
     ASSERT_TRUE(node.notify(id));
+    for (int spin = 0; spin < 20000 && c->count() < static_cast<std::size_t>(i + 1); ++spin)
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
+    ASSERT_EQ(c->count(), static_cast<std::size_t>(i + 1));
+  }
+}
+
+// A device's notifier as a sensor task makes one: attached in on_start, calling the task's own
+// notify() (no lookup), which a test then calls as the device would.
+class SelfNotifiedTask : public NotifiedTask {
+ public:
+  std::function<void()> notifier;
+  std::atomic<bool> ready{false};  // the notifier is made (on_start ran)
+
+ protected:
+  void on_start() override {
+    notifier = [this] { notify(); };
+    ready.store(true, std::memory_order_release);
+  }
+};
+
+TEST(Task, NotifyFromItsOwnNotifierActsAsNodeNotify) {
+  kernel::VirtualTimeExecutor ex;
+  Node node(ex, {"robot", 1});
+  auto task = std::make_unique<SelfNotifiedTask>();
+  SelfNotifiedTask* t = task.get();
+  const TaskId id = *node.create("dev", std::move(task));
+  auto sink = std::make_unique<Collector>();
+  Collector* c = sink.get();
+  ASSERT_TRUE(node.hook(id, *node.create("sink", std::move(sink))));
+  ex.run_until_idle();
+  ASSERT_TRUE(t->ready.load());
+
+  // Three notifications and a message before the task runs: one on_notify, first, then the message.
+  t->notifier();
+  Message m;
+  m.payload = Payload{7.0f};
+  ASSERT_TRUE(node.post(id, m));
+  t->notifier();
+  t->notifier();
+  ex.run_until_idle();
+  EXPECT_EQ(t->seen, (std::vector<std::string>{"notify", "message 7.000000"}));
+  EXPECT_EQ(node.info(id)->traffic.attempted, 1u);  // nothing was queued for the notifications
+  EXPECT_EQ(c->count(), 1u);
+
+  // Suspended, a notification waits for resume; it is not lost and not doubled.
+  ASSERT_TRUE(node.suspend(id));
+  t->notifier();
+  t->notifier();
+  ex.run_until_idle();
+  EXPECT_EQ(t->seen.size(), 2u);
+  ASSERT_TRUE(node.resume(id));
+  ex.run_until_idle();
+  ASSERT_EQ(t->seen.size(), 3u);
+  EXPECT_EQ(t->seen.back(), "notify");
+  EXPECT_EQ(c->count(), 2u);
+}
+
+TEST(Task, NotifyFromAnotherThreadUnderTheThreadExecutor) {
+  kernel::ThreadExecutor ex;
+  Node node(ex, {"robot", 1});
+  auto sink = std::make_unique<Collector>();
+  Collector* c = sink.get();
+  auto task = std::make_unique<SelfNotifiedTask>();
+  SelfNotifiedTask* t = task.get();
+  const TaskId id = *node.create("dev", std::move(task));
+  ASSERT_TRUE(node.hook(id, *node.create("sink", std::move(sink)), {.policy = QueuePolicy::kRefuse}));
+  for (int spin = 0; spin < 20000 && !t->ready.load(std::memory_order_acquire); ++spin)
+    std::this_thread::sleep_for(std::chrono::microseconds(50));
+  ASSERT_TRUE(t->ready.load(std::memory_order_acquire));
+  // Each notification, made on this thread as a device's driver would, is followed by waiting
+  // for its send: every one must run on_notify.
+  for (int i = 0; i < 50; ++i) {
+    t->notifier();
     for (int spin = 0; spin < 20000 && c->count() < static_cast<std::size_t>(i + 1); ++spin)
       std::this_thread::sleep_for(std::chrono::microseconds(50));
     ASSERT_EQ(c->count(), static_cast<std::size_t>(i + 1));

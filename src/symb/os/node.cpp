@@ -89,6 +89,19 @@ void TaskRecord::on_activity_attached(kernel::ActivitySlot& s) {
   slot = &s;
 }
 
+void TaskRecord::notify() {
+  kernel::ActivitySlot* wake = nullptr;
+  {
+    std::lock_guard in(in_mu);
+    notified = true;
+    if (!wake_pending && slot != nullptr) {
+      wake_pending = true;
+      wake = slot;
+    }
+  }
+  if (wake != nullptr) wake->wake();
+}
+
 void TaskRecord::fault(const char* where, const char* what) {
   TaskState s = state.load();
   while ((s == TaskState::kRunning || s == TaskState::kSuspended) &&
@@ -264,17 +277,17 @@ std::uint32_t TaskRecord::add_in_hook(std::uint32_t serial) {
     slot_index = in.free_slots.back();
     in.free_slots.pop_back();
   } else {
-    slot_index = static_cast<std::uint32_t>(in.slots.size());
-    in.slots.emplace_back();
+    slot_index = in.add_slot();
   }
-  in.slots[slot_index] = InHook{};
-  in.slots[slot_index].serial = serial;
-  in.slots[slot_index].hooked = true;
+  InHook& e = in.at(slot_index);
+  e = InHook{};
+  e.serial = serial;
+  e.hooked = true;
   return slot_index + 1;
 }
 
 void TaskRecord::end_in_hook(std::uint32_t edge, std::uint64_t sent_while_hooked, std::uint64_t skipped) {
-  InHook& e = inputs->slots[edge - 1];
+  InHook& e = inputs->at(edge - 1);
   e.hooked = false;
   e.sent = sent_while_hooked;
   e.skipped = skipped;
@@ -282,7 +295,7 @@ void TaskRecord::end_in_hook(std::uint32_t edge, std::uint64_t sent_while_hooked
 }
 
 void TaskRecord::retire_in_hook_if_done(std::uint32_t edge) {
-  InHook& e = inputs->slots[edge - 1];
+  InHook& e = inputs->at(edge - 1);
   if (e.hooked || e.serial == 0 || e.in_flight() != 0) return;
   inputs->retired += HookTraffic{e.sent, e.skipped, e.traffic, 0};
   e.serial = 0;
@@ -531,8 +544,9 @@ void Node::release(TaskRecord& r) {
       // Every hook into it ended in remove(): what is left are their final counts.
       if (r.inputs) {
         retired_hooks_ += r.inputs->retired;
-        for (const auto& e : r.inputs->slots)
-          if (e.serial != 0) retired_hooks_ += HookTraffic{e.sent, e.skipped, e.traffic, 0};
+        for (std::uint32_t i = 0; i < r.inputs->slot_count; ++i)
+          if (const auto& e = r.inputs->at(i); e.serial != 0)
+            retired_hooks_ += HookTraffic{e.sent, e.skipped, e.traffic, 0};
       }
       retired_longest_chain_ = std::max(retired_longest_chain_, r.longest_chain.load(std::memory_order_relaxed));
     }
@@ -816,7 +830,7 @@ HookTraffic Node::accounting(const TaskRecord& s, const detail::Hook& h) {
   }
   TaskRecord& r = *h.receiver;
   std::lock_guard in(r.in_mu);
-  a.traffic = r.inputs->slots[h.edge - 1].traffic;
+  a.traffic = r.inputs->at(h.edge - 1).traffic;
   // Counted, not derived: a message lost between the counters would show here.
   for (std::size_t k = 0; k < r.queue.size(); ++k)
     if (r.queue.at(k).edge == h.edge) ++a.queued;
@@ -847,10 +861,11 @@ HookTraffic Node::hook_traffic() const {
     std::lock_guard in(r.in_mu);
     if (!r.inputs) continue;
     t += r.inputs->retired;
-    for (const auto& e : r.inputs->slots) {
+    for (std::uint32_t i = 0; i < r.inputs->slot_count; ++i) {
+      const auto& e = r.inputs->at(i);
       if (e.serial == 0 || e.hooked) continue;  // live hooks were counted from their sender
       HookTraffic ended{e.sent, e.skipped, e.traffic, 0};
-      const auto edge = static_cast<std::uint32_t>(&e - r.inputs->slots.data()) + 1;
+      const std::uint32_t edge = i + 1;
       for (std::size_t k = 0; k < r.queue.size(); ++k)
         if (r.queue.at(k).edge == edge) ++ended.queued;
       t += ended;
@@ -908,16 +923,7 @@ Status Node::notify(TaskId receiver) {
   std::lock_guard lock(mu_);
   TaskRecord* r = lookup_locked(receiver);
   if (r == nullptr) return no_task(receiver);
-  kernel::ActivitySlot* wake = nullptr;
-  {
-    std::lock_guard in(r->in_mu);
-    r->notified = true;
-    if (!r->wake_pending && r->slot != nullptr) {
-      r->wake_pending = true;
-      wake = r->slot;
-    }
-  }
-  if (wake != nullptr) wake->wake();
+  r->notify();
   return {};
 }
 

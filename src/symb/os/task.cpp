@@ -42,6 +42,8 @@ void Task::send(Port port, const Payload& payload) {
   record_->node.send_from(*record_, m);
 }
 
+void Task::notify() { record_->notify(); }
+
 void Task::probe(std::string_view channel, std::span<const float> values) const {
   if (record_->node.probing()) record_->node.probe(*record_, channel, values);
 }

@@ -113,6 +113,11 @@ class Task {
   void send(Port port, std::span<const float> values) { send(port, Payload(values)); }
   void send(Port port, std::initializer_list<float> values) { send(port, Payload(values)); }
   void log(LogLevel level, std::string_view text) const;
+  // Node::notify(id()) without finding the task first: for a notifier the task attached in
+  // on_start and detaches in on_stop (a device saying its data is ready, thousands of times a
+  // step in a swarm), which may call it until then. The threads it may come from are
+  // Node::notify's.
+  void notify();
   // Hands a sample of this task's internal state to the node's probe sink (Node::set_probe_sink),
   // e.g. probe("hormones/c0", levels). Channel names are the task's own; keep them few and fixed
   // so a recorder can make one plot per channel. Nothing happens without a sink.

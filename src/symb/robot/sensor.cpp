@@ -184,13 +184,14 @@ void SensorTask::on_start() {
     if (auto st = sensor_->open(); !st) log(os::LogLevel::kWarn, st.error());
   seen_ = sensor_->stats();
   // The notifier runs on the driver's thread with the sensor locked, and the task detaches in
-  // on_stop under that same lock: while it runs, the link and the node it names are alive. It
-  // captures one pointer, so std::function keeps it without a heap block of its own.
-  auto st = sensor_->attach([link = link_.get()] {
+  // on_stop under that same lock: while it runs, the task, the link and the node it names are
+  // alive. It captures two pointers, so std::function keeps it without a heap block of its own.
+  auto st = sensor_->attach([self = this, link = link_.get()] {
     // A simulated device publishes on the executor's own context: the notification is made at
-    // once, exactly where the injected one would have run, before any later event.
+    // once, exactly where the injected one would have run, before any later event; the task is
+    // running (it detaches in on_stop, under the lock this runs under), so it needs no lookup.
     if (link->node->on_own_context()) {
-      (void)link->node->notify(link->self);
+      self->notify();
       return;
     }
     link->node->inject([weak = link->weak_from_this()] {
