@@ -97,6 +97,32 @@ TEST(Sensor, SamplesAreForwardedAtTheVirtualInstantTheExecutorTakesThem) {
   EXPECT_EQ(rig.sensor->latest()->time, kernel::Time{2});
 }
 
+// The task takes its mailbox a few samples at a time (into a buffer on its stack): a mailbox
+// holding several rounds' worth is forwarded whole, in order, in one wake.
+TEST(Sensor, AMailboxOfManyRoundsIsForwardedWholeAndInOrder) {
+  kernel::VirtualTimeExecutor ex;
+  SensorRig rig(ex, {.mailbox = 64});
+  ex.run_for(1ms);
+  for (const int n : {3, 4, 5, 8, 9, 41}) {
+    const std::size_t before = rig.col->count();
+    std::thread driver([&] {
+      for (int i = 0; i < n; ++i) {
+        const float v[2] = {static_cast<float>(i), 2.0f};
+        (void)rig.sensor->publish(v, kernel::Time{i});
+      }
+    });
+    driver.join();
+    ex.run_for(0ms);
+    const auto got = rig.col->received();
+    ASSERT_EQ(got.size(), before + static_cast<std::size_t>(n)) << n << " samples";
+    for (int i = 0; i < n; ++i)
+      EXPECT_EQ(got[before + static_cast<std::size_t>(i)].values, (std::vector<float>{static_cast<float>(i), 2.0f}));
+  }
+  const SensorStats s = rig.sensor->stats();
+  EXPECT_EQ(s.taken, 70u);
+  EXPECT_EQ(s.overwritten, 0u);
+}
+
 TEST(Sensor, PushesFromAnotherThreadReachHookedTasksUnderThreads) {
   kernel::ThreadExecutor ex;
   SensorRig rig(ex, {.mailbox = 256});

@@ -135,9 +135,10 @@ class Sensor : public io::Device {
   // may only hand work over (Node::inject), never call back into the sensor.
   kernel::Status attach(std::function<void()> notify);
   void detach();
-  // Moves the mailbox out, oldest first, and rearms the notification. Returns the counters as
-  // they were then (one lock for both: a task drains every period).
-  SensorStats take(std::vector<SensorSample>& out);
+  // Moves up to out.size() samples out of the mailbox, oldest first, into out[0, *taken), and
+  // rearms the notification. Returns the counters as they were then (one lock for both: a task
+  // drains every period). Fewer than out.size() taken: the mailbox is empty.
+  SensorStats take(std::span<SensorSample> out, std::size_t* taken);
 
   const std::vector<ChannelSpec> channels_;
   const std::vector<ChannelRange> ranges_;  // channels_' ranges, packed: what publish() reads
@@ -189,13 +190,14 @@ class SensorTask : public os::Task {
  private:
   struct Link;
   void drain();
+  // Sends each sample (narrowed to the task's ranges, when it has its own).
+  void forward(std::span<const SensorSample> samples);
   void report(const SensorStats& now_seen);
 
   std::shared_ptr<Sensor> sensor_;
   Options options_;
   std::shared_ptr<Link> link_;
   bool attached_ = false;
-  std::vector<SensorSample> batch_;
   SensorStats seen_;  // the sensor's counters at the last report
   os::WarningLimiter clamp_warning_;
   os::WarningLimiter reject_warning_;
