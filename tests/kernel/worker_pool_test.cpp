@@ -67,6 +67,29 @@ TEST(WorkerPool, TwoThreadsRunTwoJobsAtOnce) {
 }
 
 // An exception in one job reaches the caller after every other job ran; the pool goes on working.
+// The other thread starts on its own share of the range (the second half of 8 jobs on two
+// threads), not on the next chunk after the caller's: a robot's lane runs on the same core from
+// step to step. Job 0 holds the caller until another thread has started a job. (Bounded wait: a
+// pool that never starts its worker fails instead of hanging.)
+TEST(WorkerPool, EachThreadStartsOnItsOwnShare) {
+  WorkerPool pool({.threads = 2});
+  for (int run = 0; run < 3; ++run) {
+    const std::thread::id caller = std::this_thread::get_id();
+    std::atomic<long> first_other{-1};
+    pool.run(8, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        if (std::this_thread::get_id() != caller) {
+          long none = -1;
+          first_other.compare_exchange_strong(none, static_cast<long>(i));
+        }
+        if (i == 0)
+          for (int spin = 0; spin < 10000 && first_other.load() < 0; ++spin) std::this_thread::sleep_for(1ms);
+      }
+    });
+    EXPECT_EQ(first_other.load(), 4) << "run " << run;
+  }
+}
+
 TEST(WorkerPool, AnExceptionIsRethrownAfterEveryJobRan) {
   for (unsigned threads : {1u, 2u, 4u}) {
     WorkerPool pool({.threads = threads});

@@ -8,7 +8,7 @@
 
 namespace symb::kernel {
 
-WorkerPool::WorkerPool(Options options) : threads_(std::max(1u, options.threads)) {
+WorkerPool::WorkerPool(Options options) : threads_(std::max(1u, options.threads)), shares_(threads_) {
   std::vector<int> cpus;
   if (options.pin) {
     cpu_set_t allowed;
@@ -18,7 +18,7 @@ WorkerPool::WorkerPool(Options options) : threads_(std::max(1u, options.threads)
         if (CPU_ISSET(c, &allowed)) cpus.push_back(c);
   }
   for (unsigned k = 1; k < threads_; ++k) {
-    workers_.emplace_back([this] { worker_loop(); });
+    workers_.emplace_back([this, k] { worker_loop(k); });
     if (!cpus.empty()) {
       cpu_set_t one;
       CPU_ZERO(&one);
@@ -47,18 +47,20 @@ void WorkerPool::run(std::size_t n, const std::function<void(std::size_t, std::s
   {
     std::lock_guard lock(mu_);
     fn_ = &fn;
-    n_ = n;
     // Four chunks per thread: small enough to even out uneven jobs, few enough that taking one
     // (an atomic add) costs nothing beside the jobs.
     chunk_ = std::max<std::size_t>(1, n / (4 * std::size_t{threads_}));
-    next_.store(0, std::memory_order_relaxed);
+    for (unsigned k = 0; k < threads_; ++k) {
+      shares_[k].next.store(n * k / threads_, std::memory_order_relaxed);
+      shares_[k].end = n * (k + 1) / threads_;
+    }
     error_ = nullptr;
     busy_ = 0;
     open_ = true;
     ++generation_;
   }
   start_cv_.notify_all();
-  take_chunks();
+  take_chunks(0);
   std::exception_ptr error;
   {
     std::unique_lock lock(mu_);
@@ -70,21 +72,24 @@ void WorkerPool::run(std::size_t n, const std::function<void(std::size_t, std::s
   if (error) std::rethrow_exception(error);
 }
 
-void WorkerPool::take_chunks() {
-  for (;;) {
-    const std::size_t begin = next_.fetch_add(chunk_, std::memory_order_relaxed);
-    if (begin >= n_) return;
-    const std::size_t end = std::min(n_, begin + chunk_);
-    try {
-      (*fn_)(begin, end);
-    } catch (...) {
-      std::lock_guard lock(mu_);
-      if (!error_) error_ = std::current_exception();
+void WorkerPool::take_chunks(unsigned self) {
+  for (unsigned r = 0; r < threads_; ++r) {
+    Share& share = shares_[(self + r) % threads_];
+    for (;;) {
+      const std::size_t begin = share.next.fetch_add(chunk_, std::memory_order_relaxed);
+      if (begin >= share.end) break;
+      const std::size_t end = std::min(share.end, begin + chunk_);
+      try {
+        (*fn_)(begin, end);
+      } catch (...) {
+        std::lock_guard lock(mu_);
+        if (!error_) error_ = std::current_exception();
+      }
     }
   }
 }
 
-void WorkerPool::worker_loop() {
+void WorkerPool::worker_loop(unsigned self) {
   std::uint64_t seen = 0;
   std::unique_lock lock(mu_);
   for (;;) {
@@ -94,7 +99,7 @@ void WorkerPool::worker_loop() {
     if (!open_) continue;  // woken too late for this run
     ++busy_;
     lock.unlock();
-    take_chunks();
+    take_chunks(self);
     lock.lock();
     if (--busy_ == 0) done_cv_.notify_one();
   }
