@@ -76,12 +76,14 @@ kernel::Result<std::size_t> Actuator::set(std::span<const float> values) {
                    std::to_string(values.size())};
     return Error{"actuator '" + name() + "': NaN for channel '" + channels_[c.channel].name + "'"};
   }
-  kernel::Status st;
-  try {
-    st = apply(staged);
-  } catch (const std::exception& e) {
-    st = Error{std::string("driver threw: ") + e.what()};
-  }
+  // Made in place (a Status assigned after its construction moves a string every command).
+  const kernel::Status st = [&]() -> kernel::Status {
+    try {
+      return apply(staged);
+    } catch (const std::exception& e) {
+      return Error{std::string("driver threw: ") + e.what()};
+    }
+  }();
   if (!st) {
     // The hardware state is unknown now; output() keeps what we last know was applied.
     ++stats_.driver_errors;

@@ -75,12 +75,14 @@ void PeriodicRunner::on_activity_released() {
 }
 
 void PeriodicRunner::on_activity_tick() {
-  kernel::Status st;
-  try {
-    st = step_once(executor_.clock().now());
-  } catch (const std::exception& e) {
-    st = kernel::Error{e.what()};
-  }
+  // Made in place (a Status assigned after its construction moves a string every step).
+  const kernel::Status st = [&]() -> kernel::Status {
+    try {
+      return step_once(executor_.clock().now());
+    } catch (const std::exception& e) {
+      return kernel::Error{e.what()};
+    }
+  }();
   if (!st) {
     fail(st.error());
     return;
