@@ -73,6 +73,10 @@ class Actuator : public io::Device {
   // The driver: put `values` (conditioned, one per channel) on the hardware. Called with the
   // actuator's lock held, on the caller's thread (a task's context, the shell); must not block.
   virtual kernel::Status apply(std::span<const float> values) = 0;
+  // The lock apply() runs under. A driver whose state written by apply() is read from elsewhere (a
+  // simulator taking the newest command at its step) reads it under this lock too, rather than
+  // taking a lock of its own inside this one at every command.
+  std::mutex& apply_mutex() const { return mu_; }
 
  private:
   const std::vector<ChannelSpec> channels_;

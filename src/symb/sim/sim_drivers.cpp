@@ -36,19 +36,19 @@ std::vector<robot::ChannelSpec> SimWheels::channel_specs() {
 SimWheels::SimWheels(std::string name) : robot::Actuator(std::move(name), channel_specs()) {}
 
 WheelCommand SimWheels::command() const {
-  std::lock_guard lock(mu_);
+  std::lock_guard lock(apply_mutex());
   return cmd_;
 }
 
 void SimWheels::close() {
   robot::Actuator::close();
-  std::lock_guard lock(mu_);
+  std::lock_guard lock(apply_mutex());
   cmd_.left = cmd_.right = 0;
 }
 
 kernel::Status SimWheels::apply(std::span<const float> values) {
-  std::lock_guard lock(mu_);
-  // A close() that raced with this command wins: the wheels of a closed device stand still.
+  // Under apply_mutex(), held by Actuator::set. A close() that raced with this command wins: the wheels of a closed
+  // device stand still.
   if (!is_open()) return kernel::Error{"closed while the command was applied"};
   cmd_.left = wheel_units_to_cm_per_s(values[0]);
   cmd_.right = wheel_units_to_cm_per_s(values[1]);

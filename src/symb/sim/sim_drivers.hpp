@@ -17,7 +17,6 @@
 #pragma once
 
 #include <cstdint>
-#include <mutex>
 #include <span>
 #include <string>
 #include <vector>
@@ -93,8 +92,7 @@ class SimWheels final : public robot::Actuator {
   kernel::Status apply(std::span<const float> values) override;
 
  private:
-  mutable std::mutex mu_;  // cmd_ (apply runs under the actuator's own lock, this one is inner)
-  WheelCommand cmd_;
+  WheelCommand cmd_;  // under apply_mutex()
 };
 
 }  // namespace symb::sim
