@@ -17,6 +17,7 @@
 #include "symb/os/node.hpp"
 
 #include "HookFrame.h"
+#include "support/eventually.hpp"
 
 // Debian's Cyclone DDS is not built for ThreadSanitizer: its threads hand network buffers to each
 // other through its own atomics, which TSan cannot see, so it reports races on those buffers
@@ -32,6 +33,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using os::TaskId;
+using symb::testing::eventually;
 
 // Sends every message it is handed on, port kept: the test posts into it, its hooks carry it.
 class DdsEcho final : public os::Task {
@@ -82,16 +84,6 @@ DdsBusOptions own_bus(std::string_view test) {
   o.prefix = std::string(test) + "_" + std::to_string(::getpid()) + "_" + std::to_string(serial++);
   o.lease = 300ms;
   return o;
-}
-
-template <class F>
-bool eventually(F done, std::chrono::milliseconds limit = 5000ms) {
-  const auto until = std::chrono::steady_clock::now() + limit;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > until) return false;
-    std::this_thread::sleep_for(1ms);
-  }
-  return true;
 }
 
 struct DdsPair {

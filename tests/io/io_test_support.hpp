@@ -1,6 +1,5 @@
-// Helpers shared by the fd-based stream tests: waiting on a condition with a deadline (never a
-// fixed sleep), telling when another thread is really blocked in the kernel, and moving bytes
-// and frames across a stream with a writer thread and a reading loop.
+// Helpers shared by the fd-based stream tests: telling when another thread is really blocked in
+// the kernel, and moving bytes and frames across a stream with a writer thread and a reading loop.
 #pragma once
 
 #include <sys/syscall.h>
@@ -20,22 +19,14 @@
 #include "symb/io/frame_codec.hpp"
 #include "symb/io/stream.hpp"
 
+#include "support/eventually.hpp"
+
 namespace symb::io::testing {
 
 using namespace std::chrono_literals;
 
 // Generous: a TSan build runs about ten times slower than a normal one.
 inline constexpr auto kDeadline = 20s;
-
-// Polls `done` until it holds or `limit` passes; returns whether it held.
-inline bool eventually(const std::function<bool()>& done, std::chrono::nanoseconds limit = kDeadline) {
-  const auto end = std::chrono::steady_clock::now() + limit;
-  for (;;) {
-    if (done()) return true;
-    if (std::chrono::steady_clock::now() >= end) return false;
-    std::this_thread::yield();
-  }
-}
 
 inline pid_t this_thread_tid() { return static_cast<pid_t>(::syscall(SYS_gettid)); }
 
@@ -66,7 +57,7 @@ inline void expect_close_wakes_blocked_reader(InputDevice& stream) {
     if (!r) error = r.error();
     returned = true;
   });
-  const bool blocked = eventually([&] { return tid.load() != 0 && thread_sleeping(tid.load()); });
+  const bool blocked = symb::testing::eventually([&] { return tid.load() != 0 && thread_sleeping(tid.load()); });
   EXPECT_TRUE(blocked) << "the reader never blocked";
   EXPECT_FALSE(returned.load());
   stream.close();

@@ -100,7 +100,7 @@ TEST(StdioStream, CloseWakesAReaderWithoutClosingTheDescriptor) {
     auto r = s.read_some(buf, 60s);
     if (!r) error = r.error();
   });
-  ASSERT_TRUE(testing::eventually([&] { return tid.load() != 0 && testing::thread_sleeping(tid.load()); }));
+  ASSERT_TRUE(symb::testing::eventually([&] { return tid.load() != 0 && testing::thread_sleeping(tid.load()); }));
   s.close();
   reader.join();
   EXPECT_NE(error.find("closed"), std::string::npos) << error;

@@ -92,7 +92,7 @@ TEST(StreamTaskOverPty, NumberFramesCrossARealSerialLineUnderTheThreadExecutor) 
   ASSERT_TRUE(node.hook(*tx, *a));
   ASSERT_TRUE(node.start(*tx));
 
-  ASSERT_TRUE(testing::eventually([&] { return col->count() >= static_cast<std::size_t>(kCount); }))
+  ASSERT_TRUE(symb::testing::eventually([&] { return col->count() >= static_cast<std::size_t>(kCount); }))
       << "got " << col->count() << " of " << kCount << " frames";
   const auto got = col->frames();
   ASSERT_EQ(got.size(), static_cast<std::size_t>(kCount));
@@ -104,7 +104,7 @@ TEST(StreamTaskOverPty, NumberFramesCrossARealSerialLineUnderTheThreadExecutor) 
   }
   EXPECT_EQ(col->without_bytes(), 0u);
   // The writer counts its bytes after write_all returns, which may be after the far end has them.
-  EXPECT_TRUE(testing::eventually([&] { return near->stats().bytes_out == far->stats().bytes_in; }))
+  EXPECT_TRUE(symb::testing::eventually([&] { return near->stats().bytes_out == far->stats().bytes_in; }))
       << near->stats().bytes_out << " bytes written, " << far->stats().bytes_in << " read";
   const StreamStats far_stats = far->stats();
   EXPECT_EQ(near->stats().write_errors, 0u);

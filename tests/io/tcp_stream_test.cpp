@@ -12,7 +12,7 @@ namespace symb::io {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::eventually;
+using symb::testing::eventually;
 using testing::read_exactly;
 using testing::Writer;
 

@@ -16,11 +16,14 @@
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 
+#include "support/eventually.hpp"
+
 namespace symb::kernel {
 namespace run_wakes_here_test {  // named: the unity build shares one file's anonymous namespace
 namespace {
 
 using namespace std::chrono_literals;
+using symb::testing::eventually;
 
 // Counts its handlers, where they ran, and any two that overlapped. Input is "posted" by adding
 // to `posted` before a wake; a handler takes all of it, as a task takes its whole queue.
@@ -62,16 +65,6 @@ struct Probe final : Activity {
   std::atomic<long> posted{0}, handled{0};
   std::function<void()> hold_start, hold_stop, during_input;
 };
-
-template <class F>
-bool eventually(F f, std::chrono::milliseconds limit = 5000ms) {
-  const auto end = std::chrono::steady_clock::now() + limit;
-  while (std::chrono::steady_clock::now() < end) {
-    if (f()) return true;
-    std::this_thread::sleep_for(1ms);
-  }
-  return f();
-}
 
 // A gate a handler waits at until the test opens it.
 struct Gate {

@@ -6,10 +6,13 @@
 
 #include <gtest/gtest.h>
 
+#include "support/eventually.hpp"
+
 namespace symb::kernel {
 namespace {
 
 using namespace std::chrono_literals;
+using symb::testing::eventually;
 
 struct Counter final : Activity {
   void on_activity_attached(ActivitySlot& s) override { slot = &s; }
@@ -22,16 +25,6 @@ struct Counter final : Activity {
   std::atomic<bool> started{false}, stopped{false}, released{false};
   std::atomic<int> inputs{0}, ticks{0};
 };
-
-template <class F>
-bool eventually(F f, std::chrono::milliseconds limit = 5000ms) {
-  const auto end = std::chrono::steady_clock::now() + limit;
-  while (std::chrono::steady_clock::now() < end) {
-    if (f()) return true;
-    std::this_thread::sleep_for(1ms);
-  }
-  return f();
-}
 
 TEST(ThreadExecutor, StartsTicksAndStops) {
   ThreadExecutor ex;

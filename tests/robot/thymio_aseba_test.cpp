@@ -16,22 +16,14 @@
 #include "symb/robot/thymio_ir.hpp"
 
 #include "support/aseba_node.hpp"
+#include "support/eventually.hpp"
 
 namespace symb::robot::thymio {
 namespace {
 
 using namespace std::chrono_literals;
+using symb::testing::eventually;
 using symb::testing::FakeAsebaNode;
-
-template <class F>
-bool eventually(F&& f, std::chrono::milliseconds within = 3000ms) {
-  const auto end = std::chrono::steady_clock::now() + within;
-  while (std::chrono::steady_clock::now() < end) {
-    if (f()) return true;
-    std::this_thread::sleep_for(5ms);
-  }
-  return f();
-}
 
 std::shared_ptr<io::IOStream> connect_to(const FakeAsebaNode& node) {
   auto s = io::TcpStream::connect("127.0.0.1", node.port(), 2s);

@@ -23,25 +23,17 @@
 #include "symb/shell/tcp_shell.hpp"
 
 #include "shell_test_support.hpp"
+#include "support/eventually.hpp"
 
 namespace symb::shell {
 namespace {
 
 using namespace std::chrono_literals;
+using symb::testing::eventually;
 using testing::Json;
 using testing::JsonParser;
 
 constexpr auto kDeadline = 10s;
-
-// Polls `cond` until it holds or the deadline passes.
-bool eventually(const std::function<bool()>& cond, std::chrono::nanoseconds limit = kDeadline) {
-  const auto end = std::chrono::steady_clock::now() + limit;
-  while (!cond()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(1ms);
-  }
-  return true;
-}
 
 // The far end of a session: what a person or a script sees and types.
 class Peer {

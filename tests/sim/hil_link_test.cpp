@@ -26,10 +26,13 @@
 #include "symb/sim/hil_simulator.hpp"
 #include "symb/sim/scenario.hpp"
 
+#include "support/eventually.hpp"
+
 namespace symb::sim {
 namespace {
 
 using namespace std::chrono_literals;
+using symb::testing::eventually;
 
 TEST(HilProtocol, FramesRoundTripAndBadOnesAreRefusedWithAReason) {
   HilIrFrame f;
@@ -350,15 +353,6 @@ struct Replug {
     pty.reset();
   }
 };
-
-bool eventually(const std::function<bool()>& cond, kernel::Duration limit = 10s) {
-  const auto end = std::chrono::steady_clock::now() + limit;
-  while (!cond()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(2ms);
-  }
-  return true;
-}
 
 TEST(BoardLinkTest, ALineThatGoesAwayIsReopenedAndNothingIsCountedSentIntoIt) {
   Replug line;

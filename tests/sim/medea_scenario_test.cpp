@@ -239,16 +239,23 @@ double mean_distance(const std::vector<Window>& w, std::size_t from, std::size_t
 // hears someone from the start, share 0.9+ throughout, the rise is lost in the noise.)
 TEST(MedeaScenario, ActiveShareAndDistanceRiseOverTime) {
   SYMB_SKIP_UNDER_TSAN();
-  double share_early = 0, share_late = 0, dist_early = 0, dist_late = 0;
 #ifdef SYMB_SANITIZER
-  const int kSeeds = 1;  // seed 1 alone meets the bounds below (0.69 -> 0.91, 582 -> 1373 cm)
+  // The sanitizer builds look for memory errors and undefined behaviour: one seed for 8 minutes
+  // runs every path of the 40 (each robot lives 40 lifetimes, broadcasts, adopts and mutates
+  // genomes), and its counts are checked. The rise over time, a claim about the whole 40 minutes,
+  // is the release build's to check.
+  constexpr int kSeeds = 1;
+  constexpr auto kRun = 8min;
 #else
-  const int kSeeds = 3;
+  constexpr int kSeeds = 3;
+  constexpr auto kRun = 40min;
 #endif
+  constexpr bool kWholeRun = kRun == 40min;
+  double share_early = 0, share_late = 0, dist_early = 0, dist_late = 0;
   for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    const SwarmRun r = run_swarm(seed, 40min, 2min);
-    ASSERT_EQ(r.windows.size(), 20u);
+    const SwarmRun r = run_swarm(seed, kRun, 2min);
+    ASSERT_EQ(r.windows.size(), static_cast<std::size_t>(kRun / 2min));
     std::printf("seed %llu: windows (active share, cm per robot):", static_cast<unsigned long long>(seed));
     for (const Window& w : r.windows) std::printf(" (%.2f, %.0f)", w.active_share, w.distance);
     std::printf(
@@ -260,7 +267,8 @@ TEST(MedeaScenario, ActiveShareAndDistanceRiseOverTime) {
     EXPECT_EQ(r.malformed, 0u);
     EXPECT_GT(r.radio.delivered, 0u);
     EXPECT_EQ(r.radio.dropped, 0u);
-    EXPECT_EQ(r.lifetimes, kRobots * 200);  // 40 min / 12 s each
+    EXPECT_EQ(r.lifetimes, kRobots * static_cast<std::uint64_t>(kRun / 12s));  // 12 s each
+    if (!kWholeRun) continue;
     const double se = mean_share(r.windows, 0, 2), sl = mean_share(r.windows, 15, 20);
     const double de = mean_distance(r.windows, 0, 2), dl = mean_distance(r.windows, 15, 20);
     std::printf("  active share %.2f -> %.2f, distance %.0f -> %.0f cm per robot per 2 min\n", se, sl, de, dl);
@@ -269,6 +277,7 @@ TEST(MedeaScenario, ActiveShareAndDistanceRiseOverTime) {
     share_early += se / kSeeds, share_late += sl / kSeeds;
     dist_early += de / kSeeds, dist_late += dl / kSeeds;
   }
+  if (!kWholeRun) return;
   std::printf("over the seeds: active share %.2f -> %.2f, distance %.0f -> %.0f cm\n", share_early, share_late,
               dist_early, dist_late);
   EXPECT_GE(share_late, share_early + 0.06);
