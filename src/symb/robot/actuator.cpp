@@ -21,7 +21,6 @@ Actuator::Actuator(std::string name, std::vector<ChannelSpec> channels)
     throw std::invalid_argument("actuator '" + this->name() + "': " + st.error());
   output_.resize(channels_.size());
   for (std::size_t i = 0; i < channels_.size(); ++i) output_[i] = channels_[i].clamp(0.0f);
-  if (channels_.size() > os::Payload::kInlineValues) staged_.resize(channels_.size());
   add_ioctl({"channels", std::nullopt, "the channels: name [min, max] units, one per line"},
             [this](const os::ParamValue*) {
               std::string text;
@@ -63,11 +62,11 @@ kernel::Result<std::size_t> Actuator::set(std::span<const float> values) {
     ++stats_.not_open;
     return Error{"actuator '" + name() + "' is closed"};
   }
-  // Conditioned on the stack when the channels fit (a wheel pair does): a buffer of the
-  // actuator's own is one more cache line to fetch per command in a swarm.
-  std::array<float, os::Payload::kInlineValues> small;
-  const std::span<float> staged =
-      ranges_.size() <= small.size() ? std::span<float>(small.data(), ranges_.size()) : std::span<float>(staged_);
+  // Conditioned on the stack (a device has at most a message's worth of channels,
+  // validate_channels): a buffer of the actuator's own is one more cache line to fetch per
+  // command in a swarm.
+  std::array<float, os::Payload::kInlineValues> buffer;
+  const std::span<float> staged(buffer.data(), ranges_.size());
   const Conditioned c = condition_sample(ranges_, values, staged);
   if (!c.ok()) {
     ++stats_.rejected;

@@ -84,7 +84,6 @@ class Actuator : public io::Device {
   std::atomic<bool> open_{false};
   mutable std::mutex mu_;  // output_, stats_ and the driver's apply()
   std::vector<float> output_;
-  std::vector<float> staged_;  // set()'s conditioned values, for more channels than a message carries
   ActuatorStats stats_;
 };
 
