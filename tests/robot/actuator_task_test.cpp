@@ -99,6 +99,28 @@ TEST(ActuatorTask, DrivesOneMetreAndReportsCompletion) {
   EXPECT_EQ(rig.plant->x(), x);
 }
 
+// Whoever learns that a goal ended (a status listener, a thread polling stats()) must find the
+// wheels already told to stop: the stop command comes before the count and the report.
+TEST(ActuatorTask, TheWheelsAreStoppedBeforeTheGoalsEndIsCounted) {
+  std::vector<ActuatorTaskStats> at_stop;  // outlives the rig: its node stops the wheels as it goes
+  ActuatorRig rig;
+  rig.drive->on_command = [&](double l, double r) {
+    if (l == 0 && r == 0) at_stop.push_back(rig.task->stats());
+  };
+  ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::drive(0.3, 0.2)));
+  ASSERT_TRUE(rig.run_until_event(GoalEvent::kCompleted, 10s));
+  ASSERT_EQ(at_stop.size(), 1u);
+  EXPECT_EQ(at_stop[0].completed, 0u);
+  EXPECT_EQ(rig.task->stats().completed, 1u);
+  ASSERT_TRUE(ActuatorTask::command(rig.node, rig.id, DriveGoal::hold_speed(0.1)));
+  rig.ex.run_for(200ms);
+  ASSERT_TRUE(ActuatorTask::stop(rig.node, rig.id));
+  ASSERT_TRUE(rig.run_until_event(GoalEvent::kAborted, 1s));
+  ASSERT_EQ(at_stop.size(), 2u);
+  EXPECT_EQ(at_stop[1].aborted, 0u);
+  EXPECT_EQ(rig.task->stats().aborted, 1u);
+}
+
 TEST(ActuatorTask, TheSameGoalGivesTheSameRunBitForBit) {
   kernel::Time at[2];
   double x[2];

@@ -70,10 +70,13 @@ class FakeDrive final : public DifferentialDrive {
     return commands_;
   }
   std::atomic<bool> fail{false};
+  // Called with each command the drive takes, before it is stored (set before the drive is used).
+  std::function<void(double, double)> on_command;
 
  protected:
   kernel::Status apply_wheel_speeds(double left, double right) override {
     if (fail) return kernel::Error{"motor controller not answering"};
+    if (on_command) on_command(left, right);
     std::lock_guard lock(mu_);
     commands_.emplace_back(left, right);
     return {};

@@ -117,7 +117,7 @@ void ActuatorTask::handle_goal(const os::Message& m) {
   }
   DriveGoal g = *decoded;
   if (g.kind == GoalKind::kStop) {
-    if (goal_) finish(GoalEvent::kAborted, GoalReason::kStopped);
+    if (goal_) return halt_and_finish(GoalEvent::kAborted, GoalReason::kStopped);
     halt();
     return;
   }
@@ -231,13 +231,26 @@ void ActuatorTask::finish(GoalEvent event, GoalReason reason) {
   report(event, g, done, reason);
 }
 
-void ActuatorTask::wheels(double left, double right) {
-  if (auto st = drive_->set_wheel_speeds(left, right); !st) {
+kernel::Status ActuatorTask::drive_wheels(double left, double right) {
+  auto st = drive_->set_wheel_speeds(left, right);
+  if (!st) {
     drive_errors_.bump();
     warn(drive_warning_, st.error());
-    // A goal cannot be reached through a drive that refuses commands; the sender may retry.
-    if (goal_) finish(GoalEvent::kAborted, GoalReason::kDriveError);
   }
+  return st;
+}
+
+void ActuatorTask::wheels(double left, double right) {
+  // A goal cannot be reached through a drive that refuses commands; the sender may retry.
+  if (!drive_wheels(left, right) && goal_) finish(GoalEvent::kAborted, GoalReason::kDriveError);
+}
+
+void ActuatorTask::halt_and_finish(GoalEvent event, GoalReason reason) {
+  // The wheels are told to stop before the goal's end is counted and reported: whoever hears of
+  // it (a hooked task, a thread reading stats()) finds them stopped. A drive that refuses the stop
+  // is counted and warned about, but the goal ends for the reason it ended.
+  (void)drive_wheels(0, 0);
+  finish(event, reason);
 }
 
 void ActuatorTask::on_tick() {
@@ -250,8 +263,7 @@ void ActuatorTask::on_tick() {
     std::snprintf(text, sizeof text, "%s goal %u aborted: no odometry for %.3f s, wheels stopped",
                   to_string(goal_->goal.kind), goal_->goal.id, kernel::to_seconds(t - heard));
     warn(odometry_warning_, text);
-    finish(GoalEvent::kAborted, GoalReason::kOdometryTimeout);
-    halt();
+    halt_and_finish(GoalEvent::kAborted, GoalReason::kOdometryTimeout);
     return;
   }
   if (!goal_->started) return;  // no pose to measure from yet: the wheels stay as they are (still)
@@ -263,8 +275,7 @@ void ActuatorTask::on_tick() {
     case GoalKind::kDrive: {
       const double rest = g.value - done;
       if (std::abs(rest) <= options_.distance_tolerance) {
-        finish(GoalEvent::kCompleted, GoalReason::kNone);
-        halt();
+        halt_and_finish(GoalEvent::kCompleted, GoalReason::kNone);
         return;
       }
       v = std::clamp(options_.kp_distance * rest, -g.speed, g.speed);
@@ -274,8 +285,7 @@ void ActuatorTask::on_tick() {
     case GoalKind::kTurn: {
       const double rest = g.value - done;
       if (std::abs(rest) <= options_.angle_tolerance) {
-        finish(GoalEvent::kCompleted, GoalReason::kNone);
-        halt();
+        halt_and_finish(GoalEvent::kCompleted, GoalReason::kNone);
         return;
       }
       u = std::clamp(options_.kp_turn * rest * half_base, -g.speed, g.speed);

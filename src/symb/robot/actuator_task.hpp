@@ -115,9 +115,11 @@ class ActuatorTask : public os::Task {
   void handle_goal(const os::Message& m);
   void handle_odometry(std::span<const float> v);
   void finish(GoalEvent event, GoalReason reason);
+  void halt_and_finish(GoalEvent event, GoalReason reason);
   void report(GoalEvent event, const DriveGoal& goal, double achieved, GoalReason reason);
   double achieved() const;
   void wheels(double left, double right);
+  kernel::Status drive_wheels(double left, double right);
   void halt() { wheels(0, 0); }
   double speed_limit() const;
   void warn(os::WarningLimiter& limiter, const std::string& text);
