@@ -44,15 +44,17 @@ Scenario load_shipped(const std::string& name) {
   return s.ok() ? std::move(s).value() : Scenario{};
 }
 
-// threads 0: the single VirtualTimeExecutor.
-LockstepOutcome run_session(const Scenario& scenario, unsigned threads, kernel::Duration duration) {
+// threads 0: the single VirtualTimeExecutor. `prefetch`: LockstepExecutor::Options::prefetch, a
+// hint that must not change the run.
+LockstepOutcome run_session(const Scenario& scenario, unsigned threads, kernel::Duration duration,
+                            bool prefetch = false) {
   LockstepOutcome out;
   std::unique_ptr<kernel::Executor> executor;
   if (threads == 0)
     executor = std::make_unique<kernel::VirtualTimeExecutor>();
   else
-    executor = std::make_unique<kernel::LockstepExecutor>(
-        kernel::LockstepExecutor::Options{.threads = threads, .quantum = scenario.control_period});
+    executor = std::make_unique<kernel::LockstepExecutor>(kernel::LockstepExecutor::Options{
+        .threads = threads, .quantum = scenario.control_period, .prefetch = prefetch});
   auto created = ScenarioSession::create(scenario, *executor);
   EXPECT_TRUE(created.ok()) << (created.ok() ? "" : created.error());
   if (!created.ok()) return out;
@@ -94,6 +96,7 @@ TEST(LockstepSession, SwarmIsTheSameWithOneTwoAndFourThreads) {
     EXPECT_EQ(n.hash, one.hash) << threads << " threads";
     EXPECT_EQ(n.steps, one.steps);
   }
+  EXPECT_EQ(run_session(swarm, 2, 10s, true).hash, one.hash) << "2 threads, the lanes prefetched";
   EXPECT_EQ(run_session(swarm, 0, 10s).hash, one.hash) << "the single virtual-time executor";
 }
 
@@ -102,7 +105,8 @@ TEST(LockstepSession, RadioSwarmIsTheSameWithOneTwoAndFourThreads) {
   const LockstepOutcome one = run_session(medea, 1, 20s);
   EXPECT_GT(one.radio.delivered, 100u);  // the robots do meet over the radio
   for (unsigned threads : {2u, 4u}) {
-    const LockstepOutcome n = run_session(medea, threads, 20s);
+    // With 4 threads the lanes' state is prefetched too (a hint: the same run).
+    const LockstepOutcome n = run_session(medea, threads, 20s, threads == 4);
     EXPECT_EQ(n.hash, one.hash) << threads << " threads";
     EXPECT_EQ(n.radio.transmitted, one.radio.transmitted);
     EXPECT_EQ(n.radio.delivered, one.radio.delivered);

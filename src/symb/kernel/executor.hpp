@@ -43,6 +43,14 @@ class Activity {
   virtual void on_activity_stop() = 0;
   // The executor will never touch this activity or its slot again; the owner may free it.
   virtual void on_activity_released() = 0;
+  // A hint, with no effect on behaviour: the executor will soon run this activity's handlers, so
+  // ask the memory system for what they read first (the lockstep executor's lanes, when a swarm's
+  // state no longer fits in the cache). Called with levels 0 to kPrefetchLevels - 1, a while
+  // apart: level 0 when only this object's first cache line was asked for, each next level for
+  // what the blocks asked for at the previous one point to (reading a pointer from a block asked
+  // for at the same level would wait for it). On the executor's thread, between the handlers.
+  static constexpr int kPrefetchLevels = 4;
+  virtual void prefetch(int /*level*/) const {}
 };
 
 // The executor's side of one attached activity. Owned by the executor and valid until the

@@ -2,6 +2,8 @@
 
 #include <cassert>
 
+#include "symb/kernel/prefetch.hpp"
+
 namespace symb::kernel {
 
 struct VirtualTimeExecutor::Slot final : ActivitySlot {
@@ -161,6 +163,27 @@ VirtualTimeExecutor::Event VirtualTimeExecutor::pop_event() {
   }
   events_.pop_back();
   return top;
+}
+
+void VirtualTimeExecutor::prefetch(int stage) const {
+  switch (stage) {
+    case 0: prefetch_bytes(this, sizeof(*this)); break;
+    case 1:
+      prefetch_bytes(events_.data(), events_.size() * sizeof(Event));
+      prefetch_bytes(slots_.data(), slots_.size() * sizeof(slots_[0]));
+      break;
+    case 2:
+      for (const auto& s : slots_) __builtin_prefetch(s.get());
+      break;
+    case 3:
+      for (const auto& s : slots_)
+        if (s->activity != nullptr) __builtin_prefetch(s->activity);
+      break;
+    default:
+      for (const auto& s : slots_)
+        if (s->activity != nullptr) s->activity->prefetch(stage - 4);
+      break;
+  }
 }
 
 std::uint64_t VirtualTimeExecutor::run_until(Time until) {

@@ -6,6 +6,7 @@
 #include <new>
 
 #include "symb/kernel/counter.hpp"
+#include "symb/kernel/prefetch.hpp"
 #include "symb/os/task_record.hpp"
 
 namespace symb::os {
@@ -87,6 +88,23 @@ TaskRecord::TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> 
 void TaskRecord::on_activity_attached(kernel::ActivitySlot& s) {
   std::lock_guard lock(in_mu);
   slot = &s;
+}
+
+void TaskRecord::prefetch(int level) const {
+  switch (level) {
+    case 0: kernel::prefetch_bytes(this, sizeof(*this)); break;
+    case 1:
+      // What a handler reads first beyond the record: the task object, the queue's head (the
+      // message to handle, or where the next one lands), the hooks it sends on, its input side.
+      if (task) kernel::prefetch_bytes(task.get(), 2 * kernel::kCacheLine);
+      kernel::prefetch_bytes(&queue.front(), sizeof(Message));
+      if (!hooks.empty()) __builtin_prefetch(hooks.data());
+      if (inputs) __builtin_prefetch(inputs.get());
+      break;
+    default:
+      if (task) task->prefetch(level - 2);
+      break;
+  }
 }
 
 void TaskRecord::notify() {

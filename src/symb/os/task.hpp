@@ -80,6 +80,13 @@ class Task {
   Task(const Task&) = delete;
   Task& operator=(const Task&) = delete;
 
+  // A hint for the executor, with no effect on behaviour (kernel::Activity::prefetch): asks the
+  // memory system for what this task's next handler reads beyond the object's first two cache
+  // lines. Level 0 (those two lines already asked for): the rest of a large object, or the device
+  // a member points to; level 1, a while later: what those point to. Called on the task's own
+  // context; the default asks for nothing.
+  virtual void prefetch(int /*level*/) const {}
+
  protected:
   virtual void on_start() {}
   virtual void on_message(const Message& /*message*/) {}

@@ -119,6 +119,7 @@ struct TaskRecord final : kernel::Activity {
   void on_activity_tick() override;
   void on_activity_stop() override;
   void on_activity_released() override;
+  void prefetch(int level) const override;
 
   // Offers `m` to this task's queue through hook slot `edge` (0: posted); returns the slot to
   // wake (outside any lock) or null. `*accepted` (when given) tells whether the message was queued.

@@ -7,6 +7,7 @@
 
 #include "symb/io/number_text.hpp"
 #include "symb/kernel/counter.hpp"
+#include "symb/kernel/prefetch.hpp"
 #include "symb/os/node.hpp"
 
 namespace symb::robot {
@@ -122,6 +123,10 @@ ActuatorSinkTask::ActuatorSinkTask(std::shared_ptr<Actuator> actuator, Options o
                                   "'");
     if (auto st = validate_channels(options_.ranges); !st) throw std::invalid_argument("actuator sink: " + st.error());
   }
+}
+
+void ActuatorSinkTask::prefetch(int level) const {
+  if (level == 0) kernel::prefetch_bytes(actuator_.get(), 2 * kernel::kCacheLine);
 }
 
 ActuatorSinkStats ActuatorSinkTask::stats() const {

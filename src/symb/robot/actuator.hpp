@@ -116,6 +116,7 @@ class ActuatorSinkTask : public os::Task {
   std::vector<float> safe_output() const;
   // Safe from any thread.
   ActuatorSinkStats stats() const;
+  void prefetch(int level) const override;
 
  protected:
   void on_start() override;

@@ -5,6 +5,7 @@
 
 #include "symb/io/number_text.hpp"
 #include "symb/kernel/counter.hpp"
+#include "symb/kernel/prefetch.hpp"
 #include "symb/os/node.hpp"
 #include "symb/robot/ports.hpp"
 
@@ -107,6 +108,17 @@ std::optional<SensorSample> Sensor::latest() const {
 }
 
 bool Sensor::has_listener() const { return listening_.load(std::memory_order_acquire); }
+
+void Sensor::prefetch(int level) const {
+  if (level == 0) {
+    kernel::prefetch_bytes(this, sizeof(*this));
+    return;
+  }
+  if (!ranges_.empty()) kernel::prefetch_bytes(ranges_.data(), ranges_.size() * sizeof(ChannelRange));
+  if (listening_.load(std::memory_order_relaxed)) kernel::prefetch_bytes(&mailbox_->front(), sizeof(SensorSample));
+}
+
+void SensorTask::prefetch(int level) const { sensor_->prefetch(level); }
 
 kernel::Status Sensor::attach(std::function<void()> notify) {
   std::lock_guard lock(mu_);

@@ -123,6 +123,10 @@ class Sensor : public io::Device {
   std::optional<SensorSample> latest() const;
   // Whether a SensorTask is attached (samples are queued, not unheard).
   bool has_listener() const;
+  // A hint with no effect on behaviour (os::Task::prefetch): asks the memory system for what
+  // publishing and taking samples read: level 0 this object, level 1 (a while later) the channel
+  // ranges and the mailbox's head. From the thread that takes the samples (the head is its own).
+  void prefetch(int level) const;
 
  protected:
   // Driver hooks, called outside the sensor's data lock (a driver may publish from inside).
@@ -180,6 +184,7 @@ class SensorTask : public os::Task {
   Sensor& sensor() { return *sensor_; }
   // Safe from any thread.
   SensorTaskStats stats() const;
+  void prefetch(int level) const override;
 
  protected:
   void on_start() override;

@@ -3,8 +3,14 @@
 #include <stdexcept>
 
 #include "symb/kernel/parallel_for.hpp"
+#include "symb/kernel/prefetch.hpp"
 
 namespace symb::sim {
+
+namespace {
+// How many robots ahead a loop over the robots asks for their state (kernel/prefetch.hpp).
+constexpr std::size_t kPrefetchAhead = 4;
+}  // namespace
 
 WorldRunner::WorldRunner(kernel::Executor& executor, World& world, Options options)
     : PeriodicRunner(executor, std::move(options)),
@@ -52,6 +58,9 @@ kernel::Status WorldRunner::step_once(kernel::Time now) {
   {
     std::lock_guard lock(world_mu_);
     for (std::size_t i = 0; i < wheels_.size(); ++i) {
+      // In a large swarm each robot's wheels are a load from memory: asked for a few robots ahead.
+      if (i + kPrefetchAhead < wheels_.size())
+        kernel::prefetch_bytes(wheels_[i + kPrefetchAhead].get(), sizeof(SimWheels));
       const WheelCommand c = wheels_[i]->command();
       world_.set_wheels(i, c.left, c.right);
     }
@@ -77,6 +86,13 @@ kernel::Status WorldRunner::step_once(kernel::Time now) {
   // devices feed a node on lane i, so the publishing may be spread over the lanes' threads, each
   // robot's at the start of its lane's window (the record is not written again before then).
   executor().for_each_lane_before_its_window(ir_.size(), [this, now](std::size_t i) {
+    // Called for the robots of a lane range in order: the pose and ground sensors a few robots
+    // ahead are asked for now (only their objects: a robot past the range may be another
+    // thread's). The IR sensor is asked for by its lane, through its task.
+    if (const std::size_t ahead = i + kPrefetchAhead; ahead < ir_.size()) {
+      kernel::prefetch_bytes(pose_[ahead].get(), sizeof(SimPoseSensor));
+      kernel::prefetch_bytes(ground_[ahead].get(), sizeof(SimGroundSensor));
+    }
     const RobotStep& r = record_.robots[i];
     ir_[i]->publish_readings(r.ir, now);
     if (pose_[i]->has_listener()) pose_[i]->publish_pose(r.state.pose, now);

@@ -177,7 +177,9 @@ kernel::Result<RunResult> run_scenario(const RunOptions& options) {
   } else {
     result.threads = options.threads == 0 ? default_threads(scenario.robots.size()) : options.threads;
     auto l = std::make_unique<kernel::LockstepExecutor>(
-        kernel::LockstepExecutor::Options{.threads = result.threads, .quantum = scenario.control_period});
+        kernel::LockstepExecutor::Options{.threads = result.threads,
+                                          .quantum = scenario.control_period,
+                                          .prefetch = scenario.robots.size() >= kParallelRobots});
     lockstep = l.get();
     executor = std::move(l);
   }

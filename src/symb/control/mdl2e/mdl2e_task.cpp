@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string_view>
 
+#include "symb/kernel/prefetch.hpp"
 #include "symb/kernel/source_text.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/node.hpp"
@@ -55,6 +56,15 @@ Mdl2eTask::Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOpt
       sensors_(program_->sensor_count, 0.0),
       have_input_(program_->sensor_count == 0) {
   bind_parameters(options_);
+}
+
+void Mdl2eTask::prefetch(int level) const {
+  // The interpreter's frames and this task's step state are in the object; the sensor vector
+  // is a block of its own.
+  if (level == 0)
+    kernel::prefetch_bytes(this, sizeof(*this));
+  else if (!sensors_.empty())
+    kernel::prefetch_bytes(sensors_.data(), sensors_.size() * sizeof(double));
 }
 
 Mdl2eStats Mdl2eTask::stats() const { return counters_.snapshot(); }

@@ -113,6 +113,7 @@ class Mdl2eTask : public os::Task {
   // Safe from any thread.
   Mdl2eState state() const;
   Mdl2eStats stats() const;
+  void prefetch(int level) const override;
 
  protected:
   void on_message(const os::Message& m) override;
