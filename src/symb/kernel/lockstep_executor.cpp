@@ -134,12 +134,15 @@ std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
       }
       // A lane's state is a chain of pointers (its executor, event heap, slots, activities, their
       // tasks and queues): in a large swarm each link comes from memory. Before lane i runs, lane
-      // i + kStages is asked for its first link, the next lane down for its second, lane i + 1
-      // for its last: by its turn a lane's loads have overlapped the runs of the lanes before it.
-      // Only within this call's range: the lanes past it may be running on another thread.
+      // i + 2 kStages is asked for its first link, lane i + 2 (kStages - 1) for its second, lane
+      // i + 2 for its last: by its turn a lane's loads have overlapped the runs of the lanes
+      // before it. Two lanes a stage measured a few percent faster at 10,000 robots than one (a
+      // link has two lanes' runs to arrive). Only within this call's range: the lanes past it may
+      // be running on another thread.
       constexpr int kStages = VirtualTimeExecutor::kPrefetchStages;
+      constexpr std::size_t kLanesAStage = 2;
       for (int stage = 0; w->ex.options_.prefetch && stage < kStages; ++stage) {
-        const std::size_t ahead = i + static_cast<std::size_t>(kStages - stage);
+        const std::size_t ahead = i + kLanesAStage * static_cast<std::size_t>(kStages - stage);
         if (ahead >= w->first_lane && ahead < stop) w->ex.lanes_[ahead - w->first_lane]->prefetch(stage);
       }
       const std::size_t index = i - w->first_lane;

@@ -95,11 +95,13 @@ void TaskRecord::prefetch(int level) const {
     case 0: kernel::prefetch_bytes(this, sizeof(*this)); break;
     case 1:
       // What a handler reads first beyond the record: the task object, the queue's head (the
-      // message to handle, or where the next one lands), the hooks it sends on, its input side.
+      // message to handle, or where the next one lands; a task is typically handed one or two a
+      // step, so two slots), the hooks it sends on, its input side (counters and windows).
       if (task) kernel::prefetch_bytes(task.get(), 2 * kernel::kCacheLine);
-      kernel::prefetch_bytes(&queue.front(), sizeof(Message));
+      kernel::prefetch_bytes(&queue.at(0), sizeof(Message));
+      if (queue.capacity() > 1) kernel::prefetch_bytes(&queue.at(1), sizeof(Message));
       if (!hooks.empty()) __builtin_prefetch(hooks.data());
-      if (inputs) __builtin_prefetch(inputs.get());
+      if (inputs) kernel::prefetch_bytes(inputs.get(), sizeof(InputHooks));
       break;
     default:
       if (task) task->prefetch(level - 2);

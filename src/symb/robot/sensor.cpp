@@ -118,7 +118,10 @@ void Sensor::prefetch(int level) const {
   if (listening_.load(std::memory_order_relaxed)) kernel::prefetch_bytes(&mailbox_->front(), sizeof(SensorSample));
 }
 
-void SensorTask::prefetch(int level) const { sensor_->prefetch(level); }
+void SensorTask::prefetch(int level) const {
+  if (level == 0) kernel::prefetch_bytes(this, sizeof(*this));
+  sensor_->prefetch(level);
+}
 
 kernel::Status Sensor::attach(std::function<void()> notify) {
   std::lock_guard lock(mu_);
