@@ -14,6 +14,7 @@
 #include "symb/robot/ports.hpp"
 #include "symb/robot/sensor.hpp"
 #include "symb/sim/enki_world.hpp"
+#include "symb/sim/sim_drivers.hpp"
 
 namespace symb::sim {
 namespace {
@@ -117,6 +118,64 @@ TEST(WorldRunner, IrToWheelsTakesExactlyOneControlPeriodUnderVirtualTime) {
   EXPECT_GT(end.distance, 15.0);
   EXPECT_NEAR(end.pose.x - 50, end.distance, 1.0);
   EXPECT_EQ(runner.wheels(0)->command().sequence, 100u);
+}
+
+// Counts what it is sent (a task hooked to a pose or ground sensor task).
+class Counting final : public os::Task {
+ public:
+  std::size_t count = 0;
+  std::vector<float> last;
+
+ protected:
+  void on_message(const os::Message& m) override {
+    ++count;
+    last.assign(m.numbers().begin(), m.numbers().end());
+  }
+};
+
+// Publishing a pose or a ground reading costs a lock and a copy per robot and step, so the runner
+// publishes to those sensors only while a task listens: it follows a task's start and removal,
+// and a sensor a task still holds outlives the runner.
+TEST(WorldRunner, PublishesPoseAndGroundOnlyWhileATaskListens) {
+  kernel::VirtualTimeExecutor ex;
+  EnkiWorld world(arena(), 1);
+  world.add_robot("bot", RobotKind::kThymio2, {50, 100, 0});
+  auto runner = std::make_unique<WorldRunner>(ex, world);
+  const std::shared_ptr<SimPoseSensor> pose = runner->pose_sensor(0);
+  const std::shared_ptr<SimGroundSensor> ground = runner->ground_sensor(0);
+  ASSERT_TRUE(runner->start());
+  ex.run_for(90ms);
+  EXPECT_FALSE(pose->latest()) << "nobody listens: nothing published";
+  EXPECT_FALSE(ground->latest());
+
+  os::Node node(ex, {"bot"});
+  auto c = std::make_unique<Counting>();
+  Counting* counted = c.get();
+  const auto pose_task = *node.create("pose", std::make_unique<robot::SensorTask>(pose));
+  const auto sink = *node.create("sink", std::move(c));
+  ASSERT_TRUE(node.hook(pose_task, sink));
+  ex.run_for(90ms);
+  EXPECT_EQ(counted->count, 3u);
+  ASSERT_EQ(counted->last.size(), 3u);
+  EXPECT_FLOAT_EQ(counted->last[0], 50.0f);
+  EXPECT_FLOAT_EQ(counted->last[1], 100.0f);
+  ASSERT_TRUE(pose->latest());
+  EXPECT_EQ(pose->latest()->time, kernel::Time{180ms});
+  EXPECT_FALSE(ground->latest()) << "the ground sensor still has no listener";
+
+  ASSERT_TRUE(node.remove(pose_task));
+  ex.run_for(90ms);
+  EXPECT_EQ(pose->latest()->time, kernel::Time{180ms}) << "no listener again: nothing published";
+  EXPECT_EQ(counted->count, 3u);
+
+  // A task that holds the ground sensor when the runner goes, removed after it: its flag is shared.
+  const auto ground_task = *node.create("ground", std::make_unique<robot::SensorTask>(ground));
+  ex.run_for(30ms);
+  ASSERT_TRUE(ground->latest());
+  runner.reset();
+  ASSERT_TRUE(node.remove(ground_task));
+  ex.run_for(30ms);
+  EXPECT_FALSE(ground->has_listener());
 }
 
 TEST(WorldRunner, StopsAndStartsAgain) {

@@ -130,6 +130,7 @@ kernel::Status Sensor::attach(std::function<void()> notify) {
   notify_ = std::move(notify);
   notified_ = false;
   listening_.store(true, std::memory_order_release);
+  on_listener_changed(true);
   return {};
 }
 
@@ -137,6 +138,7 @@ void Sensor::detach() {
   std::lock_guard lock(mu_);
   notify_ = nullptr;
   listening_.store(false, std::memory_order_release);
+  on_listener_changed(false);
   // Whatever the task did not take is now unheard; keeping it would hand stale samples to the
   // next task as fresh ones.
   if (mailbox_) {

@@ -132,6 +132,9 @@ class Sensor : public io::Device {
   // Driver hooks, called outside the sensor's data lock (a driver may publish from inside).
   virtual kernel::Status activate() { return {}; }
   virtual void deactivate() {}
+  // Driver hook: a task started (true) or stopped (false) taking this sensor's samples, as
+  // has_listener() now says. Called with the data lock held: note it, call nothing back.
+  virtual void on_listener_changed(bool /*listening*/) {}
 
  private:
   friend class SensorTask;

@@ -18,15 +18,17 @@ std::vector<robot::ChannelSpec> SimPoseSensor::channel_specs(double arena_width,
           robot::ChannelSpec{"heading", "rad", -4.0f, 4.0f}};
 }
 
-SimPoseSensor::SimPoseSensor(std::string name, double arena_width, double arena_height)
-    : robot::Sensor(std::move(name), channel_specs(arena_width, arena_height)) {}
+SimPoseSensor::SimPoseSensor(std::string name, double arena_width, double arena_height,
+                             std::shared_ptr<std::atomic<bool>> heard)
+    : robot::Sensor(std::move(name), channel_specs(arena_width, arena_height)), heard_(std::move(heard)) {}
 
 std::vector<robot::ChannelSpec> SimGroundSensor::channel_specs() {
   return {robot::ChannelSpec{"left", "reflectance", 0.0f, 1.0f},
           robot::ChannelSpec{"right", "reflectance", 0.0f, 1.0f}};
 }
 
-SimGroundSensor::SimGroundSensor(std::string name) : robot::Sensor(std::move(name), channel_specs()) {}
+SimGroundSensor::SimGroundSensor(std::string name, std::shared_ptr<std::atomic<bool>> heard)
+    : robot::Sensor(std::move(name), channel_specs()), heard_(std::move(heard)) {}
 
 std::vector<robot::ChannelSpec> SimWheels::channel_specs() {
   return {robot::ChannelSpec{"left", "thymio", -kWheelUnitsMax, kWheelUnitsMax},

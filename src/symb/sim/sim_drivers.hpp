@@ -16,7 +16,9 @@
 // Both are thread-safe: the runner and the tasks may run on different threads (ThreadExecutor).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -48,26 +50,56 @@ class SimIrSensor final : public robot::Sensor {
   }
 };
 
+// What has_listener() says, mirrored into a flag of the world runner's: a runner that publishes
+// a pose or ground reading only to a sensor some task listens to reads its robots' flags from one
+// dense array, not from every robot's sensor object at every step. Shared: a task may hold the
+// sensor after the runner is gone.
+class ListenerFlag {
+ public:
+  explicit ListenerFlag(std::shared_ptr<std::atomic<bool>> flag) : flag_(std::move(flag)) {}
+  void set(bool listening) const {
+    if (flag_) flag_->store(listening, std::memory_order_relaxed);
+  }
+
+ private:
+  std::shared_ptr<std::atomic<bool>> flag_;
+};
+
 class SimPoseSensor final : public robot::Sensor {
  public:
-  // The channels' ranges are the arena's (plus a margin: a pose is never clamped).
-  SimPoseSensor(std::string name, double arena_width, double arena_height);
+  // The channels' ranges are the arena's (plus a margin: a pose is never clamped). `heard`, when
+  // given, follows has_listener() (ListenerFlag).
+  SimPoseSensor(std::string name, double arena_width, double arena_height,
+                std::shared_ptr<std::atomic<bool>> heard = nullptr);
 
   static std::vector<robot::ChannelSpec> channel_specs(double arena_width, double arena_height);
   robot::PublishResult publish_pose(const Pose& pose, kernel::Time time) {
     const float v[3] = {static_cast<float>(pose.x), static_cast<float>(pose.y), static_cast<float>(pose.theta)};
     return publish(std::span<const float>(v, 3), time);
   }
+
+ protected:
+  void on_listener_changed(bool listening) override { heard_.set(listening); }
+
+ private:
+  ListenerFlag heard_;
 };
 
 class SimGroundSensor final : public robot::Sensor {
  public:
-  explicit SimGroundSensor(std::string name = "ground");
+  // `heard`, when given, follows has_listener() (ListenerFlag).
+  explicit SimGroundSensor(std::string name = "ground", std::shared_ptr<std::atomic<bool>> heard = nullptr);
 
   static std::vector<robot::ChannelSpec> channel_specs();
   robot::PublishResult publish_readings(const GroundReadings& readings, kernel::Time time) {
     return publish(std::span<const float>(readings.data(), readings.size()), time);
   }
+
+ protected:
+  void on_listener_changed(bool listening) override { heard_.set(listening); }
+
+ private:
+  ListenerFlag heard_;
 };
 
 // The newest wheel command, in the world's units.

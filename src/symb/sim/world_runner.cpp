@@ -17,11 +17,17 @@ WorldRunner::WorldRunner(kernel::Executor& executor, World& world, Options optio
       world_(world),
       dt_(std::chrono::duration<double>(this->options().period).count()) {
   const std::size_t n = world_.robot_count();
+  pose_heard_ = std::shared_ptr<std::atomic<bool>[]>(new std::atomic<bool>[n]());
+  ground_heard_ = std::shared_ptr<std::atomic<bool>[]>(new std::atomic<bool>[n]());
   for (std::size_t i = 0; i < n; ++i) {
     ir_.push_back(std::make_shared<SimIrSensor>("ir"));
     wheels_.push_back(std::make_shared<SimWheels>("wheels"));
-    pose_.push_back(std::make_shared<SimPoseSensor>("pose", world_.spec().width, world_.spec().height));
-    ground_.push_back(std::make_shared<SimGroundSensor>("ground"));
+    // Each sensor shares the array and points at its own flag (the aliasing constructor).
+    pose_.push_back(std::make_shared<SimPoseSensor>(
+        "pose", world_.spec().width, world_.spec().height,
+        std::shared_ptr<std::atomic<bool>>(pose_heard_, &pose_heard_[static_cast<std::ptrdiff_t>(i)])));
+    ground_.push_back(std::make_shared<SimGroundSensor>(
+        "ground", std::shared_ptr<std::atomic<bool>>(ground_heard_, &ground_heard_[static_cast<std::ptrdiff_t>(i)])));
   }
   record_.robots.resize(n);
 }
@@ -86,17 +92,10 @@ kernel::Status WorldRunner::step_once(kernel::Time now) {
   // devices feed a node on lane i, so the publishing may be spread over the lanes' threads, each
   // robot's at the start of its lane's window (the record is not written again before then).
   executor().for_each_lane_before_its_window(ir_.size(), [this, now](std::size_t i) {
-    // Called for the robots of a lane range in order: the pose and ground sensors a few robots
-    // ahead are asked for now (only their objects: a robot past the range may be another
-    // thread's). The IR sensor is asked for by its lane, through its task.
-    if (const std::size_t ahead = i + kPrefetchAhead; ahead < ir_.size()) {
-      kernel::prefetch_bytes(pose_[ahead].get(), sizeof(SimPoseSensor));
-      kernel::prefetch_bytes(ground_[ahead].get(), sizeof(SimGroundSensor));
-    }
     const RobotStep& r = record_.robots[i];
     ir_[i]->publish_readings(r.ir, now);
-    if (pose_[i]->has_listener()) pose_[i]->publish_pose(r.state.pose, now);
-    if (ground_[i]->has_listener()) ground_[i]->publish_readings(r.ground, now);
+    if (pose_heard_[i].load(std::memory_order_relaxed)) pose_[i]->publish_pose(r.state.pose, now);
+    if (ground_heard_[i].load(std::memory_order_relaxed)) ground_[i]->publish_readings(r.ground, now);
   });
   // The next step's physics needs nothing the robots are about to decide (their commands act one
   // step later): under the lockstep executor it runs beside their nodes' window.
