@@ -184,10 +184,15 @@ void Mdl2eTask::step(bool at_tick) {
   counters_.steps.bump();
   if (at_tick) counters_.tick_steps.bump();
   counters_.clamped.bump(clamped);
-  {
+  // What state() reads is written under its lock only when it changed: this context is its only
+  // writer, so it may compare without the lock, and a controller that keeps its course (most
+  // steps) takes no lock at all.
+  const auto path = interpreter_.active_path();
+  const std::size_t depth = out.running ? path.size() : 0;
+  if (!started_ || depth != depth_ || left != left_ || right != right_ || ended_ != !out.running ||
+      !std::equal(path.begin(), path.begin() + static_cast<std::ptrdiff_t>(depth), path_.begin())) {
     std::lock_guard lock(mu_);
-    const auto path = interpreter_.active_path();
-    depth_ = out.running ? path.size() : 0;
+    depth_ = depth;
     std::copy_n(path.begin(), depth_, path_.begin());
     left_ = left;
     right_ = right;
