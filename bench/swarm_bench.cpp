@@ -66,8 +66,11 @@ double wall_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-// Simulated seconds per measured run: each side runs for one to a few seconds of wall clock.
-double simulated_seconds(int robots) { return robots <= 100 ? 60 : robots <= 1000 ? 20 : 4; }
+// Simulated seconds per measured run: each side runs for one to a few seconds of wall clock. The
+// 100-robot runs are the exponent's denominator: at 60 s (0.3 s of wall clock) one run's CPU time
+// a simulated second moved by 10 % between runs, enough to flip the exponent's verdict; 300 s
+// (about 1.5 s) holds it steadier.
+double simulated_seconds(int robots) { return robots <= 100 ? 300 : robots <= 1000 ? 20 : 4; }
 // Raw Enki's step is quadratic: about 80 ms at 1,000 robots and seconds at 10,000, so its rate
 // there comes from a few steps.
 int raw_enki_steps(int robots) {

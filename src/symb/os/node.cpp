@@ -145,10 +145,7 @@ void TaskRecord::on_activity_start() {
   SYMB_GUARDED("on_start", task->on_start())
 }
 
-void TaskRecord::apply_pending_parameters() {
-  // `params` is set before the task starts and never replaced, so this unlocked test is safe
-  // and spares the common case (no parameters) a lock per batch.
-  if (!params_pending.load(std::memory_order_acquire)) return;
+void TaskRecord::apply_parameters_now() {
   std::vector<std::pair<std::string, ParamValue>> pending;
   {
     std::lock_guard lock(in_mu);

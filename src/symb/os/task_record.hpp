@@ -141,7 +141,13 @@ struct TaskRecord final : kernel::Activity {
   // Node::notify's work once the task is found: on_notify() is due, and the task is woken.
   void notify();
   void fault(const char* where, const char* what);
-  void apply_pending_parameters();
+  // Every handler starts here: the test in line, the work (rare) out of line. `params` is set
+  // before the task starts and never replaced, so the unlocked test is safe and spares the common
+  // case (no parameters) a lock per batch.
+  void apply_pending_parameters() {
+    if (params_pending.load(std::memory_order_acquire)) apply_parameters_now();
+  }
+  void apply_parameters_now();
 
   Node& node;
   const TaskId id;
