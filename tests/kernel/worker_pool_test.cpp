@@ -66,7 +66,6 @@ TEST(WorkerPool, TwoThreadsRunTwoJobsAtOnce) {
   EXPECT_NE(who[0], who[1]);
 }
 
-// An exception in one job reaches the caller after every other job ran; the pool goes on working.
 // The other thread starts on its own share of the range (the second half of 8 jobs on two
 // threads), not on the next chunk after the caller's: a robot's lane runs on the same core from
 // step to step. Job 0 holds the caller until another thread has started a job. (Bounded wait: a
@@ -90,6 +89,7 @@ TEST(WorkerPool, EachThreadStartsOnItsOwnShare) {
   }
 }
 
+// An exception in one job reaches the caller after every other job ran; the pool goes on working.
 TEST(WorkerPool, AnExceptionIsRethrownAfterEveryJobRan) {
   for (unsigned threads : {1u, 2u, 4u}) {
     WorkerPool pool({.threads = threads});

@@ -10,6 +10,7 @@
 #include "symb/os/node.hpp"
 
 #include "fakes.hpp"
+#include "support/eventually.hpp"
 
 namespace symb::robot {
 namespace {
@@ -348,13 +349,13 @@ TEST(ActuatorTask, DrivesUnderThreads) {
   ASSERT_TRUE(node.start(base));
   std::this_thread::sleep_for(50ms);  // odometry flows
   ASSERT_TRUE(ActuatorTask::command(node, base, DriveGoal::drive(0.2, 0.3)));
-  EXPECT_TRUE(testing::wait_until([&] { return task->stats().completed == 1; }));
+  EXPECT_TRUE(symb::testing::eventually([&] { return task->stats().completed == 1; }));
   EXPECT_NEAR(plant->x(), 0.2, 0.03);  // real time jitters; the loop still closes
   EXPECT_EQ(drive->wheel_speeds(), (std::pair<double, double>{0, 0}));
   ASSERT_TRUE(ActuatorTask::command(node, base, DriveGoal::hold_speed(0.1)));
-  EXPECT_TRUE(testing::wait_until([&] { return drive->wheel_speeds().first != 0.0; }));
+  EXPECT_TRUE(symb::testing::eventually([&] { return drive->wheel_speeds().first != 0.0; }));
   ASSERT_TRUE(ActuatorTask::stop(node, base));
-  EXPECT_TRUE(testing::wait_until([&] { return drive->wheel_speeds() == std::pair<double, double>{0, 0}; }));
+  EXPECT_TRUE(symb::testing::eventually([&] { return drive->wheel_speeds() == std::pair<double, double>{0, 0}; }));
 }
 
 TEST(ActuatorTask, RefusesOptionsThatMakeNoSense) {

@@ -153,12 +153,4 @@ bool pump(kernel::VirtualTimeExecutor& ex, F done, std::chrono::milliseconds ste
   return done();
 }
 
-// Waits (real time) until `done` or a deadline, for runs under the thread executor.
-template <class F>
-bool wait_until(F done) {
-  const auto end = std::chrono::steady_clock::now() + 20s;
-  while (!done() && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(1ms);
-  return done();
-}
-
 }  // namespace symb::robot::testing

@@ -9,6 +9,7 @@
 #include "symb/os/node.hpp"
 
 #include "fakes.hpp"
+#include "support/eventually.hpp"
 
 namespace symb::robot {
 namespace {
@@ -169,7 +170,7 @@ TEST(PollingSensorTask, RunsUnderThreads) {
   auto c = std::make_unique<Collector>();
   Collector* col = c.get();
   ASSERT_TRUE(node.hook(id, *node.create("c", std::move(c))));
-  EXPECT_TRUE(testing::wait_until([&] { return col->count() >= 5; }));
+  EXPECT_TRUE(symb::testing::eventually([&] { return col->count() >= 5; }));
   ASSERT_TRUE(node.remove(id));
   node.wait_released();
   const auto got = col->received();

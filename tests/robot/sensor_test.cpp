@@ -14,6 +14,7 @@
 #include "symb/robot/depth_image.hpp"
 
 #include "fakes.hpp"
+#include "support/eventually.hpp"
 
 namespace symb::robot {
 namespace {
@@ -126,7 +127,7 @@ TEST(Sensor, AMailboxOfManyRoundsIsForwardedWholeAndInOrder) {
 TEST(Sensor, PushesFromAnotherThreadReachHookedTasksUnderThreads) {
   kernel::ThreadExecutor ex;
   SensorRig rig(ex, {.mailbox = 256});
-  ASSERT_TRUE(testing::wait_until([&] { return rig.sensor->has_listener(); }));
+  ASSERT_TRUE(symb::testing::eventually([&] { return rig.sensor->has_listener(); }));
   std::thread driver([&] {
     for (int i = 0; i < 200; ++i) {
       const float v[2] = {static_cast<float>(i), -1.0f};
@@ -135,7 +136,7 @@ TEST(Sensor, PushesFromAnotherThreadReachHookedTasksUnderThreads) {
     }
   });
   driver.join();
-  EXPECT_TRUE(testing::wait_until([&] { return rig.col->count() == 200; }));
+  EXPECT_TRUE(symb::testing::eventually([&] { return rig.col->count() == 200; }));
   const auto got = rig.col->received();
   ASSERT_EQ(got.size(), 200u);
   for (int i = 0; i < 200; ++i)

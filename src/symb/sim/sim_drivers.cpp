@@ -20,7 +20,7 @@ std::vector<robot::ChannelSpec> SimPoseSensor::channel_specs(double arena_width,
 
 SimPoseSensor::SimPoseSensor(std::string name, double arena_width, double arena_height,
                              std::shared_ptr<std::atomic<bool>> heard)
-    : robot::Sensor(std::move(name), channel_specs(arena_width, arena_height)), heard_(std::move(heard)) {}
+    : ListenedSensor(std::move(name), channel_specs(arena_width, arena_height), std::move(heard)) {}
 
 std::vector<robot::ChannelSpec> SimGroundSensor::channel_specs() {
   return {robot::ChannelSpec{"left", "reflectance", 0.0f, 1.0f},
@@ -28,7 +28,7 @@ std::vector<robot::ChannelSpec> SimGroundSensor::channel_specs() {
 }
 
 SimGroundSensor::SimGroundSensor(std::string name, std::shared_ptr<std::atomic<bool>> heard)
-    : robot::Sensor(std::move(name), channel_specs()), heard_(std::move(heard)) {}
+    : ListenedSensor(std::move(name), channel_specs(), std::move(heard)) {}
 
 std::vector<robot::ChannelSpec> SimWheels::channel_specs() {
   return {robot::ChannelSpec{"left", "thymio", -kWheelUnitsMax, kWheelUnitsMax},
@@ -49,8 +49,8 @@ void SimWheels::close() {
 }
 
 kernel::Status SimWheels::apply(std::span<const float> values) {
-  // Under apply_mutex(), held by Actuator::set. A close() that raced with this command wins: the wheels of a closed
-  // device stand still.
+  // Under apply_mutex(), held by Actuator::set. A close() that raced with this command wins: the
+  // wheels of a closed device stand still.
   if (!is_open()) return kernel::Error{"closed while the command was applied"};
   cmd_.left = wheel_units_to_cm_per_s(values[0]);
   cmd_.right = wheel_units_to_cm_per_s(values[1]);

@@ -50,25 +50,26 @@ class SimIrSensor final : public robot::Sensor {
   }
 };
 
-// What has_listener() says, mirrored into a flag of the world runner's: a runner that publishes
-// a pose or ground reading only to a sensor some task listens to reads its robots' flags from one
-// dense array, not from every robot's sensor object at every step. Shared: a task may hold the
-// sensor after the runner is gone.
-class ListenerFlag {
- public:
-  explicit ListenerFlag(std::shared_ptr<std::atomic<bool>> flag) : flag_(std::move(flag)) {}
-  void set(bool listening) const {
-    if (flag_) flag_->store(listening, std::memory_order_relaxed);
+// A simulated sensor whose has_listener() is mirrored into `heard`, a flag of the world runner's
+// (none: not mirrored): a runner that publishes a pose or ground reading only to a sensor some
+// task listens to reads its robots' flags from one dense array, not from every robot's sensor
+// object at every step. Shared: a task may hold the sensor after the runner is gone.
+class ListenedSensor : public robot::Sensor {
+ protected:
+  ListenedSensor(std::string name, std::vector<robot::ChannelSpec> channels, std::shared_ptr<std::atomic<bool>> heard)
+      : robot::Sensor(std::move(name), std::move(channels)), heard_(std::move(heard)) {}
+  void on_listener_changed(bool listening) override {
+    if (heard_) heard_->store(listening, std::memory_order_relaxed);
   }
 
  private:
-  std::shared_ptr<std::atomic<bool>> flag_;
+  std::shared_ptr<std::atomic<bool>> heard_;
 };
 
-class SimPoseSensor final : public robot::Sensor {
+class SimPoseSensor final : public ListenedSensor {
  public:
-  // The channels' ranges are the arena's (plus a margin: a pose is never clamped). `heard`, when
-  // given, follows has_listener() (ListenerFlag).
+  // The channels' ranges are the arena's (plus a margin: a pose is never clamped). `heard`: see
+  // ListenedSensor.
   SimPoseSensor(std::string name, double arena_width, double arena_height,
                 std::shared_ptr<std::atomic<bool>> heard = nullptr);
 
@@ -77,29 +78,17 @@ class SimPoseSensor final : public robot::Sensor {
     const float v[3] = {static_cast<float>(pose.x), static_cast<float>(pose.y), static_cast<float>(pose.theta)};
     return publish(std::span<const float>(v, 3), time);
   }
-
- protected:
-  void on_listener_changed(bool listening) override { heard_.set(listening); }
-
- private:
-  ListenerFlag heard_;
 };
 
-class SimGroundSensor final : public robot::Sensor {
+class SimGroundSensor final : public ListenedSensor {
  public:
-  // `heard`, when given, follows has_listener() (ListenerFlag).
+  // `heard`: see ListenedSensor.
   explicit SimGroundSensor(std::string name = "ground", std::shared_ptr<std::atomic<bool>> heard = nullptr);
 
   static std::vector<robot::ChannelSpec> channel_specs();
   robot::PublishResult publish_readings(const GroundReadings& readings, kernel::Time time) {
     return publish(std::span<const float>(readings.data(), readings.size()), time);
   }
-
- protected:
-  void on_listener_changed(bool listening) override { heard_.set(listening); }
-
- private:
-  ListenerFlag heard_;
 };
 
 // The newest wheel command, in the world's units.

@@ -110,7 +110,7 @@ class WorldRunner final : public PeriodicRunner {
   std::vector<std::shared_ptr<SimWheels>> wheels_;
   std::vector<std::shared_ptr<SimPoseSensor>> pose_;
   std::vector<std::shared_ptr<SimGroundSensor>> ground_;
-  // Robot i's pose and ground sensor have a listener (ListenerFlag): read at every step.
+  // Robot i's pose and ground sensor have a listener (ListenedSensor): read at every step.
   std::shared_ptr<std::atomic<bool>[]> pose_heard_, ground_heard_;
 
   std::mutex world_mu_;
