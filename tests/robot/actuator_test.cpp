@@ -1,6 +1,7 @@
 #include "symb/robot/actuator.hpp"
 
 #include <limits>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -20,7 +21,8 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // Three LEDs, brightness 0..1; remembers what reached the "hardware".
 class FakeLeds final : public Actuator {
  public:
-  FakeLeds() : Actuator("leds", {{"red", "", 0, 1}, {"green", "", 0, 1}, {"blue", "", 0, 1}}) {}
+  explicit FakeLeds(DeviceThreads threads = DeviceThreads::kAny)
+      : Actuator("leds", {{"red", "", 0, 1}, {"green", "", 0, 1}, {"blue", "", 0, 1}}, threads) {}
   std::vector<std::vector<float>> applied;
   bool fail = false;
 
@@ -59,6 +61,31 @@ TEST(Actuator, AppliesAtOnceClampedAndKeepsTheOutputOnBadInput) {
   EXPECT_EQ(s.not_open, 1u);
   EXPECT_EQ(s.driver_errors, 1u);
   EXPECT_EQ(s.clamped_values, 2u);
+}
+
+// Without its lock (a simulated robot's, called from one context at a time) an actuator conditions,
+// applies, refuses and counts exactly as with it.
+TEST(Actuator, OneCallerAtATimeNeedsNoLockAndBehavesTheSame) {
+  FakeLeds locked;
+  FakeLeds unlocked(DeviceThreads::kOneAtATime);
+  EXPECT_EQ(locked.threads(), DeviceThreads::kAny);
+  EXPECT_EQ(unlocked.threads(), DeviceThreads::kOneAtATime);
+  for (FakeLeds* leds : {&locked, &unlocked}) {
+    EXPECT_FALSE(leds->set(std::vector<float>{1, 1, 1}));  // closed
+    ASSERT_TRUE(leds->open());
+    EXPECT_EQ(*leds->set(std::vector<float>{0.5f, 2.0f, -1.0f}), 2u);
+    EXPECT_FALSE(leds->set(std::vector<float>{kNaN, 0, 0}));
+    leds->fail = true;
+    EXPECT_FALSE(leds->set(std::vector<float>{0.1f, 0.1f, 0.1f}));
+  }
+  EXPECT_EQ(unlocked.output(), (std::vector<float>{0.5f, 1.0f, 0.0f}));
+  EXPECT_EQ(unlocked.output(), locked.output());
+  EXPECT_EQ(unlocked.applied, locked.applied);
+  const ActuatorStats a = locked.stats(), b = unlocked.stats();
+  EXPECT_EQ(b.commands, 4u);
+  EXPECT_EQ(b.applied, 1u);
+  EXPECT_EQ(std::tie(a.commands, a.applied, a.rejected, a.not_open, a.driver_errors, a.clamped_values),
+            std::tie(b.commands, b.applied, b.rejected, b.not_open, b.driver_errors, b.clamped_values));
 }
 
 TEST(Actuator, IoctlsSetAndShowTheOutput) {

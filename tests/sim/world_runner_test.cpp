@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "symb/kernel/lockstep_executor.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
@@ -222,6 +223,28 @@ TEST(WorldRunner, RejectsABadPeriod) {
   EnkiWorld world(arena(), 1);
   EXPECT_THROW(WorldRunner(ex, world, {.period = 0ms}), std::invalid_argument);
   EXPECT_THROW(WorldRunner(ex, world, {.period = 2s}), std::invalid_argument);
+}
+
+// A robot's devices lock only where two threads may call them at once: under the thread executor.
+// Under the virtual-time and lockstep executors every call comes from their contexts, one at a
+// time, and the lock (a locked instruction per call, several calls a robot and step) is skipped.
+TEST(WorldRunner, ItsDevicesLockOnlyUnderAConcurrentExecutor) {
+  const auto threads_of = [](kernel::Executor& ex) {
+    EnkiWorld world(arena(), 1);
+    world.add_robot("a", RobotKind::kThymio2, {50, 100, 0});
+    WorldRunner runner(ex, world);
+    const std::vector<robot::DeviceThreads> t{runner.ir_sensor(0)->threads(), runner.wheels(0)->threads(),
+                                              runner.pose_sensor(0)->threads(), runner.ground_sensor(0)->threads()};
+    return t;
+  };
+  using robot::DeviceThreads;
+  const std::vector<DeviceThreads> any(4, DeviceThreads::kAny), one(4, DeviceThreads::kOneAtATime);
+  kernel::ThreadExecutor threads;
+  EXPECT_EQ(threads_of(threads), any);
+  kernel::VirtualTimeExecutor virtual_time;
+  EXPECT_EQ(threads_of(virtual_time), one);
+  kernel::LockstepExecutor lockstep({.threads = 2});
+  EXPECT_EQ(threads_of(lockstep), one);
 }
 
 TEST(WorldRunner, DrivesRobotsUnderTheThreadExecutor) {

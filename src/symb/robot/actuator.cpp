@@ -16,8 +16,11 @@ using kernel::Error;
 
 // --- Actuator --------------------------------------------------------------------------------------
 
-Actuator::Actuator(std::string name, std::vector<ChannelSpec> channels)
-    : io::Device(std::move(name)), channels_(std::move(channels)), ranges_(ranges_of(channels_)) {
+Actuator::Actuator(std::string name, std::vector<ChannelSpec> channels, DeviceThreads threads)
+    : io::Device(std::move(name)),
+      channels_(std::move(channels)),
+      ranges_(ranges_of(channels_)),
+      mu_(threads == DeviceThreads::kAny) {
   if (auto st = validate_channels(channels_); !st)
     throw std::invalid_argument("actuator '" + this->name() + "': " + st.error());
   output_.resize(channels_.size());

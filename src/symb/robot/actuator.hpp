@@ -10,7 +10,9 @@
 //    output stays on the hardware. A half-applied command (three LEDs of four) is never seen.
 //  - output() is what the hardware was last told, which is what the shell shows.
 //  - set() is thread-safe (a task and the shell may both drive one LED bar); commands are
-//    applied one at a time, in the order they take the actuator's lock.
+//    applied one at a time, in the order they take the actuator's lock. An actuator made
+//    DeviceThreads::kOneAtATime (a simulated robot's, under a non-concurrent executor) has no lock
+//    and is called from one context at a time.
 //  - The sink counts and logs (at a limited rate) what it had to clamp or reject; it never
 //    faults on bad input.
 //  - The sink's watchdog (Options::timeout, 0 = off): when no command has been applied for
@@ -33,11 +35,13 @@
 
 #include "symb/io/device.hpp"
 #include "symb/kernel/counter.hpp"
+#include "symb/kernel/optional_mutex.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/os/message.hpp"
 #include "symb/os/task.hpp"
 #include "symb/os/warning_limiter.hpp"
 #include "symb/robot/channel_spec.hpp"
+#include "symb/robot/device_threads.hpp"
 
 namespace symb::robot {
 
@@ -53,7 +57,8 @@ struct ActuatorStats {
 class Actuator : public io::Device {
  public:
   // Throws std::invalid_argument on a bad channel list (see validate_channels).
-  Actuator(std::string name, std::vector<ChannelSpec> channels);
+  // `threads`: kOneAtATime skips the data lock (device_threads.hpp).
+  Actuator(std::string name, std::vector<ChannelSpec> channels, DeviceThreads threads = DeviceThreads::kAny);
 
   const std::vector<ChannelSpec>& channels() const { return channels_; }
 
@@ -63,6 +68,7 @@ class Actuator : public io::Device {
   // The values last applied; before the first set(), each channel's range-clamped zero.
   std::vector<float> output() const;
   ActuatorStats stats() const;
+  DeviceThreads threads() const { return mu_.enabled() ? DeviceThreads::kAny : DeviceThreads::kOneAtATime; }
 
   // A plain open flag; drivers that must start hardware override these.
   kernel::Status open() override;
@@ -76,13 +82,13 @@ class Actuator : public io::Device {
   // The lock apply() runs under. A driver whose state written by apply() is read from elsewhere (a
   // simulator taking the newest command at its step) reads it under this lock too, rather than
   // taking a lock of its own inside this one at every command.
-  std::mutex& apply_mutex() const { return mu_; }
+  kernel::OptionalMutex& apply_mutex() const { return mu_; }
 
  private:
   const std::vector<ChannelSpec> channels_;
   const std::vector<ChannelRange> ranges_;  // channels_' ranges, packed: what set() reads
   std::atomic<bool> open_{false};
-  mutable std::mutex mu_;  // output_, stats_ and the driver's apply()
+  mutable kernel::OptionalMutex mu_;  // output_, stats_ and the driver's apply(); off for kOneAtATime
   std::vector<float> output_;
   ActuatorStats stats_;
 };

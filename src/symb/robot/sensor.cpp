@@ -19,6 +19,7 @@ Sensor::Sensor(std::string name, std::vector<ChannelSpec> channels, Options opti
     : io::Device(std::move(name)),
       channels_(std::move(channels)),
       ranges_(ranges_of(channels_)),
+      mu_(options.threads == DeviceThreads::kAny),
       mailbox_capacity_(options.mailbox) {
   if (auto st = validate_channels(channels_); !st)
     throw std::invalid_argument("sensor '" + this->name() + "': " + st.error());

@@ -42,6 +42,7 @@
 
 #include "symb/io/device.hpp"
 #include "symb/kernel/counter.hpp"
+#include "symb/kernel/optional_mutex.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/ring_buffer.hpp"
 #include "symb/kernel/time.hpp"
@@ -49,6 +50,7 @@
 #include "symb/os/task.hpp"
 #include "symb/os/warning_limiter.hpp"
 #include "symb/robot/channel_spec.hpp"
+#include "symb/robot/device_threads.hpp"
 
 namespace symb::robot {
 
@@ -96,7 +98,8 @@ enum class PublishResult : std::uint8_t { kQueued, kUnheard, kRejected, kNotOpen
 class Sensor : public io::Device {
  public:
   struct Options {
-    std::size_t mailbox = 8;  // samples held for the task between two of its runs (>= 1)
+    std::size_t mailbox = 8;                      // samples held for the task between two of its runs (>= 1)
+    DeviceThreads threads = DeviceThreads::kAny;  // kOneAtATime: no data lock (device_threads.hpp)
   };
 
   // Throws std::invalid_argument on a bad channel list (see validate_channels): a driver's
@@ -112,8 +115,9 @@ class Sensor : public io::Device {
   void close() override;
   bool is_open() const override { return open_.load(std::memory_order_acquire); }
 
-  // For the driver, from any thread, at any time (the "interrupt"): one value per channel,
-  // sampled at `time`. Never blocks for long (a short lock), never throws.
+  // For the driver, from any thread (one context at a time for DeviceThreads::kOneAtATime), at
+  // any time (the "interrupt"): one value per channel, sampled at `time`. Never blocks for long
+  // (a short lock), never throws.
   PublishResult publish(std::span<const float> values, kernel::Time time) { return publish(values, nullptr, time); }
   // ... with a blob that travels with the numbers (a rejected sample drops it too).
   PublishResult publish(std::span<const float> values, std::shared_ptr<const os::Blob> blob, kernel::Time time);
@@ -123,6 +127,7 @@ class Sensor : public io::Device {
   std::optional<SensorSample> latest() const;
   // Whether a SensorTask is attached (samples are queued, not unheard).
   bool has_listener() const;
+  DeviceThreads threads() const { return mu_.enabled() ? DeviceThreads::kAny : DeviceThreads::kOneAtATime; }
   // A hint with no effect on behaviour (os::Task::prefetch): asks the memory system for what
   // publishing and taking samples read: level 0 this object, level 1 (a while later) the channel
   // ranges and the mailbox's head. From the thread that takes the samples (the head is its own).
@@ -154,7 +159,7 @@ class Sensor : public io::Device {
   // Mirrors `notify_ != nullptr` for has_listener(), which a simulator asks every step.
   std::atomic<bool> listening_{false};
 
-  mutable std::mutex mu_;  // everything below
+  mutable kernel::OptionalMutex mu_;  // everything below; off for DeviceThreads::kOneAtATime
   // Made at the first attach: a sensor no task listens to (a simulated robot's pose and ground
   // drivers, in most scenarios) keeps only its latest sample.
   std::optional<kernel::RingBuffer<SensorSample>> mailbox_;

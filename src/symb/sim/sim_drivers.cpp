@@ -9,7 +9,8 @@ std::vector<robot::ChannelSpec> SimIrSensor::channel_specs() {
   return c;
 }
 
-SimIrSensor::SimIrSensor(std::string name) : robot::Sensor(std::move(name), channel_specs()) {}
+SimIrSensor::SimIrSensor(std::string name, robot::DeviceThreads threads)
+    : robot::Sensor(std::move(name), channel_specs(), {.threads = threads}) {}
 
 std::vector<robot::ChannelSpec> SimPoseSensor::channel_specs(double arena_width, double arena_height) {
   const float margin = 100.0f;
@@ -19,23 +20,25 @@ std::vector<robot::ChannelSpec> SimPoseSensor::channel_specs(double arena_width,
 }
 
 SimPoseSensor::SimPoseSensor(std::string name, double arena_width, double arena_height,
-                             std::shared_ptr<std::atomic<bool>> heard)
-    : ListenedSensor(std::move(name), channel_specs(arena_width, arena_height), std::move(heard)) {}
+                             std::shared_ptr<std::atomic<bool>> heard, robot::DeviceThreads threads)
+    : ListenedSensor(std::move(name), channel_specs(arena_width, arena_height), std::move(heard), threads) {}
 
 std::vector<robot::ChannelSpec> SimGroundSensor::channel_specs() {
   return {robot::ChannelSpec{"left", "reflectance", 0.0f, 1.0f},
           robot::ChannelSpec{"right", "reflectance", 0.0f, 1.0f}};
 }
 
-SimGroundSensor::SimGroundSensor(std::string name, std::shared_ptr<std::atomic<bool>> heard)
-    : ListenedSensor(std::move(name), channel_specs(), std::move(heard)) {}
+SimGroundSensor::SimGroundSensor(std::string name, std::shared_ptr<std::atomic<bool>> heard,
+                                 robot::DeviceThreads threads)
+    : ListenedSensor(std::move(name), channel_specs(), std::move(heard), threads) {}
 
 std::vector<robot::ChannelSpec> SimWheels::channel_specs() {
   return {robot::ChannelSpec{"left", "thymio", -kWheelUnitsMax, kWheelUnitsMax},
           robot::ChannelSpec{"right", "thymio", -kWheelUnitsMax, kWheelUnitsMax}};
 }
 
-SimWheels::SimWheels(std::string name) : robot::Actuator(std::move(name), channel_specs()) {}
+SimWheels::SimWheels(std::string name, robot::DeviceThreads threads)
+    : robot::Actuator(std::move(name), channel_specs(), threads) {}
 
 WheelCommand SimWheels::command() const {
   std::lock_guard lock(apply_mutex());

@@ -13,7 +13,9 @@
 //                top speed kMaxWheelSpeed (16.6 cm/s), linearly, so a controller written for the
 //                full range uses the full range. (On a real Thymio 500 is about 20 cm/s.)
 //
-// Both are thread-safe: the runner and the tasks may run on different threads (ThreadExecutor).
+// All are thread-safe (the runner and the tasks may run on different threads: ThreadExecutor)
+// unless made DeviceThreads::kOneAtATime, as the WorldRunner makes them under a non-concurrent
+// executor.
 #pragma once
 
 #include <atomic>
@@ -41,7 +43,7 @@ inline double cm_per_s_to_wheel_units(double cm_per_s) { return cm_per_s / kCmPe
 
 class SimIrSensor final : public robot::Sensor {
  public:
-  explicit SimIrSensor(std::string name = "ir");
+  explicit SimIrSensor(std::string name = "ir", robot::DeviceThreads threads = robot::DeviceThreads::kAny);
 
   static std::vector<robot::ChannelSpec> channel_specs();
   // For the runner: one reading of all 7 sensors at node time `time`.
@@ -56,8 +58,9 @@ class SimIrSensor final : public robot::Sensor {
 // object at every step. Shared: a task may hold the sensor after the runner is gone.
 class ListenedSensor : public robot::Sensor {
  protected:
-  ListenedSensor(std::string name, std::vector<robot::ChannelSpec> channels, std::shared_ptr<std::atomic<bool>> heard)
-      : robot::Sensor(std::move(name), std::move(channels)), heard_(std::move(heard)) {}
+  ListenedSensor(std::string name, std::vector<robot::ChannelSpec> channels, std::shared_ptr<std::atomic<bool>> heard,
+                 robot::DeviceThreads threads)
+      : robot::Sensor(std::move(name), std::move(channels), {.threads = threads}), heard_(std::move(heard)) {}
   void on_listener_changed(bool listening) override {
     if (heard_) heard_->store(listening, std::memory_order_relaxed);
   }
@@ -71,7 +74,8 @@ class SimPoseSensor final : public ListenedSensor {
   // The channels' ranges are the arena's (plus a margin: a pose is never clamped). `heard`: see
   // ListenedSensor.
   SimPoseSensor(std::string name, double arena_width, double arena_height,
-                std::shared_ptr<std::atomic<bool>> heard = nullptr);
+                std::shared_ptr<std::atomic<bool>> heard = nullptr,
+                robot::DeviceThreads threads = robot::DeviceThreads::kAny);
 
   static std::vector<robot::ChannelSpec> channel_specs(double arena_width, double arena_height);
   robot::PublishResult publish_pose(const Pose& pose, kernel::Time time) {
@@ -83,7 +87,8 @@ class SimPoseSensor final : public ListenedSensor {
 class SimGroundSensor final : public ListenedSensor {
  public:
   // `heard`: see ListenedSensor.
-  explicit SimGroundSensor(std::string name = "ground", std::shared_ptr<std::atomic<bool>> heard = nullptr);
+  explicit SimGroundSensor(std::string name = "ground", std::shared_ptr<std::atomic<bool>> heard = nullptr,
+                           robot::DeviceThreads threads = robot::DeviceThreads::kAny);
 
   static std::vector<robot::ChannelSpec> channel_specs();
   robot::PublishResult publish_readings(const GroundReadings& readings, kernel::Time time) {
@@ -100,7 +105,7 @@ struct WheelCommand {
 
 class SimWheels final : public robot::Actuator {
  public:
-  explicit SimWheels(std::string name = "wheels");
+  explicit SimWheels(std::string name = "wheels", robot::DeviceThreads threads = robot::DeviceThreads::kAny);
 
   static std::vector<robot::ChannelSpec> channel_specs();
   // What the runner applies at its next step. Any thread.

@@ -17,17 +17,21 @@ WorldRunner::WorldRunner(kernel::Executor& executor, World& world, Options optio
       world_(world),
       dt_(std::chrono::duration<double>(this->options().period).count()) {
   const std::size_t n = world_.robot_count();
+  // Under a non-concurrent executor every call to these devices comes from its contexts, one at a
+  // time: this runner's handler and robot i's node on lane i, each in its own phase of a window.
+  const auto threads = executor.concurrent() ? robot::DeviceThreads::kAny : robot::DeviceThreads::kOneAtATime;
   pose_heard_ = std::shared_ptr<std::atomic<bool>[]>(new std::atomic<bool>[n]());
   ground_heard_ = std::shared_ptr<std::atomic<bool>[]>(new std::atomic<bool>[n]());
   for (std::size_t i = 0; i < n; ++i) {
-    ir_.push_back(std::make_shared<SimIrSensor>("ir"));
-    wheels_.push_back(std::make_shared<SimWheels>("wheels"));
+    ir_.push_back(std::make_shared<SimIrSensor>("ir", threads));
+    wheels_.push_back(std::make_shared<SimWheels>("wheels", threads));
     // Each sensor shares the array and points at its own flag (the aliasing constructor).
     pose_.push_back(std::make_shared<SimPoseSensor>(
         "pose", world_.spec().width, world_.spec().height,
-        std::shared_ptr<std::atomic<bool>>(pose_heard_, &pose_heard_[static_cast<std::ptrdiff_t>(i)])));
+        std::shared_ptr<std::atomic<bool>>(pose_heard_, &pose_heard_[static_cast<std::ptrdiff_t>(i)]), threads));
     ground_.push_back(std::make_shared<SimGroundSensor>(
-        "ground", std::shared_ptr<std::atomic<bool>>(ground_heard_, &ground_heard_[static_cast<std::ptrdiff_t>(i)])));
+        "ground", std::shared_ptr<std::atomic<bool>>(ground_heard_, &ground_heard_[static_cast<std::ptrdiff_t>(i)]),
+        threads));
   }
   record_.robots.resize(n);
 }

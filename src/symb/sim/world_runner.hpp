@@ -24,10 +24,12 @@
 // notification is posted into the robot's idle lane at the step's instant t, the lane runs the
 // chain in its window [t, t + period) (in parallel with the other lanes), and step k + 1 at
 // t + period reads the wheels after every window has closed: the same instants, so the same run.
-// Robot i's devices must feed a node on executor.lane(i) (ScenarioSession builds them so): the
-// runner fills the step's records on the executor's threads (parallel()) and publishes robot i's
-// readings through for_each_lane_before_its_window(), which may hand lane i to another thread
-// for the call and make it first in the lane's window.
+// Robot i's devices must feed a node on executor.lane(i) (ScenarioSession builds them so), and
+// under a non-concurrent executor nothing else may call them (they have no lock:
+// robot::DeviceThreads::kOneAtATime; a shell reaches them as injected work). The runner fills
+// the step's records on the executor's threads (parallel()) and publishes robot i's readings
+// through for_each_lane_before_its_window(), which may hand lane i to another thread for the call
+// and make it first in the lane's window.
 // Under the ThreadExecutor everything happens in real time and the same chain takes as long as
 // it takes.
 //
