@@ -155,6 +155,8 @@ class Node {
   void inject(std::function<void()> fn) { executor_.inject(std::move(fn)); }
   // See kernel::Executor::on_own_context: true when node calls may be made here directly.
   bool on_own_context() const { return executor_.on_own_context(); }
+  // The executor the node runs on.
+  const kernel::Executor& executor() const { return executor_; }
 
   // --- accounting --------------------------------------------------------------------------------
   // Traffic into every task this node ever had, deleted ones included.

@@ -201,17 +201,20 @@ void SensorTask::on_start() {
   if (!sensor_->is_open())
     if (auto st = sensor_->open(); !st) log(os::LogLevel::kWarn, st.error());
   seen_ = sensor_->stats();
-  // The notifier runs on the driver's thread with the sensor locked, and the task detaches in
-  // on_stop under that same lock: while it runs, the task, the link and the node it names are
-  // alive. It captures two pointers, so std::function keeps it without a heap block of its own.
-  auto st = sensor_->attach([self = this, link = link_.get()] {
+  // The notifier runs inside publish(), under the sensor's lock (or, for a device called one
+  // context at a time, on that context), and the task detaches in on_stop under that same lock:
+  // while it runs, the task, the link and the node it names are alive. It captures two pointers,
+  // so std::function keeps it without a heap block of its own: the task and its node's executor,
+  // asked directly (through the link and the node, two more loads from memory in a swarm).
+  auto st = sensor_->attach([self = this, context = &node().executor()] {
     // A simulated device publishes on the executor's own context: the notification is made at
     // once, exactly where the injected one would have run, before any later event; the task is
     // running (it detaches in on_stop, under the lock this runs under), so it needs no lookup.
-    if (link->node->on_own_context()) {
+    if (context->on_own_context()) {
       self->notify();
       return;
     }
+    Link* link = self->link_.get();
     link->node->inject([weak = link->weak_from_this()] {
       if (auto alive = weak.lock()) (void)alive->node->notify(alive->self);
     });
