@@ -262,7 +262,12 @@ TEST(DdsBus, TheReceiversPriorityPolicyAndSuppressionApplyOnTheDirectPath) {
   // Refuse: a receiver that does not run keeps 8 and refuses the rest, counted at the receiver.
   ASSERT_TRUE(p.r2.suspend(p.sink).ok());
   send(20);
-  ASSERT_TRUE(eventually([&] { return books().attempted == 20 && books().in_flight == 8; }));
+  // Settled when the books also close: a message its sender's hook has counted may not have
+  // reached the bus's writer yet (the sink is called after the sender's lock is released).
+  ASSERT_TRUE(eventually([&] {
+    const RemoteHookBooks now = books();
+    return now.attempted == 20 && now.in_flight == 8 && now.closes();
+  }));
   EXPECT_EQ(books().dropped(HookDrop::kReceiver), 12u);
   EXPECT_TRUE(books().closes());
   ASSERT_TRUE(p.r2.resume(p.sink).ok());
@@ -272,7 +277,10 @@ TEST(DdsBus, TheReceiversPriorityPolicyAndSuppressionApplyOnTheDirectPath) {
   ASSERT_TRUE(p.r2.post(boss, numbers_on(0, os::Payload({-1.0f}))));
   ASSERT_TRUE(eventually([&] { return p.count->count.load() == 9; }));
   send(5);
-  ASSERT_TRUE(eventually([&] { return books().attempted == 25 && books().in_flight == 0; }));
+  ASSERT_TRUE(eventually([&] {
+    const RemoteHookBooks now = books();
+    return now.attempted == 25 && now.in_flight == 0 && now.closes();
+  }));
   const RemoteHookBooks b = books();
   EXPECT_EQ(b.delivered, 8u);
   EXPECT_EQ(b.dropped(HookDrop::kReceiver), 12u + 5u);
