@@ -4,8 +4,8 @@
 // A simulated robot whose world and node run on one non-concurrent executor (virtual-time,
 // lockstep) has every call made from that executor's contexts, one at a time, with a happens-before
 // between them (the lockstep executor's windows): kOneAtATime skips the lock. The lock is worth
-// skipping there: its locked instruction also waits for every load in flight, which in a swarm of
-// thousands, whose robots' state comes from memory, measured about 15 % of a robot's step.
+// skipping there: its locked instruction also waits for every load in flight, and a swarm's robots
+// took 5 % (10,000 robots, their state from memory) to 9 % (100) less CPU without it.
 // A device made kOneAtATime must not be called from any other thread (a shell command reaches it
 // as injected work, on the executor's context).
 #pragma once
