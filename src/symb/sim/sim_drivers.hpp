@@ -108,7 +108,7 @@ class SimWheels final : public robot::Actuator {
   explicit SimWheels(std::string name = "wheels", robot::DeviceThreads threads = robot::DeviceThreads::kAny);
 
   static std::vector<robot::ChannelSpec> channel_specs();
-  // What the runner applies at its next step. Any thread.
+  // What the runner applies at its next step. Any thread (for kOneAtATime, the device's context).
   WheelCommand command() const;
   // Closing the device stops the wheels, as a motor driver that loses its enable line does.
   void close() override;
