@@ -173,11 +173,11 @@ void VirtualTimeExecutor::prefetch(int stage) const {
       prefetch_bytes(slots_.data(), slots_.size() * sizeof(slots_[0]));
       break;
     case 2:
-      for (const auto& s : slots_) __builtin_prefetch(s.get());
+      for (const auto& s : slots_) prefetch_line(s.get());
       break;
     case 3:
       for (const auto& s : slots_)
-        if (s->activity != nullptr) __builtin_prefetch(s->activity);
+        if (s->activity != nullptr) prefetch_line(s->activity);
       break;
     default:
       for (const auto& s : slots_)

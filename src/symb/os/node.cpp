@@ -100,7 +100,7 @@ void TaskRecord::prefetch(int level) const {
       if (task) kernel::prefetch_bytes(task.get(), 2 * kernel::kCacheLine);
       kernel::prefetch_bytes(&queue.at(0), sizeof(Message));
       if (queue.capacity() > 1) kernel::prefetch_bytes(&queue.at(1), sizeof(Message));
-      if (!hooks.empty()) __builtin_prefetch(hooks.data());
+      if (!hooks.empty()) kernel::prefetch_line(hooks.data());
       if (inputs) kernel::prefetch_bytes(inputs.get(), sizeof(InputHooks));
       break;
     default:
