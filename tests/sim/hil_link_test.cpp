@@ -226,6 +226,39 @@ TEST(BoardLinkTest, AnswersEchoTheSequenceAndBadInputIsCountedNotFatal) {
   EXPECT_TRUE(board.logged("malformed"));
 }
 
+// A board that falls behind (here its ir task held back, as a starved process would be) keeps
+// the newest IR frames, and its books say how many it let go: every frame sent is handled or
+// stale, and every skipped sequence number is a stale frame.
+TEST(BoardLinkTest, ABoardThatFallsBehindKeepsTheNewestFramesAndCountsTheStaleOnes) {
+  auto pty = io::PtyPair::open("hil");
+  ASSERT_TRUE(pty.ok()) << pty.error();
+  Board board(pty->slave);
+  FakeSim sim{pty->master, io::FrameDecoder(256), {}};
+  const os::TaskId ir = *board.node.find("ir");
+  const auto offered = [&] { return board.node.info(ir)->traffic.attempted; };
+
+  sim.send(0, 10, 0);
+  ASSERT_TRUE(sim.read_until([&] { return sim.answered(0, 10.0f); }));
+  ASSERT_TRUE(board.node.suspend(ir).ok());
+  constexpr std::uint32_t kBurst = 20;
+  for (std::uint32_t seq = 1; seq <= kBurst; ++seq) sim.send(seq, static_cast<float>(seq), 0);
+  ASSERT_TRUE(sim.read_until([&] { return offered() == kBurst + 1; })) << offered() << " frames offered";
+  const std::size_t capacity = board.node.info(ir)->queue_capacity;
+  ASSERT_LT(capacity, kBurst);
+  ASSERT_TRUE(board.node.resume(ir).ok());
+  ASSERT_TRUE(sim.read_until([&] { return sim.answered(kBurst, static_cast<float>(kBurst)); }));
+  // The count is refreshed at the ir task's next tick.
+  ASSERT_TRUE(sim.read_until([&] { return board.link->stats().stale == kBurst - capacity; }))
+      << board.link->stats().stale;
+  const BoardLinkStats s = board.link->stats();
+  EXPECT_EQ(s.ir_frames, 1 + capacity);
+  EXPECT_EQ(s.ir_frames + s.stale, kBurst + 1u);
+  EXPECT_EQ(s.missed, s.stale);
+  EXPECT_EQ(s.last_seq, kBurst);
+  EXPECT_FALSE(sim.answered(1, 1.0f));  // the oldest went unhandled
+  EXPECT_NE(describe(s).find("missed (" + std::to_string(s.stale) + " stale)"), std::string::npos) << describe(s);
+}
+
 TEST(BoardLinkTest, SilenceIsReportedTheWheelsStopAndFramesBringItBack) {
   auto pty = io::PtyPair::open("hil");
   ASSERT_TRUE(pty.ok()) << pty.error();

@@ -196,6 +196,7 @@ class HilIrTask final : public os::Task {
   }
 
   void on_tick() override {
+    count_stale();
     if (!sequence_.lost(now())) return;
     bump([](BoardLinkStats& s) {
       ++s.link_losses;
@@ -204,11 +205,22 @@ class HilIrTask final : public os::Task {
     log(os::LogLevel::kWarn, sequence_.lost_note(now()));
   }
 
+  void on_stop() override { count_stale(); }
+
  private:
   template <class F>
   void bump(F&& f) {
     std::lock_guard lock(shared_->mu);
     f(shared_->stats);
+  }
+
+  // The frames this task's queue let go unhandled (a keep-newest hook overwrites the oldest):
+  // the node's own books for the task, read here rather than counted twice.
+  void count_stale() {
+    const auto info = node().info(id());
+    if (!info) return;
+    const std::uint64_t stale = info->traffic.overwritten;
+    bump([stale](BoardLinkStats& s) { s.stale = stale; });
   }
 
   std::shared_ptr<LinkShared> shared_;
@@ -342,20 +354,21 @@ BoardLinkStats BoardLink::stats() const {
 
 std::string describe(const BoardLinkStats& s) {
   char buf[600];
-  std::snprintf(buf, sizeof buf,
-                "frames %llu good, %llu bad (crc %llu), %llu missed, %llu out of order; link %s (%llu lost, "
-                "%llu back), last seq %u; wheels %llu commands, %llu refused, %llu watchdog stops; frames %llu "
-                "sent, %llu not sent; serial line %s (%llu lost, %llu reopened, down %lld ms in all)",
-                static_cast<unsigned long long>(s.ir_frames), static_cast<unsigned long long>(s.bad_frames()),
-                static_cast<unsigned long long>(s.decoder.crc_errors), static_cast<unsigned long long>(s.missed),
-                static_cast<unsigned long long>(s.out_of_order), s.link_up ? "up" : "down",
-                static_cast<unsigned long long>(s.link_losses), static_cast<unsigned long long>(s.link_recoveries),
-                static_cast<unsigned>(s.last_seq), static_cast<unsigned long long>(s.wheel_commands),
-                static_cast<unsigned long long>(s.wheel_rejected), static_cast<unsigned long long>(s.watchdog_stops),
-                static_cast<unsigned long long>(s.frames_written), static_cast<unsigned long long>(s.frames_unsent),
-                s.line_open ? "open" : "DOWN", static_cast<unsigned long long>(s.line_losses),
-                static_cast<unsigned long long>(s.line_reopens),
-                static_cast<long long>(kernel::to_milliseconds(s.line_down)));
+  std::snprintf(
+      buf, sizeof buf,
+      "frames %llu good, %llu bad (crc %llu), %llu missed (%llu stale), %llu out of order; link %s (%llu lost, "
+      "%llu back), last seq %u; wheels %llu commands, %llu refused, %llu watchdog stops; frames %llu "
+      "sent, %llu not sent; serial line %s (%llu lost, %llu reopened, down %lld ms in all)",
+      static_cast<unsigned long long>(s.ir_frames), static_cast<unsigned long long>(s.bad_frames()),
+      static_cast<unsigned long long>(s.decoder.crc_errors), static_cast<unsigned long long>(s.missed),
+      static_cast<unsigned long long>(s.stale), static_cast<unsigned long long>(s.out_of_order),
+      s.link_up ? "up" : "down", static_cast<unsigned long long>(s.link_losses),
+      static_cast<unsigned long long>(s.link_recoveries), static_cast<unsigned>(s.last_seq),
+      static_cast<unsigned long long>(s.wheel_commands), static_cast<unsigned long long>(s.wheel_rejected),
+      static_cast<unsigned long long>(s.watchdog_stops), static_cast<unsigned long long>(s.frames_written),
+      static_cast<unsigned long long>(s.frames_unsent), s.line_open ? "open" : "DOWN",
+      static_cast<unsigned long long>(s.line_losses), static_cast<unsigned long long>(s.line_reopens),
+      static_cast<long long>(kernel::to_milliseconds(s.line_down)));
   return buf;
 }
 
