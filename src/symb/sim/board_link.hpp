@@ -78,12 +78,12 @@ struct BoardLinkStats {
   std::uint64_t malformed = 0;     // good frames that are not IR frames (count, sequence, NaN)
   std::uint64_t out_of_order = 0;  // sequence not newer than the last one: dropped
   std::uint64_t missed = 0;        // sequence numbers skipped (lost or corrupted frames, stale below)
+  std::uint64_t restarts = 0;      // frames with seq 0 after others: the simulator started anew
+  std::uint64_t clamped = 0;       // IR values moved into [0, kIrMax]
   // Frames pushed out of the ir task's queue unhandled by newer ones: the board fell behind (a
   // starved process) and sensor data keeps the newest. Each is also a skipped sequence number, so
   // missed = corrupted + stale + lost on the line. Refreshed at every control period and at stop.
   std::uint64_t stale = 0;
-  std::uint64_t restarts = 0;      // frames with seq 0 after others: the simulator started anew
-  std::uint64_t clamped = 0;       // IR values moved into [0, kIrMax]
   std::uint64_t link_losses = 0;
   std::uint64_t link_recoveries = 0;
   bool link_up = false;

@@ -276,10 +276,9 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   ctx.out << "board: " << sim::describe(s) << "\n"
           << "board-stats: good=" << s.ir_frames << " bad=" << s.bad_frames() << " missed=" << s.missed
           << " stale=" << s.stale << " out_of_order=" << s.out_of_order << " malformed=" << s.malformed
-          << " losses=" << s.link_losses
-          << " recoveries=" << s.link_recoveries << " wheels=" << s.wheel_commands << " watchdog=" << s.watchdog_stops
-          << " bytes_in=" << s.bytes_in << " sent=" << s.frames_written << " unsent=" << s.frames_unsent
-          << " line_losses=" << s.line_losses << " line_reopens=" << s.line_reopens
+          << " losses=" << s.link_losses << " recoveries=" << s.link_recoveries << " wheels=" << s.wheel_commands
+          << " watchdog=" << s.watchdog_stops << " bytes_in=" << s.bytes_in << " sent=" << s.frames_written
+          << " unsent=" << s.frames_unsent << " line_losses=" << s.line_losses << " line_reopens=" << s.line_reopens
           << " line_down_ms=" << std::chrono::duration_cast<std::chrono::milliseconds>(s.line_down).count()
           << " line_open=" << (s.line_open ? 1 : 0) << "\n";
   port->close();
