@@ -193,17 +193,27 @@ TEST(ViewServer, AWrongTokenIsRefusedTheRightOneGetsFramesBothWays) {
   EXPECT_EQ(opened.load(), 1);
 }
 
-TEST(ViewServer, AStalledClientGetsFramesDroppedAndNeverHoldsTheSender) {
+// Starts `server`, queueing `queue_frames` per client, and connects `client` to it through a 4 KB
+// receive buffer (frames soon back up into the server's queue). The caller declares the server
+// first, so that the client closes first and the server's stop does not wait for it.
+void start_with_client(std::unique_ptr<view::ViewServer>& server, std::size_t queue_frames, WsTestClient& client) {
   view::ViewServerOptions options;
-  options.queue_frames = 16;
-  auto server = view::ViewServer::start(options, {});
-  ASSERT_TRUE(server) << server.error();
-  view::ViewServer& s = **server;
+  options.queue_frames = queue_frames;
+  auto started = view::ViewServer::start(options, {});
+  ASSERT_TRUE(started) << started.error();
+  server = std::move(started).value();
+  client.open(server->port(), "/ws?token=" + server->token(), 4096);
+  ASSERT_TRUE(client.upgraded());
+  for (int i = 0; i < 2000 && server->client_count() == 0; ++i) std::this_thread::sleep_for(5ms);
+  ASSERT_EQ(server->client_count(), 1u);
+}
+
+TEST(ViewServer, AStalledClientGetsFramesDroppedAndNeverHoldsTheSender) {
+  std::unique_ptr<view::ViewServer> server;
   WsTestClient stalled;  // upgrades, then never reads
-  stalled.open(s.port(), "/ws?token=" + s.token(), 4096);
-  ASSERT_TRUE(stalled.upgraded());
-  for (int i = 0; i < 200 && s.client_count() == 0; ++i) std::this_thread::sleep_for(5ms);
-  ASSERT_EQ(s.client_count(), 1u);
+  start_with_client(server, 16, stalled);
+  ASSERT_FALSE(HasFatalFailure());
+  view::ViewServer& s = *server;
   // 2,000 frames of 64 KB: 128 MB, far beyond what the socket buffers hold. Every broadcast
   // returns; what the client could not take is dropped and counted.
   const std::string frame(64 * 1024, 'x');
@@ -213,6 +223,67 @@ TEST(ViewServer, AStalledClientGetsFramesDroppedAndNeverHoldsTheSender) {
   EXPECT_GT(st.frames.dropped, 1000u);
   EXPECT_LE(st.frames.queued, 16u);
   EXPECT_EQ(st.frames.pushed, st.frames.sent + st.frames.dropped + st.frames.queued);
+}
+
+// The end of a run waits for a client that keeps reading, however slowly: 64 frames of 128 KB (8
+// MB, twice what Linux lets a socket's buffers hold) read one every 40 ms take over a second,
+// more than a fixed half-second wait gave them. The last frame (a run's "finished") arrives.
+TEST(ViewServer, FlushWaitsForAClientThatKeepsReadingSlowly) {
+  std::unique_ptr<view::ViewServer> server;
+  WsTestClient slow;
+  start_with_client(server, 64, slow);
+  ASSERT_FALSE(HasFatalFailure());
+  view::ViewServer& s = *server;
+  const std::string frame(128 * 1024, 'x');
+  for (int i = 0; i < 63; ++i) s.broadcast(frame);
+  s.broadcast("last");
+  std::atomic<int> read{0};
+  std::atomic<bool> got_last{false};
+  std::thread reader([&] {
+    while (auto f = slow.read_frame(5000ms)) {
+      ++read;
+      if (*f == "last") {
+        got_last = true;
+        return;
+      }
+      std::this_thread::sleep_for(40ms);
+    }
+  });
+  const auto started = std::chrono::steady_clock::now();
+  const bool flushed = s.flush(2s, 60s);
+  const auto took = std::chrono::steady_clock::now() - started;
+  reader.join();
+  EXPECT_TRUE(flushed);
+  EXPECT_TRUE(got_last) << read.load() << " frames read";
+  EXPECT_GT(took, 500ms) << "the client was not slow: nothing here tells the flush from a fixed wait";
+  const auto st = s.stats();
+  EXPECT_EQ(st.frames.queued, 0u);
+  EXPECT_EQ(st.frames.pushed, st.frames.sent + st.frames.dropped);
+}
+
+// A client that reads nothing is given up on once it has taken no frame for the stall time, not
+// waited for until the limit.
+TEST(ViewServer, FlushGivesUpOnAStalledClient) {
+  std::unique_ptr<view::ViewServer> server;
+  WsTestClient stalled;
+  start_with_client(server, 16, stalled);
+  ASSERT_FALSE(HasFatalFailure());
+  view::ViewServer& s = *server;
+  // Frames until the socket's buffers are full and the sender is stuck in its write: no frame has
+  // left the queue for four rounds (a sender that is only slow to be scheduled moves on).
+  const std::string frame(64 * 1024, 'x');
+  std::uint64_t sent = ~std::uint64_t{0};
+  for (int round = 0, still = 0; round < 400 && still < 4; ++round) {
+    still = s.stats().frames.sent == sent ? still + 1 : 0;
+    sent = s.stats().frames.sent;
+    for (int i = 0; i < 16; ++i) s.broadcast(frame);
+    std::this_thread::sleep_for(50ms);
+  }
+  ASSERT_GT(s.stats().frames.queued, 0u);
+  const auto started = std::chrono::steady_clock::now();
+  EXPECT_FALSE(s.flush(300ms, 60s));
+  EXPECT_LT(std::chrono::steady_clock::now() - started, 30s);
+  EXPECT_GT(s.stats().frames.queued, 0u);
 }
 
 // Reads a view's frames as a browser would, from the moment the run announces its URL ("view:

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <charconv>
 #include <string_view>
-#include <thread>
 
 #include "symb/io/loopback_stream.hpp"
 #include "symb/shell/shell_task.hpp"
@@ -27,10 +26,13 @@ constexpr std::size_t kMaxSpikesPerFrame = 4000;  // per detail frame, all spiki
 constexpr std::size_t kMaxSpikingTasks = 8;       // of the robot shown
 // Channels of an evolution task that are its fitness (one_plus_one, mu_plus_one).
 constexpr std::string_view kFitnessChannels[] = {"fitness", "champion_fitness", "best_fitness", "mean_fitness"};
-constexpr std::size_t kMaxLogLines = 200;        // per frame; the rest in the next
-constexpr std::size_t kLogBacklog = 50;          // lines shown from before a robot was chosen
-constexpr std::size_t kMaxLineBytes = 4096;      // a shell line from the page
-constexpr kernel::Duration kFlushLimit = 500ms;  // finish(): how long the last frames may take
+constexpr std::size_t kMaxLogLines = 200;    // per frame; the rest in the next
+constexpr std::size_t kLogBacklog = 50;      // lines shown from before a robot was chosen
+constexpr std::size_t kMaxLineBytes = 4096;  // a shell line from the page
+// finish(): how long the last frames may take in all, and how long a client may take none of them
+// before it counts as stalled (ViewServer::flush).
+constexpr kernel::Duration kFlushLimit = 10s;
+constexpr kernel::Duration kFlushStall = 2s;
 
 double view_seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
 
@@ -385,9 +387,7 @@ void LiveView::finish() {
   if (server_->client_count() == 0) return;
   send_details(true);
   // The last frames are worth a moment: the page then says the run is over.
-  const auto until = std::chrono::steady_clock::now() + kFlushLimit;
-  while (server_->stats().frames.queued > 0 && std::chrono::steady_clock::now() < until)
-    std::this_thread::sleep_for(10ms);
+  (void)server_->flush(kFlushStall, kFlushLimit);
 }
 
 }  // namespace symb::apps::view

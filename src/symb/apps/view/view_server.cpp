@@ -251,6 +251,23 @@ void ViewServer::broadcast(const std::string& frame) {
   for (auto& c : clients) c->queue.push(frame);
 }
 
+bool ViewServer::flush(kernel::Duration stall, kernel::Duration limit) const {
+  // Progress, not a fixed moment: a client reading as fast as a busy machine lets it can take
+  // longer than any fixed wait, and one that reads nothing should not hold the run's end for long.
+  const auto started = std::chrono::steady_clock::now();
+  auto progress = started;
+  FrameQueueStats frames = stats().frames;
+  while (frames.queued > 0) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - progress >= stall || now - started >= limit) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    const FrameQueueStats next = stats().frames;
+    if (next.sent != frames.sent) progress = std::chrono::steady_clock::now();
+    frames = next;
+  }
+  return true;
+}
+
 ViewServerStats ViewServer::stats() const {
   std::lock_guard lock(mu_);
   ViewServerStats s = stats_;

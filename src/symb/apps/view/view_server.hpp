@@ -80,6 +80,10 @@ class ViewServer {
   // Clients connected now; cheap enough to ask at every step.
   std::size_t client_count() const { return clients_live_.load(std::memory_order_relaxed); }
   ViewServerStats stats() const;
+  // Waits while frames are queued for the clients and they keep taking them: gives up once none
+  // was taken for `stall` (a stalled client) or after `limit` in all. Returns whether every frame
+  // queued went out. For the end of a run, whose last frames say that it is over.
+  bool flush(kernel::Duration stall, kernel::Duration limit) const;
 
  private:
   struct Client;
