@@ -160,10 +160,12 @@ TEST(ThymioAseba, ANodeThatStopsAnsweringIsLostAndToldToStop) {
   ASSERT_TRUE(node.listen());
   AsebaThymioOptions o;
   o.control_period = 10ms;
-  o.reply_timeout = 10ms;
+  // Long beside the fake node's answer, so that only silence is a missed read, not a fake node
+  // that the other tests on a busy box kept off its core for a moment.
+  o.reply_timeout = 300ms;
   o.lost_periods = 3;
-  o.reopen_first = 1s;  // no reconnect within the test
-  o.reopen_most = 1s;
+  o.reopen_first = 5s;  // no reconnect within the test
+  o.reopen_most = 5s;
   auto t = AsebaThymio::create(connect_to(node), o);
   ASSERT_TRUE(t->connect());
   ASSERT_TRUE(t->wheels()->open());
