@@ -91,10 +91,12 @@ std::vector<Hil3Tick> hil3_in_process(const Scenario& sc, std::uint64_t ticks) {
   return out;
 }
 
-// The board: the module's RobotSystem over the link's devices, served on its own thread.
+// The board: the module's RobotSystem over the link's devices, served on its own thread (from
+// `delay` on: a board slow to come up).
 class Hil3Board {
  public:
-  Hil3Board(const Scenario& sc, std::size_t module, std::shared_ptr<io::IOStream> port) {
+  Hil3Board(const Scenario& sc, std::size_t module, std::shared_ptr<io::IOStream> port,
+            std::chrono::milliseconds delay = std::chrono::milliseconds(0)) {
     HilModuleBoardOptions bo;
     bo.control_period = sc.control_period;
     board_ = std::make_unique<HilModuleBoard>(ex_, sc.robots[module].module_kind, std::move(port), bo);
@@ -109,7 +111,8 @@ class Hil3Board {
     if (!built.ok()) return;
     system_ = std::move(built).value();
     EXPECT_TRUE(board_->start().ok());
-    thread_ = std::thread([this] {
+    thread_ = std::thread([this, delay] {
+      std::this_thread::sleep_for(delay);
       while (!stop_.load()) {
         auto got = board_->serve(5ms);
         if (!got.ok()) break;  // the simulator's end closed
@@ -145,7 +148,9 @@ struct Hil3Pair {
   std::unique_ptr<HilOrganism> hil;
   std::vector<Hil3Tick> ticks;
 
-  Hil3Pair(Scenario scenario, std::size_t module, HilOrganismOptions options) : sc(std::move(scenario)) {
+  Hil3Pair(Scenario scenario, std::size_t module, HilOrganismOptions options,
+           std::chrono::milliseconds board_delay = std::chrono::milliseconds(0))
+      : sc(std::move(scenario)) {
     auto [a, b] = io::make_loopback_pair("hil3");
     std::shared_ptr<io::IOStream> sim_end = std::move(a), board_end = std::move(b);
     auto made = OrganismSession::create(sc, ex);
@@ -160,7 +165,7 @@ struct Hil3Pair {
       }
       ticks.push_back(std::move(t));
     });
-    board = std::make_unique<Hil3Board>(sc, module, board_end);
+    board = std::make_unique<Hil3Board>(sc, module, board_end, board_delay);
     auto h = HilOrganism::create(*session, ex, module, sim_end, std::move(options));
     EXPECT_TRUE(h.ok()) << h.error();
     if (!h.ok()) return;
@@ -226,6 +231,25 @@ TEST(HilOrganism, TheBoardsModuleMovesTheOrganismExactlyAsInProcess) {
   double swing = 0;
   for (const auto& t : reference) swing = std::max(swing, std::abs(t.hinges[1]));
   EXPECT_GT(swing, 0.3);
+}
+
+// In lockstep the handshake waits as long as every answer does: a board that answers it six
+// periods late (kept off its core, slow to come up) gets it once, and the books count one.
+TEST(HilOrganism, InLockstepABoardSlowToAnswerTheHandshakeGetsItOnce) {
+  const Scenario sc = hil3_scenario();
+  Hil3Pair pair(sc, 1, hil3_lockstep(), 6 * std::chrono::duration_cast<std::chrono::milliseconds>(sc.control_period));
+  ASSERT_TRUE(pair.hil);
+  EXPECT_EQ(pair.hil->stats().frames_sent, 1u);
+  constexpr std::uint64_t kTicks = 20;
+  auto done = pair.hil->run_ticks(kTicks);
+  ASSERT_TRUE(done.ok()) << done.error();
+  const auto st = pair.hil->stats();
+  pair.board->join();
+  const auto bs = pair.board->board().stats();
+  EXPECT_EQ(st.frames_sent, kTicks + 1);
+  EXPECT_EQ(st.late + st.stale + st.missing, 0u);
+  EXPECT_EQ(bs.frames, kTicks);
+  EXPECT_EQ(bs.bad_frames(), 0u);
 }
 
 TEST(HilOrganism, ALatchAndAnUnlatchFromTheBoardReachTheWorld) {

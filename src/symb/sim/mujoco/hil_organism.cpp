@@ -276,11 +276,14 @@ kernel::Status HilOrganism::wait_for_board(kernel::Duration timeout) {
     std::copy(c.begin(), c.end(), readings_.begin() + (kHilSensorConnector - 1));
   });
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  const kernel::Duration period = session_.scenario().control_period;
+  // Sent again each period, or each answer_wait when that is longer (a lockstep run, which waits
+  // that long for every answer): a board kept off its core for more than a period would otherwise
+  // answer two handshakes, and the books count one.
+  const kernel::Duration wait = std::max(session_.scenario().control_period, options_.answer_wait);
   while (std::chrono::steady_clock::now() < deadline) {
     watch_line();
     send_sensors(0);
-    if (read_board(period, 0)) return {};
+    if (read_board(wait, 0)) return {};
   }
   return kernel::Error{"the board did not answer the handshake within " +
                        std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(timeout).count()) + " ms"};

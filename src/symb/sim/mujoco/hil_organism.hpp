@@ -17,8 +17,8 @@
 // organism, bit for bit. Late answers (for an older frame than the newest sent) are still used,
 // and counted; stale ones (older than one applied) are dropped; a silent board's module keeps its
 // last commands for `hold`, then its wheels stop and its hinge holds its angle, and it is reported.
-// The handshake is the 2D one: [0, readings before the first step] each period until the board
-// answers; the answer is never applied.
+// The handshake is the 2D one: [0, readings before the first step] each period (each
+// `answer_wait` when that is longer) until the board answers; the answer is never applied.
 //
 // A line whose device goes away (a USB adapter pulled, `symb link` stopped) is reported, reopened
 // by its path with backoff and used again once it is back, as in 2D; stats() says how long it was
