@@ -60,7 +60,7 @@ ServeReport parse_report(std::string text) {
 class ServeRing {
  public:
   // n processes m0..m(n-1); oscillator k hooked to oscillator k+1 (mod n) on port 1.
-  ServeRing(int n, std::string_view test, std::string duration, std::string lease = "300ms")
+  ServeRing(int n, std::string_view test, std::string duration, std::string lease = "2s")
       : dir_(fs::temp_directory_path() / unique(test)) {
     fs::create_directories(dir_);
     std::string hooks;
@@ -209,7 +209,7 @@ TEST_F(Serve, SplitOverTwoProcessesOscillatorsLockAsInOne) {
   const std::string a = "create oscillator osc id=0 frequency=1 coupling=6 --suspended";
   const std::string b = "create oscillator osc id=1 frequency=1.4 coupling=6 --suspended";
   const std::string common = " --domain " + std::to_string(10 + ::getpid() % 200) +
-                             " --lease 300ms --duration 1200ms --link-timeout 5s --prefix lock" + tag;
+                             " --lease 2s --duration 1200ms --link-timeout 5s --prefix lock" + tag;
   // One process: both oscillators on one node (the second named osc2), hooked locally.
   symb::test_support::SymbChild one(SYMB_BINARY,
                                     "serve --node m0 --exec '" + a + "' --exec '" +
@@ -277,7 +277,7 @@ TEST_F(Serve, TwoNetworkNamespacesFindEachOtherWithNoConfiguration) {
   const fs::path dir = fs::temp_directory_path() / ("serve_netns_" + tag);
   fs::create_directories(dir);
   const std::string common = " --domain 3 --prefix netns" + tag +
-                             " --lease 300ms --duration 1s --link-timeout 5s --hook 'm0/osc>m1/osc:1' --hook "
+                             " --lease 2s --duration 1s --link-timeout 5s --hook 'm0/osc>m1/osc:1' --hook "
                              "'m1/osc>m0/osc:1'";
   std::vector<std::unique_ptr<symb::test_support::SymbChild>> children;
   for (int k = 0; k < 2; ++k)
