@@ -83,13 +83,14 @@ TEST(AsebaBoard, RunsTheScenarioOnAFakeThymioWithItsShell) {
   ASSERT_TRUE(pty) << pty.error();
   Outcome o;
   std::thread run([&] {
-    o = board({kMaze, "--robot", "aseba:tcp:127.0.0.1:" + std::to_string(thymio.port()), "--duration", "1200ms",
+    o = board({kMaze, "--robot", "aseba:tcp:127.0.0.1:" + std::to_string(thymio.port()), "--duration", "3s",
                "--quiet", "--shell", pty->slave_path});
   });
   // The shell answers on its line as on any board. The question is asked again until the board
-  // has opened its line (bytes written before that may be flushed by its opening).
+  // has opened its line (bytes written before that may be flushed by its opening), for most of
+  // the run: a board slow to start on a busy box (a sanitizer build) has time to.
   std::string replies;
-  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(2800);
   auto next_ask = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
   int asked = 0;
   while (std::chrono::steady_clock::now() < end && replies.find("controller") == std::string::npos) {
