@@ -22,6 +22,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/eventually.hpp"
 #include "support/symb_child.hpp"
 
 namespace {
@@ -64,7 +65,8 @@ class Hil3Cli : public ::testing::Test {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     link_ = std::make_unique<Hil3Child>("link --dir '" + (dir_ / "tty").string() + "'", dir_ / "link.log");
-    for (int i = 0; i < 200 && !fs::exists(dir_ / "tty" / "shell"); ++i) std::this_thread::sleep_for(20ms);
+    // The link's paths appear once its pseudo-terminals are up.
+    symb::testing::eventually([&] { return fs::exists(dir_ / "tty" / "shell"); });
     ASSERT_TRUE(fs::exists(dir_ / "tty" / "shell")) << link_->output();
   }
   void TearDown() override {

@@ -25,6 +25,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/eventually.hpp"
 #include "support/symb_child.hpp"
 
 namespace {
@@ -120,7 +121,7 @@ class Hil : public ::testing::Test {
     fs::create_directories(dir_);
     link_ = std::make_unique<Child>("link --dir '" + (dir_ / "tty").string() + "'", dir_ / "link.log");
     // The link's paths appear once its pseudo-terminals are up.
-    for (int i = 0; i < 200 && !fs::exists(dir_ / "tty" / "shell"); ++i) std::this_thread::sleep_for(20ms);
+    symb::testing::eventually([&] { return fs::exists(dir_ / "tty" / "shell"); });
     ASSERT_TRUE(fs::exists(dir_ / "tty" / "shell")) << link_->output();
   }
   void TearDown() override {

@@ -24,6 +24,7 @@
 #include "symb/apps/view/view_json.hpp"
 #include "symb/apps/view/view_server.hpp"
 
+#include "support/eventually.hpp"
 #include "support/symb_child.hpp"
 #include "support/ws_test_client.hpp"
 
@@ -176,18 +177,15 @@ TEST(ViewServer, AWrongTokenIsRefusedTheRightOneGetsFramesBothWays) {
   WsTestClient good;
   good.open(s.port(), "/ws?token=secret");
   ASSERT_TRUE(good.upgraded());
-  for (int i = 0; i < 200 && s.client_count() == 0; ++i) std::this_thread::sleep_for(5ms);
+  symb::testing::eventually([&] { return s.client_count() != 0; });
   ASSERT_EQ(s.client_count(), 1u);
   s.broadcast("{\"type\":\"status\"}");
   EXPECT_EQ(good.read_frame(), "{\"type\":\"status\"}");
   ASSERT_TRUE(good.send_text("pause"));
-  for (int i = 0; i < 200; ++i) {
-    {
-      std::lock_guard lock(said_mu);
-      if (!said.empty()) break;
-    }
-    std::this_thread::sleep_for(5ms);
-  }
+  symb::testing::eventually([&] {
+    std::lock_guard lock(said_mu);
+    return !said.empty();
+  });
   std::lock_guard lock(said_mu);
   EXPECT_EQ(said, "pause");
   EXPECT_EQ(opened.load(), 1);
@@ -611,19 +609,26 @@ TEST(ViewBoard, ABoardIsShownWithItsTasksAndNoWorld) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   symb::test_support::SymbChild link(SYMB_BINARY, "link --dir '" + (dir / "tty").string() + "'", dir / "link.log");
-  for (int i = 0; i < 200 && !fs::exists(dir / "tty" / "shell"); ++i) std::this_thread::sleep_for(20ms);
+  symb::testing::eventually([&] { return fs::exists(dir / "tty" / "shell"); });
   ASSERT_TRUE(fs::exists(dir / "tty" / "board")) << link.output();
   symb::test_support::SymbChild board(SYMB_BINARY,
                                       "board '" + std::string(SYMB_SCENARIO_DIR) + "/maze.yaml' --serial '" +
-                                          (dir / "tty" / "board").string() + "' --view 0 --duration 2s --quiet",
+                                          (dir / "tty" / "board").string() + "' --view 0 --duration 20s --quiet",
                                       dir / "board.log");
   std::string out;
-  for (int i = 0; i < 250 && (out = board.output()).find("?token=") == std::string::npos; ++i)
-    std::this_thread::sleep_for(20ms);
+  symb::testing::eventually([&] { return (out = board.output()).find("?token=") != std::string::npos; });
   ViewTestReader reader;
   reader.on_notice(out);
   ASSERT_TRUE(reader.upgraded()) << out;
   ASSERT_TRUE(reader.client().send_text("shell tasks"));
+  // Stopped with Ctrl-C once its shell has answered the page, not by a short --duration: a busy box
+  // may keep this test or the board off its core for seconds between the notice and the answer.
+  // Graph frames come from the board's loop, where Ctrl-C is a request to stop, not a kill.
+  symb::testing::eventually([&] {
+    return !reader.frames("shell", "controller").empty() &&
+           !reader.frames("graph", "{\"name\":\"controller\",").empty();
+  });
+  board.interrupt();
   EXPECT_EQ(board.wait(), 0) << board.output();
   reader.join();
   link.interrupt();

@@ -2,6 +2,7 @@
 // is malformed or hostile (an oversized length, half a word, a description that claims memory the
 // node does not have, a reply outside it) is refused and counted while good traffic goes on; and
 // a host finds, describes, reads, writes and exchanges events with a node over TCP.
+#include <chrono>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -10,12 +11,17 @@
 #include "symb/io/tcp_stream.hpp"
 
 #include "support/aseba_node.hpp"
+#include "support/eventually.hpp"
 
 namespace symb::io::aseba {
 namespace {
 
 using namespace std::chrono_literals;
 using Bytes = std::vector<std::byte>;
+
+// How long a peer that is there is given to answer: a call returns as soon as the answer comes, and
+// on a busy box the peer's thread may be kept off its core for seconds.
+constexpr auto kAnswer = symb::testing::kEventuallyLimit;
 
 std::vector<Message> decode_all(std::span<const std::byte> in, AsebaDecoder& d) {
   std::vector<Message> out;
@@ -172,7 +178,7 @@ TEST(AsebaDescription, ImpossibleDescriptionsAreRefusedWithTheReason) {
 struct AsebaLinkFixture : ::testing::Test {
   void SetUp() override {
     ASSERT_TRUE(node.listen());
-    auto s = TcpStream::connect("127.0.0.1", node.port(), 2s);
+    auto s = TcpStream::connect("127.0.0.1", node.port(), kAnswer);
     ASSERT_TRUE(s) << s.error();
     link = std::make_unique<AsebaLink>(std::shared_ptr<IOStream>(std::move(s).value()));
   }
@@ -181,10 +187,10 @@ struct AsebaLinkFixture : ::testing::Test {
 };
 
 TEST_F(AsebaLinkFixture, FindsDescribesReadsWritesAndExchangesEvents) {
-  auto id = link->discover(2s);
+  auto id = link->discover(kAnswer);
   ASSERT_TRUE(id) << id.error();
   EXPECT_EQ(*id, 1);
-  auto d = link->describe(*id, 2s);
+  auto d = link->describe(*id, kAnswer);
   ASSERT_TRUE(d) << d.error();
   EXPECT_EQ(d->name, "thymio-II");
   ASSERT_NE(d->find("prox.horizontal"), nullptr);
@@ -192,12 +198,12 @@ TEST_F(AsebaLinkFixture, FindsDescribesReadsWritesAndExchangesEvents) {
   EXPECT_EQ(d->find("motor.left.target")->address, 57);
 
   node.poke(44, 1234);
-  auto v = link->get(*d, 42, 7, 2s);
+  auto v = link->get(*d, 42, 7, kAnswer);
   ASSERT_TRUE(v) << v.error();
   EXPECT_EQ((*v)[2], 1234);
   const std::int16_t targets[2] = {-200, 300};
   ASSERT_TRUE(link->set(*d, 57, targets));
-  auto back = link->get(*d, 57, 2, 2s);  // the node handles messages in order: the set came first
+  auto back = link->get(*d, 57, 2, kAnswer);  // the node handles messages in order: the set came first
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(*back, std::vector<std::int16_t>({-200, 300}));
   // Outside the node's memory: refused before anything is sent.
@@ -212,7 +218,8 @@ TEST_F(AsebaLinkFixture, FindsDescribesReadsWritesAndExchangesEvents) {
   });
   const std::int16_t args[2] = {7, -7};
   ASSERT_TRUE(link->emit(4, args));
-  for (int i = 0; i < 100 && heard.empty(); ++i) ASSERT_TRUE(link->pump(20ms));
+  const auto until = std::chrono::steady_clock::now() + kAnswer;
+  while (heard.empty() && std::chrono::steady_clock::now() < until) ASSERT_TRUE(link->pump(20ms));
   EXPECT_EQ(heard, std::vector<std::int16_t>({7, -7}));
   const LinkStats s = link->stats();
   EXPECT_EQ(s.user_events, 1u);
@@ -225,9 +232,9 @@ TEST_F(AsebaLinkFixture, AFailingNodeGivesAnErrorNotAWait) {
   auto d = link->describe(9, 200ms);  // nobody is node 9
   ASSERT_FALSE(d);
   EXPECT_NE(d.error().find("did not describe itself"), std::string::npos) << d.error();
-  auto id = link->discover(2s);
+  auto id = link->discover(kAnswer);
   ASSERT_TRUE(id);
-  auto desc = link->describe(*id, 2s);
+  auto desc = link->describe(*id, kAnswer);
   ASSERT_TRUE(desc);
   node.set_answering(false);
   auto v = link->get(*desc, 42, 7, 100ms);
@@ -236,7 +243,8 @@ TEST_F(AsebaLinkFixture, AFailingNodeGivesAnErrorNotAWait) {
   EXPECT_EQ(link->stats().timeouts, 1u);
   node.close();
   kernel::Status st;
-  for (int i = 0; i < 100 && st; ++i) st = link->pump(20ms);
+  const auto until = std::chrono::steady_clock::now() + kAnswer;
+  while (st && std::chrono::steady_clock::now() < until) st = link->pump(20ms);
   EXPECT_FALSE(st);  // the end of the stream is an error
 }
 
@@ -247,7 +255,7 @@ TEST(AsebaLink, HostileRepliesAreCountedAndDropped) {
   ASSERT_TRUE(l);
   auto listener = std::move(l).value();
   std::thread evil([&] {
-    auto s = listener->accept(5s);
+    auto s = listener->accept(kAnswer);
     if (!s || !*s) return;
     auto& out = **s;
     auto w = [&](std::uint16_t type, const AsebaWriter& p) { (void)out.write_all(*p.finish(1, type)); };
@@ -260,7 +268,7 @@ TEST(AsebaLink, HostileRepliesAreCountedAndDropped) {
     AsebaDecoder requests;
     bool asked = false;
     while (!asked) {
-      auto n = out.read_some(buf, 5s);
+      auto n = out.read_some(buf, kAnswer);
       if (!n || *n == 0) return;
       requests.feed(std::span<const std::byte>(buf.data(), *n),
                     [&](const Message& m) { asked = asked || m.type == type::kGetVariables; });
@@ -272,14 +280,14 @@ TEST(AsebaLink, HostileRepliesAreCountedAndDropped) {
     big.resize(6 + 0x0FFF, std::byte{0x55});
     (void)out.write_all(big);
     w(type::kVariables, AsebaWriter().word(0).word(11).word(22));
-    (void)out.read_some(buf, 2s);
+    (void)out.read_some(buf, kAnswer);
   });
-  auto s = TcpStream::connect("127.0.0.1", listener->port(), 2s);
+  auto s = TcpStream::connect("127.0.0.1", listener->port(), kAnswer);
   ASSERT_TRUE(s) << s.error();
   AsebaLink link(std::shared_ptr<IOStream>(std::move(s).value()));
-  auto d = link.describe(1, 2s);
+  auto d = link.describe(1, kAnswer);
   ASSERT_TRUE(d) << d.error();
-  auto v = link.get(*d, 0, 2, 2s);
+  auto v = link.get(*d, 0, 2, kAnswer);
   ASSERT_TRUE(v) << v.error();
   EXPECT_EQ(*v, std::vector<std::int16_t>({11, 22}));
   const LinkStats st = link.stats();

@@ -25,6 +25,7 @@ namespace {
 using namespace std::chrono_literals;
 using os::TaskId;
 using symb::testing::eventually;
+using symb::testing::kEventuallyLimit;
 
 // Sends every message it is handed on, port kept: the test posts into it, its hooks carry it.
 class DdsEcho final : public os::Task {
@@ -95,7 +96,7 @@ TEST(DdsBus, CarriesAHookBetweenNodesWithExactBooks) {
   DdsPair p;
   auto bus = DdsBus::create({&p.r1, &p.r2}, own_bus("exact")).value();
   const auto id = bus->hook("r1/src", "r2/sink", {.port = 3}).value();
-  ASSERT_TRUE(bus->wait_linked(5s));
+  ASSERT_TRUE(bus->wait_linked(kEventuallyLimit));
   constexpr int kMessages = 500;
   const auto message = [](os::Port port, float v) {
     os::Message m;
@@ -242,7 +243,7 @@ TEST(DdsBus, TheReceiversPriorityPolicyAndSuppressionApplyOnTheDirectPath) {
   ASSERT_TRUE(p.r2.hook(boss, p.sink, {.priority = 5, .suppress_window = 60s}));
   auto bus = DdsBus::create({&p.r1, &p.r2}, own_bus("rules")).value();
   ASSERT_TRUE(bus->hook("r1/src", "r2/sink", {.priority = 2, .policy = os::QueuePolicy::kRefuse}).ok());
-  ASSERT_TRUE(bus->wait_linked(5s));
+  ASSERT_TRUE(bus->wait_linked(kEventuallyLimit));
   // The ends as the nodes list them: no proxy task on either side.
   EXPECT_FALSE(p.r1.find("dds_to.1").has_value());
   bool sink_end = false, stand_in = false;
@@ -297,7 +298,7 @@ TEST(DdsBus, TheSendersPortInhibitionAndBlobsAreCountedBeforeDds) {
   DdsPair p;
   auto bus = DdsBus::create({&p.r1, &p.r2}, own_bus("sender")).value();
   ASSERT_TRUE(bus->hook("r1/src", "r2/sink", {.port = 1}).ok());
-  ASSERT_TRUE(bus->wait_linked(5s));
+  ASSERT_TRUE(bus->wait_linked(kEventuallyLimit));
   const auto books = [&] { return bus->hooks().at(0).books; };
   ASSERT_TRUE(p.r1.post(p.src, numbers_on(1, os::Payload({1.0f}))));
   ASSERT_TRUE(p.r1.post(p.src, numbers_on(2, os::Payload({2.0f}))));  // another port
@@ -373,7 +374,7 @@ TEST(DdsBus, AnIdleReceiverHandlesOnTheListenersThreadAndMayAnswerOverDdsFromThe
   auto bus = DdsBus::create({&r1, &r2}, own_bus("guest")).value();
   ASSERT_TRUE(bus->hook("r1/src", "r2/echo").ok());
   ASSERT_TRUE(bus->hook("r2/echo", "r1/sink").ok());
-  ASSERT_TRUE(bus->wait_linked(5s));
+  ASSERT_TRUE(bus->wait_linked(kEventuallyLimit));
   constexpr int kMessages = 20;
   for (int i = 0; i < kMessages; ++i) {
     ASSERT_TRUE(r1.post(src, numbers_on(0, os::Payload({float(i)}))).ok());

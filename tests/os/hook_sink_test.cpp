@@ -13,6 +13,7 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 
+#include "support/eventually.hpp"
 #include "test_tasks.hpp"
 
 namespace symb::os {
@@ -294,8 +295,7 @@ TEST(HookSink, IsCalledOnTheSendersOwnThread) {
   auto sink = std::make_shared<RecordingSink>("wire");
   ASSERT_TRUE(node.hook(tx, sink));
   ASSERT_TRUE(node.post(tx, Message{}));
-  const auto until = std::chrono::steady_clock::now() + 5s;
-  while (sink->threads().empty() && std::chrono::steady_clock::now() < until) std::this_thread::sleep_for(1ms);
+  symb::testing::eventually([&] { return !sink->threads().empty(); });
   ASSERT_EQ(sink->threads().size(), 1u);
   EXPECT_EQ(sink->threads()[0], handler_thread.load());
   EXPECT_NE(sink->threads()[0], std::this_thread::get_id());

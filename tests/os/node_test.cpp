@@ -14,6 +14,7 @@
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 
+#include "support/eventually.hpp"
 #include "test_tasks.hpp"
 
 namespace symb::os {
@@ -222,8 +223,7 @@ TEST(Node, ThreadExecutorRunsTheSameTaskCode) {
   auto rx = *node.create("rx", std::move(c));
   auto tx = *node.create("tx", std::make_unique<Emitter>(), {.period = 1ms});
   ASSERT_TRUE(node.hook(tx, rx));
-  const auto end = std::chrono::steady_clock::now() + 5s;
-  while (col->count() < 20 && std::chrono::steady_clock::now() < end) std::this_thread::sleep_for(1ms);
+  symb::testing::eventually([&] { return col->count() >= 20; });
   ASSERT_GE(col->count(), 20u);
   auto got = col->received();
   // A slow reader may lose the oldest to keep-newest, but order is kept.

@@ -24,6 +24,7 @@
 #include "symb/sim/mujoco/mujoco_runner.hpp"
 #include "symb/sim/robot_system.hpp"
 
+#include "support/eventually.hpp"
 #include "support/measured.hpp"
 
 namespace symb::sim::mujoco {
@@ -511,8 +512,12 @@ TEST(MujocoDevices, ConnectorIoctlsFromAThreadWhileTheRunnerStepsOnAnother) {
                                                rig.ex.clock().now() + 100ms),
               10ms);
   ASSERT_TRUE(rig.runner->start());
-  for (int i = 0; i < 200 && latcher->answers().size() < 3; ++i) std::this_thread::sleep_for(10ms);
-  std::this_thread::sleep_for(100ms);
+  // Waited for, not slept for: on a busy box either thread may be kept off its core for seconds.
+  // The partner hears of the unlatch on the runner's next tick.
+  symb::testing::eventually([&] { return latcher->answers().size() >= 3; });
+  symb::testing::eventually([&] {
+    return rig.runner->ticks() > 3 && dev_has_line(rig.log_lines(1), "unlatched front to a.front (unlatched by a)");
+  });
   rig.runner->stop();
   const auto answers = latcher->answers();
   ASSERT_EQ(answers.size(), 3U);

@@ -17,6 +17,8 @@
 #include "symb/sim/enki_world.hpp"
 #include "symb/sim/sim_drivers.hpp"
 
+#include "support/eventually.hpp"
+
 namespace symb::sim {
 namespace {
 
@@ -259,7 +261,7 @@ TEST(WorldRunner, DrivesRobotsUnderTheThreadExecutor) {
     Robot a(ex, runner, 0, 400.0f);
     Robot b(ex, runner, 1, 200.0f);
     ASSERT_TRUE(runner.start());
-    const auto deadline = std::chrono::steady_clock::now() + 5s;
+    const auto deadline = std::chrono::steady_clock::now() + symb::testing::kEventuallyLimit;
     while ((runner.steps() < 40 || a.controller->seen().size() < 20 || b.controller->seen().size() < 20) &&
            std::chrono::steady_clock::now() < deadline) {
       // Reading the world while it steps on the runner's thread: with_world serialises.
