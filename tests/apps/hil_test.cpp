@@ -33,11 +33,13 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-#ifdef SYMB_SANITIZER
+// At wall-clock pace the HIL run follows the in-process one (compared over kCompareSeconds); in
+// lockstep it is the in-process one, over kLockstepSeconds, in a few seconds of wall time.
 constexpr int kCompareSeconds = 15;
+constexpr int kLockstepSeconds = 60;
+#ifdef SYMB_SANITIZER
 constexpr int kCorruptSeconds = 10;
 #else
-constexpr int kCompareSeconds = 60;
 constexpr int kCorruptSeconds = 20;
 #endif
 constexpr int kPathWindowSeconds = 15;  // the paths are compared step by step over this
@@ -142,6 +144,18 @@ class Hil : public ::testing::Test {
     EXPECT_NE(b->output().find("Ctrl-C to stop"), std::string::npos) << b->output();
     return b;
   }
+  // The maze with seed 1 for `seconds`: `symb run` into inproc/, then board and `symb sim` (with
+  // `sim_extra`) into hil/.
+  void run_both(int seconds, const std::string& sim_extra) {
+    const std::string d = "--duration " + std::to_string(seconds) + "s";
+    Child run("run '" + kScenario + "' --seed 1 --quiet --out '" + (dir_ / "inproc").string() + "' " + d,
+              dir_ / "inproc.log");
+    ASSERT_EQ(run.wait(), 0) << run.output();
+    auto b = board();
+    ASSERT_EQ(sim("hil", "--seed 1 " + sim_extra + " " + d), 0) << sim_output_;
+    b->interrupt();
+    ASSERT_EQ(b->wait(), 0) << b->output();
+  }
   int sim(const std::string& out, const std::string& extra) {
     Child c("sim '" + kScenario + "' --serial '" + (dir_ / "tty" / "sim").string() + "' --out '" +
                 (dir_ / out).string() + "' --quiet " + extra,
@@ -158,15 +172,8 @@ class Hil : public ::testing::Test {
 };
 
 TEST_F(Hil, FollowsTheInProcessRunOfTheMaze) {
-  const std::string d = "--duration " + std::to_string(kCompareSeconds) + "s";
-  Child run("run '" + kScenario + "' --seed 1 --quiet --out '" + (dir_ / "inproc").string() + "' " + d,
-            dir_ / "inproc.log");
-  ASSERT_EQ(run.wait(), 0) << run.output();
-
-  auto b = board();
-  ASSERT_EQ(sim("hil", "--seed 1 " + d), 0) << sim_output_;
-  b->interrupt();
-  ASSERT_EQ(b->wait(), 0) << b->output();
+  run_both(kCompareSeconds, "");
+  ASSERT_FALSE(HasFatalFailure());
 
   const auto in = path_of(dir_ / "inproc" / "steps.csv");
   const auto hil = path_of(dir_ / "hil" / "steps.csv");
@@ -190,6 +197,31 @@ TEST_F(Hil, FollowsTheInProcessRunOfTheMaze) {
       << "identical steps " << same << " of " << window << ", late answers " << link.at("late");
   std::printf("in-process %.1f cm, HIL %.1f cm; first %zu steps: %zu identical, mean distance %.3f cm; late %lld\n",
               din, dhil, window, same, sum / static_cast<double>(window), link.at("late"));
+}
+
+// `symb sim --lockstep`: the simulator waits for every answer instead of the wall clock, so a
+// minute of the maze is the in-process run bit for bit, however busy the box.
+TEST_F(Hil, InLockstepTheRunIsTheInProcessOneBitForBit) {
+  run_both(kLockstepSeconds, "--lockstep");
+  ASSERT_FALSE(HasFatalFailure());
+  const auto hash = [](const fs::path& summary) {
+    const std::string text = symb::test_support::read_whole_file(summary);
+    const auto at = text.find("trajectory hash: ");
+    return at == std::string::npos ? std::string() : text.substr(at, text.find('\n', at) - at);
+  };
+  const std::string in = hash(dir_ / "inproc" / "summary.txt");
+  ASSERT_FALSE(in.empty());
+  EXPECT_EQ(hash(dir_ / "hil" / "summary.txt"), in);
+  const std::string hil = symb::test_support::read_whole_file(dir_ / "hil" / "summary.txt");
+  EXPECT_NE(hil.find("executor: hardware-in-the-loop, lockstep"), std::string::npos) << hil;
+  const auto link = sim_link_stats(dir_ / "hil" / "summary.txt");
+  const long long steps = kLockstepSeconds * 1000 / 30;
+  EXPECT_EQ(link.at("frames_sent"), steps + 1);  // the handshake and one frame per step
+  EXPECT_EQ(link.at("applied"), steps - 1);      // every step after the first, on its answer
+  EXPECT_EQ(link.at("late"), 0);
+  EXPECT_EQ(link.at("missing"), 1);  // step 1 runs at rest
+  EXPECT_EQ(link.at("bad"), 0);
+  EXPECT_NE(sim_output_.find("in lockstep with the boards"), std::string::npos) << sim_output_;
 }
 
 // The newest "board: frames N good, M bad (crc C), X missed (S stale)" line of a board's periodic

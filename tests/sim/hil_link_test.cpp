@@ -309,6 +309,37 @@ std::unique_ptr<EnkiWorld> open_arena_with_one_robot() {
   return world;
 }
 
+// A board at the slave end of `pty`, on a thread of its own until it is destroyed: each IR frame
+// that arrives is handed to `answer`, and the wheel frame it returns (if any) is written back.
+class ScriptedBoard {
+ public:
+  ScriptedBoard(const io::PtyPair& pty, std::function<std::optional<HilWheelFrame>(const HilIrFrame&)> answer)
+      : thread_([this, &pty, answer = std::move(answer)] {
+          io::FrameDecoder d(256);
+          std::vector<std::byte> buf(1024);
+          while (!stop_) {
+            auto n = pty.slave->read_some(buf, 5ms);
+            if (!n || *n == 0) continue;
+            d.feed(std::span<const std::byte>(buf.data(), *n), [&](std::span<const std::byte> p) {
+              auto f = decode_ir_payload(p);
+              if (!f) return;
+              if (auto w = answer(*f)) (void)pty.slave->write_all(io::encode_frame(encode_wheel_payload(*w)));
+            });
+          }
+        }) {}
+  ~ScriptedBoard() { stop(); }
+  ScriptedBoard(const ScriptedBoard&) = delete;
+  ScriptedBoard& operator=(const ScriptedBoard&) = delete;
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
   auto world_ptr = open_arena_with_one_robot();
   EnkiWorld& world = *world_ptr;
@@ -327,23 +358,13 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
   simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
 
   // A board that answers the handshake and the first 10 steps with 300 units, then falls silent.
-  std::atomic<bool> stop{false};
-  std::thread board([&] {
-    io::FrameDecoder d(256);
-    std::vector<std::byte> buf(1024);
-    while (!stop) {
-      auto n = pty->slave->read_some(buf, 5ms);
-      if (!n || *n == 0) continue;
-      d.feed(std::span<const std::byte>(buf.data(), *n), [&](std::span<const std::byte> p) {
-        auto f = decode_ir_payload(p);
-        if (f && f->seq <= 10) (void)pty->slave->write_all(io::encode_frame(encode_wheel_payload({f->seq, 300, 300})));
-      });
-    }
+  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::optional<HilWheelFrame> {
+    if (f.seq > 10) return std::nullopt;
+    return HilWheelFrame{f.seq, 300, 300};
   });
   ASSERT_TRUE(simulator.wait_for_boards(2s).ok());
   auto steps = simulator.run_for(3000ms);  // 30 steps
-  stop = true;
-  board.join();
+  board.stop();
   ASSERT_TRUE(steps.ok()) << steps.error();
   ASSERT_EQ(left.size(), 30u);
   const double v = 300 * kCmPerSecondPerWheelUnit;
@@ -359,6 +380,43 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
   EXPECT_LE(s.frames_sent, 35u);
   ASSERT_FALSE(events.empty());
   EXPECT_NE(events.back().find("board silent"), std::string::npos);
+}
+
+// In lockstep a board slower than the period still drives every step: the simulator waits for
+// the answer to the newest frame before each step, so step k runs on the answer to frame k - 1,
+// never late and never missing; the handshake goes out once.
+TEST(HilSimulatorTest, InLockstepABoardSlowerThanThePeriodAnswersEveryStepOnTime) {
+  auto world_ptr = open_arena_with_one_robot();
+  EnkiWorld& world = *world_ptr;
+  auto pty = io::PtyPair::open("hil-lockstep");
+  ASSERT_TRUE(pty.ok()) << pty.error();
+  HilSimulatorOptions o;
+  o.period = 30ms;
+  o.lockstep = true;
+  o.answer_wait = 20s;  // only a silent board waits it out
+  HilSimulator simulator(world, {pty->master}, o);
+  std::vector<double> left;
+  simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
+  // Answers frame k with 10 k units, 50 ms after reading it (over a period late at wall-clock pace).
+  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::optional<HilWheelFrame> {
+    std::this_thread::sleep_for(50ms);
+    const float units = 10.0f * static_cast<float>(f.seq);
+    return HilWheelFrame{f.seq, units, units};
+  });
+  ASSERT_TRUE(simulator.wait_for_boards(20s).ok());
+  auto steps = simulator.run_for(300ms);  // 10 steps
+  board.stop();
+  ASSERT_TRUE(steps.ok()) << steps.error();
+  ASSERT_EQ(left.size(), 10u);
+  EXPECT_EQ(left[0], 0.0);  // step 1 runs at rest: the handshake's answer is never applied
+  for (std::size_t k = 2; k <= 10; ++k)
+    EXPECT_NEAR(left[k - 1], 10.0 * static_cast<double>(k - 1) * kCmPerSecondPerWheelUnit, 1e-9) << "step " << k;
+  const auto s = simulator.stats()[0];
+  EXPECT_EQ(s.applied, 9u);
+  EXPECT_EQ(s.late, 0u);
+  EXPECT_EQ(s.missing, 1u);       // step 1
+  EXPECT_EQ(s.frames_sent, 11u);  // one handshake, one frame per step
+  EXPECT_EQ(simulator.overruns(), 0u);
 }
 
 // A serial path that goes away and comes back, as a USB adapter's does when it is pulled and

@@ -59,6 +59,8 @@ HilSimulator::HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStrea
     throw std::invalid_argument("HilSimulator: corrupt must be in [0, 1]");
   if (options_.reopen_first.count() <= 0 || options_.reopen_most < options_.reopen_first)
     throw std::invalid_argument("HilSimulator: reopen_first must be positive and at most reopen_most");
+  if (options_.lockstep && options_.answer_wait.count() <= 0)
+    throw std::invalid_argument("HilSimulator: a lockstep run needs a positive answer_wait");
   hold_steps_ = static_cast<std::uint64_t>(std::max<std::int64_t>(1, options_.hold / options_.period));
   for (std::size_t i = 0; i < robots_.size(); ++i) {
     robots_[i].stats.robot = world.robot_name(i);
@@ -150,15 +152,30 @@ void HilSimulator::watch_line(std::size_t i) {
   if (!note.empty()) event(note);
 }
 
-std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_frame) {
+std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_frame, std::uint32_t want,
+                                                       kernel::Duration wait) {
   Robot& r = robots_[i];
   std::optional<HilWheelFrame> best;
   std::uint64_t received = 0, malformed = 0, stale = 0;
   any_frame = false;
-  // Non-blocking: a zero timeout polls; the loop ends as soon as nothing more is there.
-  for (int rounds = 0; rounds < 64; ++rounds) {
-    auto got = ports_[i]->read_some(buf_, kernel::Duration{0});
-    if (!got || *got == 0) break;
+  const auto deadline = Clock::now() + wait;
+  // A zero timeout polls; the loop ends as soon as nothing more is there, once the answer awaited
+  // (if any) came or its wait ran out.
+  for (int rounds = 0; rounds < 64;) {
+    const bool awaiting = want > 0 && (!best || best->seq < want);
+    const auto left = awaiting ? std::max(Clock::duration{0}, deadline - Clock::now()) : Clock::duration{0};
+    auto got = ports_[i]->read_some(buf_, std::chrono::duration_cast<kernel::Duration>(left));
+    if (!got) {
+      // The line is gone (watch_line reopens it): nothing comes before the deadline, and a
+      // lockstep run does not race through the outage.
+      if (awaiting) std::this_thread::sleep_until(deadline);
+      break;
+    }
+    if (*got == 0) {
+      if (awaiting && Clock::now() < deadline) continue;
+      break;
+    }
+    ++rounds;
     r.decoder.feed(std::span<const std::byte>(buf_.data(), *got), [&](std::span<const std::byte> payload) {
       auto f = decode_wheel_payload(payload);
       if (!f) {
@@ -187,6 +204,12 @@ kernel::Status HilSimulator::wait_for_boards(kernel::Duration timeout) {
   if (auto st = open_ports(); !st) return st;
   const auto deadline = Clock::now() + timeout;
   auto due = Clock::now();
+  // The handshake goes out again each period, or each answer wait in lockstep (a board kept off
+  // its core for longer than a period would otherwise answer two); answers are looked for each
+  // period.
+  const auto resend_every = std::chrono::duration_cast<Clock::duration>(
+      options_.lockstep ? std::max(options_.period, options_.answer_wait) : options_.period);
+  auto resend = Clock::now();
   for (;;) {
     bool all = true;
     for (std::size_t i = 0; i < robots_.size(); ++i) {
@@ -210,8 +233,11 @@ kernel::Status HilSimulator::wait_for_boards(kernel::Duration timeout) {
       return kernel::Error{"no answer from the board of " + missing + " within " +
                            u(std::chrono::duration_cast<std::chrono::milliseconds>(timeout).count()) + " ms"};
     }
-    for (std::size_t i = 0; i < robots_.size(); ++i)
-      if (!robots_[i].stats.answered) send_ir(i, 0);
+    if (Clock::now() >= resend) {
+      for (std::size_t i = 0; i < robots_.size(); ++i)
+        if (!robots_[i].stats.answered) send_ir(i, 0);
+      resend = Clock::now() + resend_every;
+    }
     due += options_.period;
     std::this_thread::sleep_until(due);
   }
@@ -229,8 +255,8 @@ kernel::Result<std::uint64_t> HilSimulator::run_for(kernel::Duration duration) {
       return kernel::Error{"the sequence numbers are used up (" + u(kHilMaxSequence) + " steps)"};
     const auto due =
         start + std::chrono::duration_cast<Clock::duration>(options_.period * static_cast<std::int64_t>(k));
-    std::this_thread::sleep_until(due);
-    if (Clock::now() - due > options_.period) {
+    if (!options_.lockstep) std::this_thread::sleep_until(due);
+    if (!options_.lockstep && Clock::now() - due > options_.period) {
       // Far behind (a stopped process, a loaded machine): resume the beat from now instead of
       // stepping in a burst, which the boards could not follow.
       overruns_.fetch_add(1);
@@ -242,7 +268,7 @@ kernel::Result<std::uint64_t> HilSimulator::run_for(kernel::Duration duration) {
     for (std::size_t i = 0; i < robots_.size(); ++i) {
       watch_line(i);
       bool any = false;
-      const auto f = read_wheels(i, any);
+      const auto f = options_.lockstep ? read_wheels(i, any, seq_, options_.answer_wait) : read_wheels(i, any);
       Robot& r = robots_[i];
       std::string note;
       {

@@ -14,7 +14,9 @@
 //
 // So a board that answers within the period acts one period after it read, exactly like the
 // in-process run (world_runner.hpp's latency contract), and the same seed gives the same
-// trajectory for as long as every answer is on time. A late answer (one for an older IR frame
+// trajectory for as long as every answer is on time. In lockstep (options.lockstep) step 1 waits
+// for the answers instead of reading without blocking, and no step waits for the wall clock: every
+// answer is on time, and the run is the in-process one, bit for bit. A late answer (one for an older IR frame
 // than the newest sent) is still used, and counted. A board that stays silent: the robot keeps
 // its last speeds for `hold`, then stops, and it is reported; when frames come back it follows
 // them again.
@@ -61,6 +63,12 @@ struct HilSimulatorOptions {
   // doubling up to reopen_most (io::ReopenBackoff); meanwhile its frames are counted unsent.
   kernel::Duration reopen_first = std::chrono::milliseconds(100);
   kernel::Duration reopen_most = std::chrono::seconds(2);
+  // Lockstep: before each step, wait for every board's answer to the newest frame, up to
+  // `answer_wait` of wall time, instead of keeping the wall-clock pace (steps follow each other
+  // as soon as the answers are in). A board that answers within it drives its robot exactly as
+  // in process, however busy the machine; a silent one costs each step the whole wait.
+  bool lockstep = false;
+  kernel::Duration answer_wait = std::chrono::seconds(1);
 };
 
 struct HilRobotStats {
@@ -98,8 +106,8 @@ class HilSimulator {
   // One port per robot of `world`, in robot order. Ports are opened (if closed), their unread
   // input flushed, and those that are file descriptors get a short write timeout, so a board
   // that does not read costs the step a few milliseconds at most. Throws std::invalid_argument
-  // on a wrong port count, a period outside (0, 1 s], `corrupt` outside [0, 1] or a reopen
-  // backoff that is not positive and ascending.
+  // on a wrong port count, a period outside (0, 1 s], `corrupt` outside [0, 1], a reopen
+  // backoff that is not positive and ascending, or lockstep without a positive answer_wait.
   HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStream>> ports, HilSimulatorOptions options);
   ~HilSimulator();
   HilSimulator(const HilSimulator&) = delete;
@@ -109,7 +117,8 @@ class HilSimulator {
 
   // The handshake: until every board answered, or `timeout`, or stop(). Fails on timeout.
   kernel::Status wait_for_boards(kernel::Duration timeout);
-  // Steps the world for `duration` of wall-clock time (duration / period steps) or until stop().
+  // Steps the world duration / period times (in `duration` of wall-clock time, unless in
+  // lockstep) or until stop().
   // Returns the steps done. Fails when a port cannot be opened or the sequence space is used up.
   kernel::Result<std::uint64_t> run_for(kernel::Duration duration);
   void stop() { stop_.store(true); }
@@ -126,8 +135,10 @@ class HilSimulator {
   void send_ir(std::size_t robot, std::uint32_t seq);
   // Notices a line that went away and reopens it with backoff (before each step).
   void watch_line(std::size_t robot);
-  // Reads what arrived, non-blocking; returns the newest valid wheel frame with seq >= 1.
-  std::optional<HilWheelFrame> read_wheels(std::size_t robot, bool& any_frame);
+  // Reads what arrived; returns the newest valid wheel frame with seq >= 1. Does not block, unless
+  // `want` > 0: then it first waits up to `wait` for a frame answering `want` (or a newer one).
+  std::optional<HilWheelFrame> read_wheels(std::size_t robot, bool& any_frame, std::uint32_t want = 0,
+                                           kernel::Duration wait = kernel::Duration{0});
   void event(const std::string& text);
 
   World& world_;

@@ -1,6 +1,6 @@
 // `symb sim SCENARIO --serial PATH`: the simulator side of hardware-in-the-loop. The scenario's
-// world runs here at wall-clock pace; each robot's control system runs on a board (`symb board`)
-// at the other end of its serial line.
+// world runs here at wall-clock pace (or in lockstep with the boards' answers); each robot's
+// control system runs on a board (`symb board`) at the other end of its serial line.
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -31,14 +31,15 @@ constexpr kernel::Duration kMaxDuration = sim::kMaxRunDuration;  // a scenario's
 
 constexpr OptionSpec kSimOptions[] = {
     {"--serial", "PATH", "the board's data line; one per robot, comma-separated, in scenario order"},
-    {"--duration", "D", "wall-clock time to run: 60s, 10min, ... (default: the scenario's)"},
+    {"--duration", "D",
+     "simulated time to run (wall-clock time too, unless --lockstep): 60s, 10min, ... (default: the scenario's)"},
     {"--out", "DIR", "output folder (default out/<scenario name>-hil)"},
     {"--seed", "S", "seed of the world, unsigned 64-bit (default: the scenario's)"},
     {"--corrupt", "P", "corrupt this fraction of the IR frames sent (0..1, default 0)"},
     {"--hold", "D", "a silent board's robot keeps its speeds this long, then stops (default 300ms)"},
     {"--wait", "D", "how long to wait for the boards' first answer (default 60s)"},
     {"--board", "NAME", "3D scenarios: the module that runs on the board (the others run here)"},
-    {"--lockstep", "", "3D scenarios: wait for every answer (up to 1 s) instead of the wall-clock pace"},
+    {"--lockstep", "", "wait for every answer (up to 1 s) instead of keeping the wall-clock pace"},
     {"--dds", "", "3D scenarios: reach the board over DDS (symb board --dds) instead of --serial"},
     {"--domain", "N", "--dds: the DDS domain id, 0..232 (default 0)"},
     {"--prefix", "NAME", "--dds: the first name of every topic, rt/NAME/... (default symb)"},
@@ -52,7 +53,8 @@ void print_sim_help(std::ostream& out) {
       << "The simulator side of hardware-in-the-loop (docs/hil.md): runs the scenario's world at\n"
       << "wall-clock pace; after every step (the control period, 30 ms) it sends each robot's 7 IR\n"
       << "values to its board over the serial line and, before the next step, reads the board's\n"
-      << "wheel speeds without waiting for them. Start the board first (symb board); `symb link`\n"
+      << "wheel speeds without waiting for them (with --lockstep: waits for them, and keeps no pace,\n"
+      << "so the run is the in-process one). Start the board first (symb board); `symb link`\n"
       << "makes the serial lines out of pseudo-terminals.\n\n"
       << "Options:\n"
       << describe_options(kSimOptions) << "\n"
@@ -160,8 +162,8 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
     oa.out_dir = out_dir;
     return run_sim_organism(sc, oa, ctx);
   }
-  if (!board.empty() || lockstep || dds) {
-    ctx.err << kSimCommand << ": --board, --lockstep and --dds are for 3D scenarios; " << sc.file
+  if (!board.empty() || dds) {
+    ctx.err << kSimCommand << ": --board and --dds are for 3D scenarios; " << sc.file
             << " describes a 2D world (one --serial path per robot; over DDS: symb run --bus dds --remote)\n";
     return kExitUsage;
   }
@@ -174,6 +176,8 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   const kernel::Duration run_for = duration.value_or(sc.duration);
   so.period = sc.control_period;
   so.seed = run_seed;
+  so.lockstep = lockstep;
+  so.answer_wait = 1s;
   so.on_event = [&ctx](const std::string& text) { ctx.err << "sim: " << text << "\n" << std::flush; };
 
   std::unique_ptr<sim::World> world;
@@ -256,12 +260,13 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   std::ostringstream summary;
   summary << "scenario: " << sc.name << " (" << sc.file << ")\n"
           << "seed: " << run_seed << "\n"
-          << "executor: hardware-in-the-loop, wall clock\n"
+          << "executor: hardware-in-the-loop, " << (lockstep ? "lockstep" : "wall clock") << "\n"
           << "control period: " << fixed(dt * 1000, 1) << " ms\n"
           << "simulated: " << fixed(world->time(), 2) << " s in " << recorder.steps() << " steps\n"
           << "wall clock: " << fixed(wall, 3) << " s\n"
           << "overruns: " << simulator.overruns() << "\n"
-          << "corrupt: " << so.corrupt << "\n\n"
+          << "corrupt: " << so.corrupt << "\n"
+          << "trajectory hash: " << hex64(recorder.hash()) << "\n\n"
           << "robot,distance_m,contacts,contact_steps,moving_s,end_x_cm,end_y_cm\n";
   for (const auto& x : recorder.summaries())
     summary << x.name << "," << fixed(x.distance / 100, 3) << "," << x.contact_events << "," << x.contact_steps << ","
@@ -296,7 +301,7 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   }
 
   ctx.out << "sim: " << sc.name << ", seed " << run_seed << ", " << fixed(world->time(), 1)
-          << " s at wall-clock pace\n";
+          << (lockstep ? " s in lockstep with the boards\n" : " s at wall-clock pace\n");
   for (const auto& x : recorder.summaries())
     ctx.out << "  " << x.name << ": " << fixed(x.distance / 100.0, 2) << " m travelled, " << x.contact_events
             << " contacts (" << x.contact_steps << " steps touching), moving " << fixed(x.moving_seconds, 1) << " s\n";
