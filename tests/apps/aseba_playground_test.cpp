@@ -239,18 +239,20 @@ TEST_F(AsebaPlayground, Mdl2eMazeControllerDrivesWithoutContact) {
   const auto before = run_.thymio->stats();
   ASSERT_TRUE(before.up);
   playground_->kill();
-  const auto killed = std::chrono::steady_clock::now();
-  while (run_.thymio->stats().losses == 0 && std::chrono::steady_clock::now() - killed < 3s)
-    std::this_thread::sleep_for(5ms);
+  EXPECT_TRUE(symb::testing::eventually([&] { return run_.thymio->stats().losses > 0; }));
   auto lost = run_.thymio->stats();
   ASSERT_EQ(lost.losses, 1u);
   EXPECT_FALSE(lost.up);
   EXPECT_LE(lost.last_stop_delay, 2 * scenario_.control_period);
   EXPECT_EQ(lost.left_target, 0);
   EXPECT_EQ(lost.right_target, 0);
+  // The report follows the count, from the backend's thread.
+  ASSERT_TRUE(symb::testing::eventually([&] {
+    std::lock_guard lock(reports_mu_);
+    return !reports_.empty();
+  }));
   {
     std::lock_guard lock(reports_mu_);
-    ASSERT_FALSE(reports_.empty());
     EXPECT_NE(reports_.front().find("lost"), std::string::npos) << reports_.front();
   }
   // The controller's commands go nowhere.
@@ -258,15 +260,17 @@ TEST_F(AsebaPlayground, Mdl2eMazeControllerDrivesWithoutContact) {
 
   // A Playground started again on the same port is picked up again.
   playground_ = std::make_unique<Playground>(binary_, world_, dir_);
-  const auto restarted = std::chrono::steady_clock::now();
-  while (run_.thymio->stats().reconnects == 0 && std::chrono::steady_clock::now() - restarted < 15s)
-    std::this_thread::sleep_for(20ms);
+  EXPECT_TRUE(symb::testing::eventually([&] { return run_.thymio->stats().reconnects > 0; }));
   auto back = run_.thymio->stats();
   ASSERT_EQ(back.reconnects, 1u);
   EXPECT_TRUE(back.up);
   EXPECT_TRUE(symb::testing::eventually([&] { return run_.thymio->stats().samples > back.samples + 5; }));
-  std::lock_guard lock(reports_mu_);
-  EXPECT_NE(reports_.back().find("link back"), std::string::npos) << reports_.back();
+  std::string last;
+  EXPECT_TRUE(symb::testing::eventually([&] {
+    std::lock_guard lock(reports_mu_);
+    last = reports_.back();
+    return last.find("link back") != std::string::npos;
+  })) << last;
 }
 
 TEST_F(AsebaPlayground, BraitenbergPerceptronDrivesWithoutContact) {
