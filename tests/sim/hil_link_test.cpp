@@ -340,17 +340,19 @@ class ScriptedBoard {
   std::thread thread_;
 };
 
+// The hold is counted in steps, the same way at wall-clock pace and in lockstep. In lockstep every
+// answer of the board's is on time however busy the box (at wall-clock pace a loaded box delays
+// answers past a period of even 100 ms), and each silent step costs the answer wait.
 TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
   auto world_ptr = open_arena_with_one_robot();
   EnkiWorld& world = *world_ptr;
   auto pty = io::PtyPair::open("hil");
   ASSERT_TRUE(pty.ok()) << pty.error();
   HilSimulatorOptions o;
-  // Each answer must arrive within its step for every one of the ten to be applied: a period of
-  // 100 ms leaves the board thread that much scheduling slack on a loaded 2-core box (at 30 ms,
-  // ctest -j2 beside the sanitizer builds delayed answers until several bunched into one step).
-  o.period = 100ms;
-  o.hold = 500ms;  // 5 steps
+  o.period = 30ms;
+  o.hold = 150ms;  // 5 steps
+  o.lockstep = true;
+  o.answer_wait = 500ms;
   std::vector<std::string> events;
   o.on_event = [&](const std::string& e) { events.push_back(e); };
   HilSimulator simulator(world, {pty->master}, o);
@@ -362,24 +364,24 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
     if (f.seq > 10) return std::nullopt;
     return HilWheelFrame{f.seq, 300, 300};
   });
-  ASSERT_TRUE(simulator.wait_for_boards(2s).ok());
-  auto steps = simulator.run_for(3000ms);  // 30 steps
+  ASSERT_TRUE(simulator.wait_for_boards(20s).ok());
+  auto steps = simulator.run_for(18 * 30ms);  // 18 steps, the last 7 silent
   board.stop();
   ASSERT_TRUE(steps.ok()) << steps.error();
-  ASSERT_EQ(left.size(), 30u);
+  ASSERT_EQ(left.size(), 18u);
   const double v = 300 * kCmPerSecondPerWheelUnit;
   EXPECT_EQ(left[0], 0.0);  // step 1 runs at rest: the handshake's answer is never applied
-  EXPECT_NEAR(left[1], v, 1e-9);
-  EXPECT_NEAR(left[12], v, 1e-9);  // held after the board's last answer (for step 11)
-  EXPECT_EQ(left[29], 0.0);        // then stopped
+  for (std::size_t k = 2; k <= 11; ++k) EXPECT_NEAR(left[k - 1], v, 1e-9) << "step " << k;   // on answers 1 to 10
+  for (std::size_t k = 12; k <= 15; ++k) EXPECT_NEAR(left[k - 1], v, 1e-9) << "step " << k;  // held
+  for (std::size_t k = 16; k <= 18; ++k) EXPECT_EQ(left[k - 1], 0.0) << "step " << k;  // the fifth silent: stopped
   const auto s = simulator.stats()[0];
   EXPECT_EQ(s.silences, 1u);
   EXPECT_TRUE(s.silent);
   EXPECT_EQ(s.applied, 10u);
-  EXPECT_GE(s.frames_sent, 31u);  // the handshake (once per period until answered) and one per step
-  EXPECT_LE(s.frames_sent, 35u);
+  EXPECT_EQ(s.missing, 8u);       // step 1 and the seven silent ones
+  EXPECT_EQ(s.frames_sent, 19u);  // the handshake and one per step
   ASSERT_FALSE(events.empty());
-  EXPECT_NE(events.back().find("board silent"), std::string::npos);
+  EXPECT_NE(events.back().find("board silent for 5 steps"), std::string::npos) << events.back();
 }
 
 // In lockstep a board slower than the period still drives every step: the simulator waits for
