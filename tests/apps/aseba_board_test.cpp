@@ -83,8 +83,8 @@ TEST(AsebaBoard, RunsTheScenarioOnAFakeThymioWithItsShell) {
   ASSERT_TRUE(pty) << pty.error();
   Outcome o;
   std::thread run([&] {
-    o = board({kMaze, "--robot", "aseba:tcp:127.0.0.1:" + std::to_string(thymio.port()), "--duration", "3s",
-               "--quiet", "--shell", pty->slave_path});
+    o = board({kMaze, "--robot", "aseba:tcp:127.0.0.1:" + std::to_string(thymio.port()), "--duration", "3s", "--quiet",
+               "--shell", pty->slave_path});
   });
   // The shell answers on its line as on any board. The question is asked again until the board
   // has opened its line (bytes written before that may be flushed by its opening), for most of
