@@ -14,12 +14,12 @@
 //
 // So a board that answers within the period acts one period after it read, exactly like the
 // in-process run (world_runner.hpp's latency contract), and the same seed gives the same
-// trajectory for as long as every answer is on time. In lockstep (options.lockstep) step 1 waits
-// for the answers instead of reading without blocking, and no step waits for the wall clock: every
-// answer is on time, and the run is the in-process one, bit for bit. A late answer (one for an older IR frame
-// than the newest sent) is still used, and counted. A board that stays silent: the robot keeps
-// its last speeds for `hold`, then stops, and it is reported; when frames come back it follows
-// them again.
+// trajectory for as long as every answer is on time. In lockstep (options.lockstep) item 1 first
+// waits for the answers to frame k - 1 (up to answer_wait), and no step waits for the wall clock:
+// every answer is on time, and the run is the in-process one, bit for bit. A late answer (one for
+// an older IR frame than the newest sent) is still used, and counted. A board that stays silent:
+// the robot keeps its last speeds for `hold`, then stops, and it is reported; when frames come
+// back it follows them again.
 //
 // A line whose device goes away (writes or reads fail: a USB adapter pulled, `symb link`
 // stopped) is reported, reopened by its path with backoff and used again once it is back;
