@@ -132,9 +132,14 @@ class IslandRing::State {
     figures_out_ = mine;
     for (int r = 0; r < size_; ++r)
       if (r != rank_) send(figures_out_.data(), figures_out_.size(), MPI_DOUBLE, r, kFiguresTag);
+    // Figures still to come from r: from every rank not gone, and from one that left on its own
+    // (its run failed), which sends them right after saying so; its notice may be read first.
+    const auto expected = [&](int r) {
+      return !all[static_cast<std::size_t>(r)] && (gone_from_[r] == kNever || found_at_[r] == kLeft);
+    };
     const auto heard_all = [&] {
       for (int r = 0; r < size_; ++r)
-        if (!all[static_cast<std::size_t>(r)] && gone_from_[r] == kNever) return false;
+        if (expected(r)) return false;
       return true;
     };
     // Every rank listens until all the others finished (or are gone): a rank found gone late may
@@ -142,9 +147,7 @@ class IslandRing::State {
     double since = now_seconds();
     const auto waiting_for_someone = [&] {
       for (int r = 0; r < size_; ++r)
-        if (!all[static_cast<std::size_t>(r)] && gone_from_[r] == kNever &&
-            now_seconds() - std::max(since, last_heard_[r]) <= wait_)
-          return true;
+        if (expected(r) && now_seconds() - std::max(since, last_heard_[r]) <= wait_) return true;
       return false;
     };
     while (!heard_all() && waiting_for_someone()) {
