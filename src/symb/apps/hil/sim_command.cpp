@@ -31,8 +31,7 @@ constexpr kernel::Duration kMaxDuration = sim::kMaxRunDuration;  // a scenario's
 
 constexpr OptionSpec kSimOptions[] = {
     {"--serial", "PATH", "the board's data line; one per robot, comma-separated, in scenario order"},
-    {"--duration", "D",
-     "simulated time to run (wall-clock time too, unless --lockstep): 60s, 10min, ... (default: the scenario's)"},
+    {"--duration", "D", "simulated time, also wall clock unless --lockstep (default: the scenario's)"},
     {"--out", "DIR", "output folder (default out/<scenario name>-hil)"},
     {"--seed", "S", "seed of the world, unsigned 64-bit (default: the scenario's)"},
     {"--corrupt", "P", "corrupt this fraction of the IR frames sent (0..1, default 0)"},
