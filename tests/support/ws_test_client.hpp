@@ -68,9 +68,14 @@ class WsTestClient {
     if (len > (64u << 20)) return std::nullopt;
     std::string payload(len, '\0');
     if (len && !read_exact(payload.data(), len, timeout)) return std::nullopt;
-    if ((h[0] & 0x0f) == 0x8) return std::nullopt;  // close
+    if ((h[0] & 0x0f) == 0x8) {
+      told_goodbye_ = true;
+      return std::nullopt;
+    }
     return payload;
   }
+  // Whether read_frame() met the server's close frame (rather than a timeout or a dropped socket).
+  bool told_goodbye() const { return told_goodbye_; }
 
   // Sends one masked text frame.
   bool send_text(const std::string& text) {
@@ -120,6 +125,7 @@ class WsTestClient {
 
   int fd_ = -1;
   std::string status_;
+  bool told_goodbye_ = false;
 };
 
 }  // namespace symb::testing

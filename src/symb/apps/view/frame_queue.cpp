@@ -29,8 +29,15 @@ std::optional<std::string> FrameQueue::pop(kernel::Duration timeout) {
   if (!ready_.wait_for(lock, timeout, [this] { return closed_ || !frames_.empty(); }) || closed_) return std::nullopt;
   std::string frame = std::move(frames_.front());
   frames_.pop_front();
-  ++stats_.sent;
+  writing_ = true;
   return frame;
+}
+
+void FrameQueue::done(bool written) {
+  std::lock_guard lock(mu_);
+  if (!writing_) return;
+  writing_ = false;
+  ++(written ? stats_.sent : stats_.dropped);
 }
 
 void FrameQueue::close() {
@@ -51,7 +58,7 @@ bool FrameQueue::closed() const {
 FrameQueueStats FrameQueue::stats() const {
   std::lock_guard lock(mu_);
   FrameQueueStats s = stats_;
-  s.queued = frames_.size();
+  s.queued = frames_.size() + (writing_ ? 1 : 0);
   return s;
 }
 

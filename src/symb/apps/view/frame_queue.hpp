@@ -2,10 +2,13 @@
 // thread that writes them to the socket (civetweb's mg_websocket_write blocks until the client
 // has taken the bytes). Bounded: when it is full, push() drops the oldest frame and counts it, so
 // the run never waits for a slow or stalled client; the client sees the newest state and a frame
-// counter with a gap. The counters close: pushed = sent + dropped + size().
+// counter with a gap. A frame the consumer took is still queued until it says whether it wrote
+// it (done()): a write cut short (the server stopping under it) is a frame the client never got,
+// and whoever waits for the queue to empty must wait for the write too. The counters close:
+// pushed = sent + dropped + queued.
 //
-// Thread use: any number of producers (push), one consumer (pop). push() holds the queue's lock
-// only to move a string in or out: it never waits on the consumer or the socket.
+// Thread use: any number of producers (push), one consumer (pop, done). push() holds the queue's
+// lock only to move a string in or out: it never waits on the consumer or the socket.
 #pragma once
 
 #include <condition_variable>
@@ -22,9 +25,9 @@ namespace symb::apps::view {
 
 struct FrameQueueStats {
   std::uint64_t pushed = 0;   // push() calls while open
-  std::uint64_t sent = 0;     // frames pop() handed out
-  std::uint64_t dropped = 0;  // pushed but overtaken while the queue was full
-  std::size_t queued = 0;     // waiting now
+  std::uint64_t sent = 0;     // frames written (done(true))
+  std::uint64_t dropped = 0;  // overtaken while the queue was full, left at close, or not written
+  std::size_t queued = 0;     // waiting now, the one being written included
 };
 
 class FrameQueue {
@@ -36,8 +39,11 @@ class FrameQueue {
   // close(), frames are discarded without being counted. Never blocks for longer than it takes
   // to move the string.
   void push(std::string frame);
-  // The oldest frame, waiting up to `timeout` for one; nothing on timeout or once closed.
+  // The oldest frame, waiting up to `timeout` for one; nothing on timeout or once closed. The
+  // consumer calls done() once it has tried to write it, before the next pop().
   std::optional<std::string> pop(kernel::Duration timeout);
+  // The frame pop() gave out was written (sent) or not (dropped).
+  void done(bool written);
   // Wakes the consumer; from then on pop() returns nothing and push() discards. Frames still
   // queued count as dropped.
   void close();
@@ -52,6 +58,7 @@ class FrameQueue {
   std::condition_variable ready_;
   std::deque<std::string> frames_;
   FrameQueueStats stats_;
+  bool writing_ = false;  // a popped frame not yet done()
   bool closed_ = false;
 };
 

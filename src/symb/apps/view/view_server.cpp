@@ -18,6 +18,9 @@ namespace {
 using namespace std::chrono_literals;
 
 constexpr kernel::Duration kPollEvery = 20ms;  // how often an idle sender asks poll()
+// How long the stop waits for the senders to finish the frame they are writing and say goodbye:
+// civetweb refuses every write once it is told to stop, so a frame still going out then is cut.
+constexpr kernel::Duration kGoodbyeWait = 2s;
 constexpr std::size_t kMaxTokenBytes = 256;
 
 // The token of a request's query string ("token=..."), or empty.
@@ -47,6 +50,7 @@ struct ViewServer::Client {
   std::thread sender;
   std::atomic<bool> open{true};
   std::atomic<bool> farewell{false};  // the server is going: say goodbye so the client closes
+  std::atomic<bool> ended{false};     // the sender has left its loop (and said goodbye if asked)
 };
 
 kernel::Result<std::unique_ptr<ViewServer>> ViewServer::start(ViewServerOptions options, ViewServerHandlers handlers) {
@@ -97,14 +101,20 @@ ViewServer::~ViewServer() {
   std::vector<std::shared_ptr<Client>> clients;
   {
     std::lock_guard lock(mu_);
+    stopping_ = true;
     clients = clients_;
   }
-  // The senders first: each says goodbye (a WebSocket close), so that a browser closes its end and
-  // civetweb's thread reading it stops at once rather than at its next 2 s poll.
+  // The senders first: each finishes the frame it is writing and says goodbye (a WebSocket
+  // close), so that a browser has every frame flush() saw go out and closes its end, and
+  // civetweb's thread reading it stops at once rather than at its next 2 s poll. Only then is
+  // civetweb stopped: from that moment it writes nothing more.
   for (auto& c : clients) {
     c->farewell = true;
     c->queue.close();
   }
+  const auto until = std::chrono::steady_clock::now() + kGoodbyeWait;
+  for (auto& c : clients)
+    while (!c->ended.load() && std::chrono::steady_clock::now() < until) std::this_thread::sleep_for(1ms);
   if (ctx_) {
     // civetweb's listening thread sees the stop only when its poll() returns, which it does every
     // 2 s when nothing happens: a connection made meanwhile wakes it at once.
@@ -168,6 +178,11 @@ void ViewServer::on_ws_ready(mg_connection* conn, void* self) {
     client->id = s->next_id_++;
     ++s->stats_.clients_opened;
     s->clients_.push_back(client);
+    // Upgraded while the server stops (the destructor has already told the others goodbye).
+    if (s->stopping_) {
+      client->farewell = true;
+      client->queue.close();
+    }
   }
   mg_set_user_connection_data(conn, client.get());
   s->clients_live_.fetch_add(1, std::memory_order_relaxed);
@@ -215,12 +230,19 @@ void ViewServer::retire(const std::shared_ptr<Client>& client) {
 }
 
 void ViewServer::send_loop(const std::shared_ptr<Client>& client) {
+  struct Ended {
+    Client& c;
+    ~Ended() { c.ended = true; }
+  } ended{*client};
   while (client->open.load()) {
     std::optional<std::string> frame = client->queue.pop(kPollEvery);
     if (!frame && client->queue.closed()) break;
+    const bool queued = frame.has_value();
     if (!frame && handlers_.poll) frame = handlers_.poll(client->id);
     if (!frame) continue;
-    if (mg_websocket_write(client->conn, MG_WEBSOCKET_OPCODE_TEXT, frame->data(), frame->size()) <= 0) {
+    const bool written = mg_websocket_write(client->conn, MG_WEBSOCKET_OPCODE_TEXT, frame->data(), frame->size()) > 0;
+    if (queued) client->queue.done(written);
+    if (!written) {
       // The client is gone or timed out: stop sending; civetweb closes the connection.
       client->queue.close();
       return;

@@ -63,7 +63,8 @@ struct ViewServerStats {
 class ViewServer {
  public:
   static kernel::Result<std::unique_ptr<ViewServer>> start(ViewServerOptions options, ViewServerHandlers handlers);
-  // Stops listening, closes every client and joins the sender threads.
+  // Says goodbye to every client (a WebSocket close, after the frames being written), then stops
+  // listening and joins the sender threads.
   ~ViewServer();
   ViewServer(const ViewServer&) = delete;
   ViewServer& operator=(const ViewServer&) = delete;
@@ -102,8 +103,9 @@ class ViewServer {
   mg_context* ctx_ = nullptr;
   std::uint16_t port_ = 0;
   std::atomic<std::size_t> clients_live_{0};
-  mutable std::mutex mu_;  // clients_, stats_, next_id_
+  mutable std::mutex mu_;  // clients_, stats_, next_id_, stopping_
   std::vector<std::shared_ptr<Client>> clients_;
+  bool stopping_ = false;  // the destructor has begun: a client upgraded now is told goodbye at once
   ViewServerStats stats_;
   ClientId next_id_ = 1;
 };
