@@ -313,7 +313,8 @@ std::unique_ptr<EnkiWorld> open_arena_with_one_robot() {
 // that arrives is handed to `answer`, and the wheel frame it returns (if any) is written back.
 class ScriptedBoard {
  public:
-  ScriptedBoard(const io::PtyPair& pty, std::function<std::optional<HilWheelFrame>(const HilIrFrame&)> answer)
+  // `answer` gives the frames to write back for each IR frame read, in order (none: silence).
+  ScriptedBoard(const io::PtyPair& pty, std::function<std::vector<HilWheelFrame>(const HilIrFrame&)> answer)
       : thread_([this, &pty, answer = std::move(answer)] {
           io::FrameDecoder d(256);
           std::vector<std::byte> buf(1024);
@@ -323,7 +324,8 @@ class ScriptedBoard {
             d.feed(std::span<const std::byte>(buf.data(), *n), [&](std::span<const std::byte> p) {
               auto f = decode_ir_payload(p);
               if (!f) return;
-              if (auto w = answer(*f)) (void)pty.slave->write_all(io::encode_frame(encode_wheel_payload(*w)));
+              for (const HilWheelFrame& w : answer(*f))
+                (void)pty.slave->write_all(io::encode_frame(encode_wheel_payload(w)));
             });
           }
         }) {}
@@ -360,9 +362,9 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
   simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
 
   // A board that answers the handshake and the first 10 steps with 300 units, then falls silent.
-  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::optional<HilWheelFrame> {
-    if (f.seq > 10) return std::nullopt;
-    return HilWheelFrame{f.seq, 300, 300};
+  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
+    if (f.seq > 10) return {};
+    return {HilWheelFrame{f.seq, 300, 300}};
   });
   ASSERT_TRUE(simulator.wait_for_boards(20s).ok());
   auto steps = simulator.run_for(18 * 30ms);  // 18 steps, the last 7 silent
@@ -400,10 +402,10 @@ TEST(HilSimulatorTest, InLockstepABoardSlowerThanThePeriodAnswersEveryStepOnTime
   std::vector<double> left;
   simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
   // Answers frame k with 10 k units, 50 ms after reading it (over a period late at wall-clock pace).
-  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::optional<HilWheelFrame> {
+  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
     std::this_thread::sleep_for(50ms);
     const float units = 10.0f * static_cast<float>(f.seq);
-    return HilWheelFrame{f.seq, units, units};
+    return {HilWheelFrame{f.seq, units, units}};
   });
   ASSERT_TRUE(simulator.wait_for_boards(20s).ok());
   auto steps = simulator.run_for(300ms);  // 10 steps
@@ -419,6 +421,48 @@ TEST(HilSimulatorTest, InLockstepABoardSlowerThanThePeriodAnswersEveryStepOnTime
   EXPECT_EQ(s.missing, 1u);       // step 1
   EXPECT_EQ(s.frames_sent, 11u);  // one handshake, one frame per step
   EXPECT_EQ(simulator.overruns(), 0u);
+}
+
+// An answer that comes after its step's wait (here held back on purpose) and arrives with the next
+// one is overtaken: the step takes the newer, and the older is counted superseded, so that every
+// wheel frame received is applied, stale or superseded. The board answers odd frames only
+// together with the next even one: the even steps wait in vain, the odd ones find two answers.
+TEST(HilSimulatorTest, AnAnswerOvertakenByTheNextIsCountedSuperseded) {
+  auto world_ptr = open_arena_with_one_robot();
+  EnkiWorld& world = *world_ptr;
+  auto pty = io::PtyPair::open("hil-superseded");
+  ASSERT_TRUE(pty.ok()) << pty.error();
+  HilSimulatorOptions o;
+  o.period = 30ms;
+  o.lockstep = true;
+  o.answer_wait = 500ms;  // waited out on each even step
+  HilSimulator simulator(world, {pty->master}, o);
+  std::vector<double> left;
+  simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
+  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
+    const float units = 10.0f * static_cast<float>(f.seq);
+    if (f.seq == 0) return {HilWheelFrame{0, 0, 0}};
+    if (f.seq % 2 == 1) return {};
+    return {HilWheelFrame{f.seq - 1, units - 10, units - 10}, HilWheelFrame{f.seq, units, units}};
+  });
+  ASSERT_TRUE(simulator.wait_for_boards(20s).ok());
+  auto steps = simulator.run_for(300ms);  // 10 steps, frames 1 to 10
+  board.stop();
+  ASSERT_TRUE(steps.ok()) << steps.error();
+  ASSERT_EQ(left.size(), 10u);
+  // Step k runs on the answer to frame k - 1 when k - 1 is even; otherwise on the speeds before.
+  for (std::size_t k = 3; k <= 9; k += 2) {
+    const double v = 10.0 * static_cast<double>(k - 1) * kCmPerSecondPerWheelUnit;
+    EXPECT_NEAR(left[k - 1], v, 1e-9) << "step " << k;
+    EXPECT_NEAR(left[k], v, 1e-9) << "step " << k + 1 << " keeps it";
+  }
+  const auto s = simulator.stats()[0];
+  EXPECT_EQ(s.applied, 4u);     // steps 3, 5, 7 and 9, on answers 2, 4, 6 and 8
+  EXPECT_EQ(s.superseded, 4u);  // answers 1, 3, 5 and 7
+  EXPECT_EQ(s.missing, 6u);     // step 1 and the even steps
+  EXPECT_EQ(s.late, 0u);
+  EXPECT_EQ(s.stale, 0u);
+  EXPECT_EQ(s.received, 1u + s.applied + s.superseded);  // the handshake's answer, and the rest
 }
 
 // A serial path that goes away and comes back, as a USB adapter's does when it is pulled and

@@ -35,8 +35,8 @@ std::string describe(const HilRobotStats& s) {
          u(s.line_losses) + " lost, " + u(s.line_reopens) + " reopened, down " +
          u(static_cast<std::uint64_t>(kernel::to_milliseconds(s.line_down))) + " ms in all); received " +
          u(s.received) + " good, " + u(s.bad_frames()) + " bad; applied " + u(s.applied) + " (" + u(s.late) +
-         " late), " + u(s.stale) + " stale, " + u(s.missing) + " steps without a new frame, " + u(s.silences) +
-         " silences, " + u(s.recoveries) + " recoveries";
+         " late), " + u(s.stale) + " stale, " + u(s.superseded) + " superseded, " + u(s.missing) +
+         " steps without a new frame, " + u(s.silences) + " silences, " + u(s.recoveries) + " recoveries";
 }
 
 HilSimulator::HilSimulator(World& world, std::vector<std::shared_ptr<io::IOStream>> ports, HilSimulatorOptions options)
@@ -156,7 +156,7 @@ std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_
                                                        kernel::Duration wait) {
   Robot& r = robots_[i];
   std::optional<HilWheelFrame> best;
-  std::uint64_t received = 0, malformed = 0, stale = 0;
+  std::uint64_t received = 0, malformed = 0, stale = 0, superseded = 0;
   any_frame = false;
   const auto deadline = Clock::now() + wait;
   // A zero timeout polls; the loop ends as soon as nothing more is there, once the answer awaited
@@ -189,6 +189,7 @@ std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_
         ++stale;
         return;
       }
+      if (best) ++superseded;  // the one of the two not kept
       if (!best || f->seq >= best->seq) best = *f;
     });
   }
@@ -196,6 +197,7 @@ std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_
   r.stats.received += received;
   r.stats.malformed += malformed;
   r.stats.stale += stale;
+  r.stats.superseded += superseded;
   r.stats.decoder = r.decoder.stats();
   return best;
 }

@@ -82,12 +82,15 @@ struct HilRobotStats {
   std::uint64_t line_reopens = 0;
   kernel::Duration line_down{0};  // in all, the outage in progress included
   bool line_open = true;
-  std::uint64_t received = 0;    // good wheel frames
-  std::uint64_t malformed = 0;   // good frames that are no wheel frame
-  io::FrameStats decoder;        // dropped(): bad frames (CRC, framing)
-  std::uint64_t applied = 0;     // steps that took new speeds from a frame
-  std::uint64_t late = 0;        // ... that answered an older IR frame than the newest sent
-  std::uint64_t stale = 0;       // frames older than one already applied: dropped
+  std::uint64_t received = 0;   // good wheel frames
+  std::uint64_t malformed = 0;  // good frames that are no wheel frame
+  io::FrameStats decoder;       // dropped(): bad frames (CRC, framing)
+  std::uint64_t applied = 0;    // steps that took new speeds from a frame
+  std::uint64_t late = 0;       // ... that answered an older IR frame than the newest sent
+  std::uint64_t stale = 0;      // frames older than one already applied: dropped
+  // Frames overtaken by a newer one before a step took them (an answer that came after its own
+  // step's wait, then with the next): with applied and stale, every wheel frame received.
+  std::uint64_t superseded = 0;
   std::uint64_t missing = 0;     // steps with no new frame (the last speeds kept)
   std::uint64_t silences = 0;    // times the board fell silent for `hold` (robot stopped)
   std::uint64_t recoveries = 0;  // times it answered again after that

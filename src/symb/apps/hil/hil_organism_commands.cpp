@@ -199,10 +199,11 @@ int run_sim_organism(const sim::Scenario& sc, const SimOrganismArgs& args, const
          << "link: " << sim::mujoco::describe(st) << "\n"
          << "link-stats: sent=" << st.frames_sent << " corrupted=" << st.corrupted << " received=" << st.received
          << " bad=" << st.bad_frames() << " applied=" << st.applied << " late=" << st.late << " stale=" << st.stale
-         << " missing=" << st.missing << " silences=" << st.silences << " docking=" << st.dock_commands
-         << " docking_refused=" << st.dock_refused << " unsent=" << st.unsent << " line_losses=" << st.line_losses
-         << " line_reopens=" << st.line_reopens << " line_down_ms=" << kernel::to_milliseconds(st.line_down)
-         << " line_open=" << (st.line_open ? 1 : 0) << "\n";
+         << " superseded=" << st.superseded << " missing=" << st.missing << " silences=" << st.silences
+         << " docking=" << st.dock_commands << " docking_refused=" << st.dock_refused << " unsent=" << st.unsent
+         << " line_losses=" << st.line_losses << " line_reopens=" << st.line_reopens
+         << " line_down_ms=" << kernel::to_milliseconds(st.line_down) << " line_open=" << (st.line_open ? 1 : 0)
+         << "\n";
   const std::string dead = st.line_open ? std::string()
                                         : args.board + " (down " +
                                               fixed(std::chrono::duration<double>(st.line_down).count(), 1) +

@@ -270,15 +270,15 @@ int run_sim_command(std::span<const std::string_view> args, const CliContext& ct
   for (const auto& x : recorder.summaries())
     summary << x.name << "," << fixed(x.distance / 100, 3) << "," << x.contact_events << "," << x.contact_steps << ","
             << fixed(x.moving_seconds, 2) << "," << fixed(x.end.x, 1) << "," << fixed(x.end.y, 1) << "\n";
-  summary << "\nrobot,frames_sent,corrupted,write_errors,received,bad,applied,late,stale,missing,silences,"
+  summary << "\nrobot,frames_sent,corrupted,write_errors,received,bad,applied,late,stale,superseded,missing,silences,"
              "recoveries,unsent,line_losses,line_reopens,line_down_ms,line_open\n";
   std::string dead;  // the robots whose line was down at the end
   for (const auto& s : link) {
     const auto down_ms = std::chrono::duration_cast<std::chrono::milliseconds>(s.line_down).count();
     summary << s.robot << "," << s.frames_sent << "," << s.corrupted << "," << s.write_errors << "," << s.received
-            << "," << s.bad_frames() << "," << s.applied << "," << s.late << "," << s.stale << "," << s.missing << ","
-            << s.silences << "," << s.recoveries << "," << s.unsent << "," << s.line_losses << "," << s.line_reopens
-            << "," << down_ms << "," << (s.line_open ? 1 : 0) << "\n";
+            << "," << s.bad_frames() << "," << s.applied << "," << s.late << "," << s.stale << "," << s.superseded
+            << "," << s.missing << "," << s.silences << "," << s.recoveries << "," << s.unsent << "," << s.line_losses
+            << "," << s.line_reopens << "," << down_ms << "," << (s.line_open ? 1 : 0) << "\n";
     if (!s.line_open)
       dead += (dead.empty() ? "" : "; ") + s.robot + " (down " + fixed(static_cast<double>(down_ms) / 1000, 1) +
               " s in all, " + std::to_string(s.line_losses) + " loss(es))";

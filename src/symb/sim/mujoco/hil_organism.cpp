@@ -23,8 +23,9 @@ std::string describe(const HilOrganismStats& s) {
          std::to_string(s.write_errors) + " not taken, " + std::to_string(s.unsent) + " unsent), received " +
          std::to_string(s.received) + " good, " + std::to_string(s.bad_frames()) + " bad; applied " +
          std::to_string(s.applied) + ", " + std::to_string(s.late) + " late, " + std::to_string(s.stale) + " stale, " +
-         std::to_string(s.missing) + " ticks without; silent " + std::to_string(s.silences) + " time(s); docking " +
-         std::to_string(s.dock_commands) + " (" + std::to_string(s.dock_refused) + " refused)";
+         std::to_string(s.superseded) + " superseded, " + std::to_string(s.missing) + " ticks without; silent " +
+         std::to_string(s.silences) + " time(s); docking " + std::to_string(s.dock_commands) + " (" +
+         std::to_string(s.dock_refused) + " refused)";
 }
 
 kernel::Status HilOrganism::check(const Scenario& sc, std::size_t module) {
@@ -198,6 +199,7 @@ bool HilOrganism::read_board(kernel::Duration wait, std::uint32_t want) {
         ++stats_.stale;
         return;
       }
+      if (best_) ++stats_.superseded;  // the one of the two not kept
       if (!best_ || c.seq >= best_->seq) best_ = c;
       if (want > 0 && c.seq >= want) got = true;
     });

@@ -66,15 +66,18 @@ struct HilOrganismOptions {
 };
 
 struct HilOrganismStats {
-  std::uint64_t frames_sent = 0;    // sensor frames the line took, handshake included
-  std::uint64_t corrupted = 0;      // of them, corrupted by the fault injector
-  std::uint64_t write_errors = 0;   // frames the line did not take
-  std::uint64_t received = 0;       // good command frames
-  std::uint64_t malformed = 0;      // good frames that are neither a command nor a docking frame
-  io::FrameStats decoder;           // dropped(): bad frames (CRC, framing)
-  std::uint64_t applied = 0;        // ticks that took new commands from a frame
-  std::uint64_t late = 0;           // ... that answered an older frame than the newest sent
-  std::uint64_t stale = 0;          // frames older than one already applied: dropped
+  std::uint64_t frames_sent = 0;   // sensor frames the line took, handshake included
+  std::uint64_t corrupted = 0;     // of them, corrupted by the fault injector
+  std::uint64_t write_errors = 0;  // frames the line did not take
+  std::uint64_t received = 0;      // good command frames
+  std::uint64_t malformed = 0;     // good frames that are neither a command nor a docking frame
+  io::FrameStats decoder;          // dropped(): bad frames (CRC, framing)
+  std::uint64_t applied = 0;       // ticks that took new commands from a frame
+  std::uint64_t late = 0;          // ... that answered an older frame than the newest sent
+  std::uint64_t stale = 0;         // frames older than one already applied: dropped
+  // Frames overtaken by a newer one before a tick took them (an answer that came after its own
+  // tick's wait, then with the next): with applied and stale, every command frame received.
+  std::uint64_t superseded = 0;
   std::uint64_t missing = 0;        // ticks with no new frame (the last commands kept)
   std::uint64_t silences = 0;       // times the board fell silent for `hold` (module stopped)
   std::uint64_t dock_commands = 0;  // docking frames applied to the world
