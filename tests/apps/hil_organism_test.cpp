@@ -57,6 +57,15 @@ std::map<std::string, long long> hil3_fields(const std::string& text, const std:
   return out;
 }
 
+// The good frames in the board's latest statistics line ("board: frames N good, ..."), or -1.
+long long hil3_board_frames(const std::string& board_output) {
+  const auto at = board_output.rfind("board: frames ");
+  long long good = -1;
+  if (at == std::string::npos || std::sscanf(board_output.c_str() + at, "board: frames %lld good", &good) != 1)
+    return -1;
+  return good;
+}
+
 class Hil3Cli : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -76,9 +85,9 @@ class Hil3Cli : public ::testing::Test {
     }
     if (!HasFailure()) fs::remove_all(dir_);
   }
-  std::unique_ptr<Hil3Child> board() {
+  std::unique_ptr<Hil3Child> board(const std::string& extra = "") {
     auto b = std::make_unique<Hil3Child>(
-        "board '" + kChain + "' --robot m4 --quiet --serial '" + (dir_ / "tty" / "board").string() + "'",
+        "board '" + kChain + "' --robot m4 --quiet --serial '" + (dir_ / "tty" / "board").string() + "' " + extra,
         dir_ / "board.log");
     for (int i = 0; i < 1500 && b->output().find("Ctrl-C to stop") == std::string::npos; ++i)
       std::this_thread::sleep_for(20ms);
@@ -138,11 +147,14 @@ TEST_F(Hil3Cli, CorruptedFramesAreCountedExactlyAtWallClockPace) {
 // `symb link` stopped in the middle of a run and started again 0.5 s later: both sides reopen
 // their paths, the simulator exits 0, and the board's module answers again.
 TEST_F(Hil3Cli, BothSidesReopenTheirLinesWhenTheLinkComesBack) {
-  auto b = board();
+  auto b = board("--stats-every 100ms");
   Hil3Child sim("sim '" + kChain + "' --board m4 --quiet --duration 5s --serial '" + (dir_ / "tty" / "sim").string() +
                     "' --out '" + (dir_ / "back").string() + "'",
                 dir_ / "back.log");
-  std::this_thread::sleep_for(1500ms);  // the run is under way
+  // The run is under way once the board has read a second of frames (its statistics say so): a
+  // simulator slow to start on a loaded machine must have opened its line before the link stops.
+  for (int i = 0; i < 2000 && hil3_board_frames(b->output()) < 34; ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_GE(hil3_board_frames(b->output()), 34) << b->output();
   link_->interrupt();
   ASSERT_EQ(link_->wait(), 0) << link_->output();
   std::this_thread::sleep_for(500ms);  // the outage: no link at all
@@ -162,7 +174,7 @@ TEST_F(Hil3Cli, BothSidesReopenTheirLinesWhenTheLinkComesBack) {
   EXPECT_EQ(bs.at("line_reopens"), 1) << b->output();
   EXPECT_EQ(bs.at("line_open"), 1);
   // The board answered after the line came back: more than the ticks before the outage were
-  // applied (1.5 s is 50 ticks; the run is 166).
+  // applied (about a second, 34 ticks; the run is 166).
   EXPECT_GT(link.at("applied"), 100) << sim.output();
   std::printf("3D HIL, link stopped for 0.5 s: sim down %lld ms, %lld unsent, %lld applied of 166 ticks\n",
               link.at("line_down_ms"), link.at("unsent"), link.at("applied"));
