@@ -89,7 +89,8 @@ struct HilRobotStats {
   std::uint64_t late = 0;       // ... that answered an older IR frame than the newest sent
   std::uint64_t stale = 0;      // frames older than one already applied: dropped
   // Frames overtaken by a newer one before a step took them (an answer that came after its own
-  // step's wait, then with the next): with applied and stale, every wheel frame received.
+  // step's wait, then with the next): with applied and stale, every wheel frame received but the
+  // handshake's answers.
   std::uint64_t superseded = 0;
   std::uint64_t missing = 0;     // steps with no new frame (the last speeds kept)
   std::uint64_t silences = 0;    // times the board fell silent for `hold` (robot stopped)

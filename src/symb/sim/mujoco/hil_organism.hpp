@@ -76,7 +76,8 @@ struct HilOrganismStats {
   std::uint64_t late = 0;          // ... that answered an older frame than the newest sent
   std::uint64_t stale = 0;         // frames older than one already applied: dropped
   // Frames overtaken by a newer one before a tick took them (an answer that came after its own
-  // tick's wait, then with the next): with applied and stale, every command frame received.
+  // tick's wait, then with the next): with applied and stale, every command frame received but
+  // the handshake's answers and the newest (applied at the next tick).
   std::uint64_t superseded = 0;
   std::uint64_t missing = 0;        // ticks with no new frame (the last commands kept)
   std::uint64_t silences = 0;       // times the board fell silent for `hold` (module stopped)
