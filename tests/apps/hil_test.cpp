@@ -200,7 +200,8 @@ TEST_F(Hil, FollowsTheInProcessRunOfTheMaze) {
 }
 
 // `symb sim --lockstep`: the simulator waits for every answer instead of the wall clock, so a
-// minute of the maze is the in-process run bit for bit, however busy the box.
+// minute of the maze is the in-process run bit for bit on an idle or moderately busy box (what a
+// board on the wall clock can still do between a frame and its answer: docs/hil.md).
 TEST_F(Hil, InLockstepTheRunIsTheInProcessOneBitForBit) {
   run_both(kLockstepSeconds, "--lockstep");
   ASSERT_FALSE(HasFatalFailure());

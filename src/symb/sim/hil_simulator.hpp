@@ -65,8 +65,10 @@ struct HilSimulatorOptions {
   kernel::Duration reopen_most = std::chrono::seconds(2);
   // Lockstep: before each step, wait for every board's answer to the newest frame, up to
   // `answer_wait` of wall time, instead of keeping the wall-clock pace (steps follow each other
-  // as soon as the answers are in). A board that answers within it drives its robot exactly as
-  // in process, however busy the machine; a silent one costs each step the whole wait.
+  // as soon as the answers are in). Every answer is then on time however busy the machine, and a
+  // board whose node answers each frame from that frame drives its robot exactly as in process
+  // (see docs/hil.md for what a board on the wall clock can still do between a frame and its
+  // answer); a silent one costs each step the whole wait.
   bool lockstep = false;
   kernel::Duration answer_wait = std::chrono::seconds(1);
 };
