@@ -342,27 +342,43 @@ class ScriptedBoard {
   std::thread thread_;
 };
 
+// One robot in an empty arena, simulated in lockstep at 30 ms a step over a pseudo-terminal whose
+// other end a ScriptedBoard plays; `left` is the robot's left wheel speed at each step.
+struct LockstepRig {
+  std::unique_ptr<EnkiWorld> world = open_arena_with_one_robot();
+  std::optional<io::PtyPair> pty;
+  std::unique_ptr<HilSimulator> simulator;
+  std::vector<double> left;
+
+  // The simulator with `o`, whose period and lockstep are set here.
+  void open(const std::string& name, HilSimulatorOptions o) {
+    auto p = io::PtyPair::open(name);
+    ASSERT_TRUE(p.ok()) << p.error();
+    pty = std::move(p).value();
+    o.period = 30ms;
+    o.lockstep = true;
+    simulator = std::make_unique<HilSimulator>(*world, std::vector<std::shared_ptr<io::IOStream>>{pty->master}, o);
+    simulator->add_observer([this](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
+  }
+};
+
 // The hold is counted in steps, the same way at wall-clock pace and in lockstep. In lockstep every
 // answer of the board's is on time however busy the box (at wall-clock pace a loaded box delays
 // answers past a period of even 100 ms), and each silent step costs the answer wait.
 TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
-  auto world_ptr = open_arena_with_one_robot();
-  EnkiWorld& world = *world_ptr;
-  auto pty = io::PtyPair::open("hil");
-  ASSERT_TRUE(pty.ok()) << pty.error();
   HilSimulatorOptions o;
-  o.period = 30ms;
   o.hold = 150ms;  // 5 steps
-  o.lockstep = true;
   o.answer_wait = 500ms;
   std::vector<std::string> events;
   o.on_event = [&](const std::string& e) { events.push_back(e); };
-  HilSimulator simulator(world, {pty->master}, o);
-  std::vector<double> left;
-  simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
+  LockstepRig rig;
+  rig.open("hil", o);
+  ASSERT_FALSE(HasFatalFailure());
+  HilSimulator& simulator = *rig.simulator;
+  const std::vector<double>& left = rig.left;
 
   // A board that answers the handshake and the first 10 steps with 300 units, then falls silent.
-  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
+  ScriptedBoard board(*rig.pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
     if (f.seq > 10) return {};
     return {HilWheelFrame{f.seq, 300, 300}};
   });
@@ -390,19 +406,15 @@ TEST(HilSimulatorTest, ASilentBoardsRobotKeepsItsSpeedsForAWhileThenStops) {
 // the answer to the newest frame before each step, so step k runs on the answer to frame k - 1,
 // never late and never missing; the handshake goes out once.
 TEST(HilSimulatorTest, InLockstepABoardSlowerThanThePeriodAnswersEveryStepOnTime) {
-  auto world_ptr = open_arena_with_one_robot();
-  EnkiWorld& world = *world_ptr;
-  auto pty = io::PtyPair::open("hil-lockstep");
-  ASSERT_TRUE(pty.ok()) << pty.error();
   HilSimulatorOptions o;
-  o.period = 30ms;
-  o.lockstep = true;
   o.answer_wait = 20s;  // only a silent board waits it out
-  HilSimulator simulator(world, {pty->master}, o);
-  std::vector<double> left;
-  simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
+  LockstepRig rig;
+  rig.open("hil-lockstep", o);
+  ASSERT_FALSE(HasFatalFailure());
+  HilSimulator& simulator = *rig.simulator;
+  const std::vector<double>& left = rig.left;
   // Answers frame k with 10 k units, 50 ms after reading it (over a period late at wall-clock pace).
-  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
+  ScriptedBoard board(*rig.pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
     std::this_thread::sleep_for(50ms);
     const float units = 10.0f * static_cast<float>(f.seq);
     return {HilWheelFrame{f.seq, units, units}};
@@ -428,18 +440,14 @@ TEST(HilSimulatorTest, InLockstepABoardSlowerThanThePeriodAnswersEveryStepOnTime
 // wheel frame received is applied, stale or superseded. The board answers odd frames only
 // together with the next even one: the even steps wait in vain, the odd ones find two answers.
 TEST(HilSimulatorTest, AnAnswerOvertakenByTheNextIsCountedSuperseded) {
-  auto world_ptr = open_arena_with_one_robot();
-  EnkiWorld& world = *world_ptr;
-  auto pty = io::PtyPair::open("hil-superseded");
-  ASSERT_TRUE(pty.ok()) << pty.error();
   HilSimulatorOptions o;
-  o.period = 30ms;
-  o.lockstep = true;
   o.answer_wait = 500ms;  // waited out on each even step
-  HilSimulator simulator(world, {pty->master}, o);
-  std::vector<double> left;
-  simulator.add_observer([&](const StepRecord& r) { left.push_back(r.robots[0].state.left_speed); });
-  ScriptedBoard board(*pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
+  LockstepRig rig;
+  rig.open("hil-superseded", o);
+  ASSERT_FALSE(HasFatalFailure());
+  HilSimulator& simulator = *rig.simulator;
+  const std::vector<double>& left = rig.left;
+  ScriptedBoard board(*rig.pty, [](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
     const float units = 10.0f * static_cast<float>(f.seq);
     if (f.seq == 0) return {HilWheelFrame{0, 0, 0}};
     if (f.seq % 2 == 1) return {};
