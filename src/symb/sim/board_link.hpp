@@ -26,6 +26,10 @@
 // devices are not a registry's to hand out. ir and wheels declare the in-process device tasks'
 // layouts (device_task_ports), so the board refuses the same hooks a simulated robot does. stats() may be read from any
 // thread.
+//
+// The node keeps the wall clock (the paper's board, on OS threads): it shows how the control
+// system copes with real time. HilRobotBoard (hil_robot_board.hpp) is the same robot on a clock
+// the simulator's frames drive, which is the in-process run bit for bit.
 #pragma once
 
 #include <cstdint>

@@ -16,7 +16,8 @@
 // in-process run (world_runner.hpp's latency contract), and the same seed gives the same
 // trajectory for as long as every answer is on time. In lockstep (options.lockstep) item 1 first
 // waits for the answers to frame k - 1 (up to answer_wait), and no step waits for the wall clock:
-// every answer is on time, and the run is the in-process one, bit for bit. A late answer (one for
+// every answer is on time, and with a board whose node runs on the frames (hil_robot_board.hpp)
+// the run is the in-process one, bit for bit. A late answer (one for
 // an older IR frame than the newest sent) is still used, and counted. A board that stays silent:
 // the robot keeps its last speeds for `hold`, then stops, and it is reported; when frames come
 // back it follows them again.
@@ -66,8 +67,8 @@ struct HilSimulatorOptions {
   // Lockstep: before each step, wait for every board's answer to the newest frame, up to
   // `answer_wait` of wall time, instead of keeping the wall-clock pace (steps follow each other
   // as soon as the answers are in). Every answer is then on time however busy the machine, and a
-  // board whose node answers each frame from that frame drives its robot exactly as in process
-  // (see docs/hil.md for what a board on the wall clock can still do between a frame and its
+  // board whose node runs on the frames (HilRobotBoard) drives its robot exactly as in process
+  // (docs/hil.md says what a board on the wall clock can still do between a frame and its
   // answer); a silent one costs each step the whole wait.
   bool lockstep = false;
   kernel::Duration answer_wait = std::chrono::seconds(1);
