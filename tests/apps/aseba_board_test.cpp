@@ -47,6 +47,17 @@ TEST(AsebaBoard, MalformedTargetsAreUsageErrors) {
   EXPECT_EQ(std::get<AsebaTarget>(t).port, 33333);
 }
 
+// A Thymio keeps its own time: only a board the simulator drives can follow its frames.
+TEST(AsebaBoard, LockstepIsAUsageErrorWithAThymioOrAPlaygroundFile) {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{kMaze, "--robot", "aseba:tcp:127.0.0.1:1", "--lockstep"},
+        std::vector<std::string>{kMaze, "--playground", "x.playground", "--lockstep"}}) {
+    const Outcome o = board(args);
+    EXPECT_EQ(o.status, kExitUsage) << o.err;
+    EXPECT_NE(o.err.find("--lockstep is for a board the simulator drives"), std::string::npos) << o.err;
+  }
+}
+
 TEST(AsebaBoard, NobodyThereAndNotAThymioAreFailuresWithTheReason) {
   symb::testing::FakeAsebaNode epuck("e-puck", {{"prox", 8}, {"motor.left.target", 1}});
   ASSERT_TRUE(epuck.listen());

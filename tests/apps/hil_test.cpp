@@ -144,17 +144,18 @@ class Hil : public ::testing::Test {
     EXPECT_NE(b->output().find("Ctrl-C to stop"), std::string::npos) << b->output();
     return b;
   }
-  // The maze with seed 1 for `seconds`: `symb run` into inproc/, then board and `symb sim` (with
-  // `sim_extra`) into hil/.
-  void run_both(int seconds, const std::string& sim_extra) {
+  // The maze with seed 1 for `seconds`: `symb run` into inproc/, then board (with `board_extra`)
+  // and `symb sim` (with `sim_extra`) into hil/. The board's output is kept in board_output_.
+  void run_both(int seconds, const std::string& sim_extra, const std::string& board_extra = "") {
     const std::string d = "--duration " + std::to_string(seconds) + "s";
     Child run("run '" + kScenario + "' --seed 1 --quiet --out '" + (dir_ / "inproc").string() + "' " + d,
               dir_ / "inproc.log");
     ASSERT_EQ(run.wait(), 0) << run.output();
-    auto b = board();
+    auto b = board(board_extra);
     ASSERT_EQ(sim("hil", "--seed 1 " + sim_extra + " " + d), 0) << sim_output_;
     b->interrupt();
     ASSERT_EQ(b->wait(), 0) << b->output();
+    board_output_ = b->output();
   }
   int sim(const std::string& out, const std::string& extra) {
     Child c("sim '" + kScenario + "' --serial '" + (dir_ / "tty" / "sim").string() + "' --out '" +
@@ -167,7 +168,7 @@ class Hil : public ::testing::Test {
 
   fs::path dir_;
   std::unique_ptr<Child> link_;
-  std::string sim_output_;
+  std::string sim_output_, board_output_;
   int boards_ = 0;
 };
 
@@ -199,11 +200,12 @@ TEST_F(Hil, FollowsTheInProcessRunOfTheMaze) {
               din, dhil, window, same, sum / static_cast<double>(window), link.at("late"));
 }
 
-// `symb sim --lockstep`: the simulator waits for every answer instead of the wall clock, so a
-// minute of the maze is the in-process run bit for bit on an idle or moderately busy box (what a
-// board on the wall clock can still do between a frame and its answer: docs/hil.md).
+// `symb sim --lockstep` with `symb board --lockstep`: the simulator waits for every answer instead
+// of the wall clock, and the board's node runs on the frames, so a minute of the maze is the
+// in-process run bit for bit however busy the box (a board on the wall clock can still act
+// between a frame and its answer: docs/hil.md).
 TEST_F(Hil, InLockstepTheRunIsTheInProcessOneBitForBit) {
-  run_both(kLockstepSeconds, "--lockstep");
+  run_both(kLockstepSeconds, "--lockstep", "--lockstep");
   ASSERT_FALSE(HasFatalFailure());
   const auto hash = [](const fs::path& summary) {
     const std::string text = symb::test_support::read_whole_file(summary);
@@ -223,6 +225,14 @@ TEST_F(Hil, InLockstepTheRunIsTheInProcessOneBitForBit) {
   EXPECT_EQ(link.at("missing"), 1);  // step 1 runs at rest
   EXPECT_EQ(link.at("bad"), 0);
   EXPECT_NE(sim_output_.find("in lockstep with the boards"), std::string::npos) << sim_output_;
+  EXPECT_NE(board_output_.find("its clock follows the simulator's frames"), std::string::npos) << board_output_;
+  const auto board_stats = fields(board_output_, "board-stats:");
+  ASSERT_FALSE(board_stats.empty()) << board_output_;
+  EXPECT_EQ(board_stats.at("good"), steps);  // every frame ran the node, none was let go
+  EXPECT_EQ(board_stats.at("missed"), 0);
+  EXPECT_EQ(board_stats.at("handshakes"), 1);
+  EXPECT_EQ(board_stats.at("answers"), steps + 1);
+  EXPECT_EQ(board_stats.at("line_open"), 1);
 }
 
 // The newest "board: frames N good, M bad (crc C), X missed (S stale)" line of a board's periodic

@@ -1,7 +1,8 @@
 // `symb board SCENARIO --serial PATH`: the board side of hardware-in-the-loop, the paper's
 // evaluation board. One robot's control system from the scenario runs here on OS threads; its
 // IR sensor and wheel tasks talk to the simulator over the serial line, and its command shell
-// listens on a second line.
+// listens on a second line. With --lockstep the node runs on a clock the simulator's frames drive
+// instead (sim::HilRobotBoard), as a 3D board's always does.
 #include <thread>
 
 #include "symb/apps/hil/hil_commands.hpp"
@@ -9,8 +10,10 @@
 #include "symb/apps/view/view_request.hpp"
 #include "symb/io/serial_port.hpp"
 #include "symb/kernel/thread_executor.hpp"
+#include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/shell/shell_task.hpp"
 #include "symb/sim/board_link.hpp"
+#include "symb/sim/hil_robot_board.hpp"
 #include "symb/sim/playground_world.hpp"
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
@@ -27,6 +30,7 @@ constexpr OptionSpec kBoardOptions[] = {
     {"--serial", "PATH", "the data line to the simulator"},
     {"--shell", "PATH", "a second serial line for the command shell (symb shell --serial ...)"},
     {"--robot", "NAME", "the scenario's robot this board runs (default: the first; 3D: required)"},
+    {"--lockstep", "", "2D: the node's clock follows the simulator's frames, not the wall clock (3D always)"},
     {"--dds", "", "3D scenarios: reach the simulator over DDS (symb sim --dds) instead of --serial"},
     {"--domain", "N", "--dds: the DDS domain id, 0..232 (default 0)"},
     {"--prefix", "NAME", "--dds: the first name of every topic, rt/NAME/... (default symb)"},
@@ -55,9 +59,119 @@ void print_board_help(std::ostream& out) {
       << "simulator; --serial is then not needed (docs/thymio.md).\n\n"
       << "Options:\n"
       << describe_options(kBoardOptions) << "\n"
+      << "With --lockstep the node's clock follows the simulator's frames: each IR frame runs it up to\n"
+      << "the world's next step and the wheels' output then is the answer, so every act of the node falls\n"
+      << "where it falls in process; with `symb sim --lockstep` the run is `symb run`'s, bit for bit,\n"
+      << "however busy the machine.\n\n"
       << "Runs until Ctrl-C (or --duration); it keeps running when the link goes silent, and when the\n"
       << "serial device goes away it reopens the path with backoff (100 ms doubling to 2 s). It exits\n"
       << "1 when the line was down at the end (a dead link), with how long it was down.\n";
+}
+
+struct BoardLockstepArgs {
+  std::shared_ptr<io::SerialPort> port, shell_port;
+  std::string serial, shell_path;
+  std::optional<std::uint64_t> seed;
+  std::optional<kernel::Duration> duration;
+  kernel::Duration stats_every;
+  bool quiet = false;
+  view::ViewRequest view;
+};
+
+// The 2D board on the simulator's frames: the robot's RobotSystem over HilRobotBoard's devices on
+// a virtual-time executor that serve() drives.
+int run_board_lockstep(const sim::Scenario& sc, std::size_t index, const BoardLockstepArgs& a, const CliContext& ctx) {
+  const sim::RobotSpec& spec = sc.robots[index];
+  kernel::VirtualTimeExecutor ex;
+  sim::HilRobotBoardOptions bo;
+  bo.control_period = sc.control_period;
+  bo.on_event = [&ctx, &spec](const std::string& text) {
+    ctx.err << "board " << spec.name << ": " << text << "\n" << std::flush;
+  };
+  sim::HilRobotBoard board(ex, a.port, bo);
+  sim::RobotSystemOptions ro;
+  ro.control_period = sc.control_period;
+  ro.seed = sim::robot_node_seed(a.seed.value_or(sc.seed), index);
+  ro.read_program = sim::file_program_reader(sc.base_dir);
+  auto built = sim::RobotSystem::build(ex, spec, board.devices(), ro);
+  if (!built) {
+    ctx.err << kBoardCommand << ": " << built.error() << "\n";
+    return kExitFailure;
+  }
+  std::unique_ptr<sim::RobotSystem> system = std::move(built).value();
+  auto log_sink = std::make_shared<PrefixedLogSink>(ctx.err, "board " + spec.name + ": ");
+  if (!a.quiet) {
+    for (const os::LogEntry& e : system->node().log().since(0)) log_sink->write(e);
+    system->node().log().add_sink(log_sink);
+  }
+  if (a.shell_port) {
+    auto table = std::make_shared<shell::DeviceTable>();
+    for (const auto& d : board.device_list()) (*table)[d->name()] = d;
+    (*table)["uart0"] = a.port;
+    (*table)["uart1"] = a.shell_port;
+    shell::ShellOptions so;
+    so.devices = table;
+    auto attached = shell::attach_shell(system->node(), a.shell_port, so);
+    if (!attached) {
+      ctx.err << kBoardCommand << ": shell: " << attached.error() << "\n";
+      return kExitFailure;
+    }
+  }
+  if (auto st = board.start(); !st) {
+    ctx.err << kBoardCommand << ": " << st.error() << "\n";
+    return kExitFailure;
+  }
+  // The web view reads the robot's node between two frames, where none of its tasks runs.
+  auto view_started = BoardView::start(a.view, spec.name, system->node(), sc.name, ctx.err);
+  if (!view_started) {
+    ctx.err << kBoardCommand << ": " << view_started.error() << "\n";
+    return kExitFailure;
+  }
+  BoardView board_view = std::move(view_started).value();
+  ctx.out << "board: robot " << spec.name << " of " << sc.name << " on " << a.serial
+          << (a.shell_port ? ", shell on " + a.shell_path : std::string()) << "; " << system->node().task_count()
+          << " tasks; its clock follows the simulator's frames; Ctrl-C to stop\n"
+          << std::flush;
+  FrameBoardLoop loop;
+  loop.robot = spec.name;
+  loop.serve = [&board](kernel::Duration timeout) { return board.serve(timeout); };
+  loop.port = a.port;
+  loop.between = [&] {
+    ex.run_injected();  // the shell's input, between frames
+    board_view.between();
+  };
+  loop.stats = [&board] { return sim::describe(board.stats()); };
+  loop.node = &system->node();
+  loop.duration = a.duration;
+  loop.stats_every = a.stats_every;
+  const FrameBoardEnd end = run_frame_board_loop(loop, ctx.err);
+  system->node().log().remove_sink(log_sink);
+  board_view.stop();
+  const sim::HilRobotBoardStats s = board.stats();
+  const io::ReopenBackoff& line = end.line;
+  ctx.out << "board: " << sim::describe(s) << "\n"
+          << "board-stats: good=" << s.frames << " bad=" << s.bad_frames() << " missed=" << s.missed
+          << " out_of_order=" << s.out_of_order << " malformed=" << s.malformed << " handshakes=" << s.handshakes
+          << " restarts=" << s.restarts << " answers=" << s.answers << " not_taken=" << s.write_errors
+          << " losses=" << s.link_losses << " recoveries=" << s.link_recoveries << " bytes_in=" << s.bytes_in
+          << " line_losses=" << line.losses() << " line_reopens=" << line.reopens()
+          << " line_down_ms=" << kernel::to_milliseconds(line.down_for(end.at))
+          << " line_open=" << (line.down() ? 0 : 1) << "\n";
+  system.reset();
+  a.port->close();
+  if (a.shell_port) a.shell_port->close();
+  if (!end.cycle.empty()) {
+    ctx.err << kBoardCommand << ": " << end.cycle << "\n";
+    return kExitFailure;
+  }
+  // A dead link is a failed run: the serial line was down when the board stopped.
+  if (line.down()) {
+    ctx.err << kBoardCommand << ": the serial line " << a.serial << " was down when the board stopped (down "
+            << fixed(std::chrono::duration<double>(line.down_for(end.at)).count(), 1) << " s in all, " << line.losses()
+            << " loss(es), " << line.reopens() << " reopening(s))\n";
+    return kExitFailure;
+  }
+  return kExitOk;
 }
 
 }  // namespace
@@ -71,6 +185,7 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   std::optional<std::uint64_t> seed;
   kernel::Duration stats_every = 5s;
   bool quiet = false;
+  bool lockstep = false;
   std::string playground;
   std::uint16_t playground_port = sim::kPlaygroundFirstPort;
   std::optional<double> speed_scale;
@@ -103,6 +218,8 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
       seed = std::get<std::uint64_t>(v);
     } else if (o.name == "--quiet") {
       quiet = true;
+    } else if (o.name == "--lockstep") {
+      lockstep = true;
     } else if (o.name == "--view") {
       auto v = view::parse_view(o.value);
       if (auto* e = std::get_if<UsageError>(&v)) return usage_error(ctx, kBoardCommand, *e);
@@ -145,6 +262,9 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
   } else if (!dds_option.empty()) {
     return usage_error(ctx, kBoardCommand, UsageError{dds_option + " is for --dds"});
   }
+  if (lockstep && (aseba || !playground.empty()))
+    return usage_error(ctx, kBoardCommand,
+                       UsageError{"--lockstep is for a board the simulator drives (--serial, or --dds in 3D)"});
   if (serial.empty() && !dds && !aseba && playground.empty())
     return usage_error(ctx, kBoardCommand, UsageError{"missing --serial PATH (the data line)"});
 
@@ -212,6 +332,19 @@ int run_board_command(std::span<const std::string_view> args, const CliContext& 
     }
   }
 
+  if (lockstep) {
+    BoardLockstepArgs la;
+    la.port = port;
+    la.shell_port = shell_port;
+    la.serial = serial;
+    la.shell_path = shell_path;
+    la.seed = seed;
+    la.duration = duration;
+    la.stats_every = stats_every;
+    la.quiet = quiet;
+    la.view = view_request;
+    return run_board_lockstep(sc, index, la, ctx);
+  }
   kernel::ThreadExecutor executor;
   sim::BoardLinkOptions lo;
   lo.control_period = sc.control_period;

@@ -4,8 +4,10 @@
 //   symb sim    the simulator side: a scenario's world at wall-clock pace, one serial line per
 //               robot; writes what `symb run` writes, plus link statistics
 //   symb board  the board side: one robot's task graph on OS threads, its device tasks on the
-//               serial line, its command shell on a second line
-// Command-line handling and the loops around the sim layer's HilSimulator and BoardLink.
+//               serial line, its command shell on a second line; with --lockstep its node on
+//               a clock the frames drive
+// Command-line handling and the loops around the sim layer's HilSimulator, BoardLink and
+// HilRobotBoard.
 #pragma once
 
 #include <filesystem>

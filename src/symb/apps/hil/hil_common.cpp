@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <thread>
 
 #include "symb/os/param.hpp"
 
@@ -53,6 +54,51 @@ void BoardView::stop() {
   live_->finish();
   node_->set_probe_sink({});
   live_.reset();
+}
+
+FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err) {
+  using namespace std::chrono_literals;
+  FrameBoardEnd end;
+  const kernel::WallClock wall;  // the line's outages are timed on it (FrameBoardEnd::at)
+  const auto steady = [&wall] { return wall.now(); };
+  const std::string who = "board " + loop.robot + ": ";
+  InterruptFlag interrupt;
+  const auto start = std::chrono::steady_clock::now();
+  auto next_stats = start + loop.stats_every;
+  while (!interrupt.raised() && (!loop.duration || std::chrono::steady_clock::now() - start < *loop.duration)) {
+    if (end.line.down()) {
+      if (end.line.due(steady())) {
+        if (auto st = loop.port->open(); st) {
+          (void)loop.port->ioctl("flush");
+          err << who << "serial line open again after " << kernel::to_milliseconds(end.line.reopened(steady()))
+              << " ms\n"
+              << std::flush;
+        } else {
+          const auto wait = end.line.failed(steady());
+          err << who << "reopen attempt " << end.line.attempts() << " failed: " << st.error() << "; next in "
+              << kernel::to_milliseconds(wait) << " ms\n"
+              << std::flush;
+        }
+      }
+      if (end.line.down()) std::this_thread::sleep_for(20ms);
+    } else if (auto served = loop.serve(20ms); !served) {
+      if (!loop.port) {
+        if (!loop.gone(served.error())) break;
+        std::this_thread::sleep_for(20ms);
+        continue;
+      }
+      end.line.lost(steady());
+      err << who << served.error() << ": reopening it with backoff\n" << std::flush;
+    }
+    if (loop.between) loop.between();
+    if (end.cycle = loop.node->cycle_error(); !end.cycle.empty()) break;
+    if (std::chrono::steady_clock::now() >= next_stats) {
+      next_stats += loop.stats_every;
+      err << "board: " << loop.stats() << "\n" << std::flush;
+    }
+  }
+  end.at = steady();
+  return end;
 }
 
 }  // namespace symb::apps::hil

@@ -1,13 +1,16 @@
 // What the hardware-in-the-loop commands (`symb link`, `symb sim`, `symb board`) share: reading a
 // command line with one positional SCENARIO among options, Ctrl-C as a request to stop and
 // finish cleanly, the seed a robot's node gets (the same as in-process, so the board's random
-// streams are the in-process run's), and a board's web view.
+// streams are the in-process run's), a board's web view, and the loop of a board whose node's
+// clock the simulator's frames drive.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <ostream>
 #include <span>
 #include <string>
@@ -20,6 +23,11 @@
 #include "symb/apps/view/live_view.hpp"
 #include "symb/apps/view/view_request.hpp"
 #include "symb/io/dds/dds_frame_stream.hpp"
+#include "symb/io/reopen_backoff.hpp"
+#include "symb/io/stream.hpp"
+#include "symb/kernel/clock.hpp"
+#include "symb/kernel/result.hpp"
+#include "symb/kernel/time.hpp"
 #include "symb/os/node.hpp"
 #include "symb/os/syslog.hpp"
 
@@ -69,5 +77,33 @@ class BoardView {
   os::Node* node_ = nullptr;
   std::unique_ptr<view::LiveView> live_;
 };
+
+// The loop of a board whose node runs on the simulator's frames (a 3D module; a 2D robot with
+// `--lockstep`) until Ctrl-C, the duration, or a message cycle: serve the line, run what the shell
+// injected, give the web view its frames, print the statistics every `stats_every`. A serial line
+// that goes away is reopened by its path with backoff (100 ms doubling to 2 s), as the board on
+// the wall clock does; what happened goes to `err`, each line prefixed with "board NAME: ".
+struct FrameBoardLoop {
+  std::string robot;
+  // Reads the line up to the given wall time and handles what came (the board's serve()).
+  std::function<kernel::Result<std::size_t>(kernel::Duration)> serve;
+  // The serial line to reopen when serve() fails. Null (a DDS stream): `gone` decides instead.
+  std::shared_ptr<io::IOStream> port;
+  // serve() failed and there is no port: false ends the loop, true waits on.
+  std::function<bool(const std::string& error)> gone;
+  std::function<void()> between;       // between two serves: the shell's input, the view
+  std::function<std::string()> stats;  // "frames 12 good, ..." for the periodic line
+  os::Node* node = nullptr;            // its cycle_error() ends the loop
+  std::optional<kernel::Duration> duration;
+  kernel::Duration stats_every = std::chrono::seconds(5);
+};
+
+struct FrameBoardEnd {
+  std::string cycle;       // the message cycle that ended the loop, or empty
+  io::ReopenBackoff line;  // the line's losses, reopenings and time down
+  kernel::Time at{0};      // the loop's end, on the clock `line` was kept on: down_for(at)
+};
+
+FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err);
 
 }  // namespace symb::apps::hil

@@ -321,57 +321,32 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
           << (shell_port ? ", shell on " + args.shell : std::string()) << "; " << system->node().task_count()
           << " tasks; its clock follows the simulator's frames; Ctrl-C to stop\n"
           << std::flush;
-  InterruptFlag interrupt;
-  const auto start = std::chrono::steady_clock::now();
-  auto next_stats = start + args.stats_every;
-  std::string cycle, ended;
+  std::string ended;
   bool lost = false;
-  io::ReopenBackoff backoff;
-  const auto steady = [] {
-    return std::chrono::duration_cast<kernel::Time>(std::chrono::steady_clock::now().time_since_epoch());
+  FrameBoardLoop loop;
+  loop.robot = spec.name;
+  loop.serve = [&board](kernel::Duration timeout) { return board.serve(timeout); };
+  if (!dds) loop.port = port;
+  loop.gone = [&](const std::string& error) {
+    // Not the simulator (a foreign writer that came and went): wait on for it.
+    if (board.stats().handshakes == 0) return true;
+    // Over DDS the simulator's stream ends with its run (it left) or with its process (lost).
+    lost = dds->stream->peer() != io::DdsPeerState::kLeft;
+    ended = lost ? "the simulator is gone without ending the run (" + error + ")" : "the simulator ended its run";
+    ctx.err << "board " << spec.name << ": " << ended << "\n" << std::flush;
+    return false;
   };
-  while (!interrupt.raised() && (!args.duration || std::chrono::steady_clock::now() - start < *args.duration)) {
-    if (backoff.down()) {
-      // The device went away: its path again with backoff (100 ms doubling to 2 s), as in 2D.
-      if (backoff.due(steady())) {
-        if (auto st = port->open(); st) {
-          (void)port->ioctl("flush");
-          ctx.err << "board " << spec.name << ": serial line open again after "
-                  << kernel::to_milliseconds(backoff.reopened(steady())) << " ms\n"
-                  << std::flush;
-        } else {
-          const auto wait = backoff.failed(steady());
-          ctx.err << "board " << spec.name << ": reopen attempt " << backoff.attempts() << " failed: " << st.error()
-                  << "; next in " << kernel::to_milliseconds(wait) << " ms\n"
-                  << std::flush;
-        }
-      }
-      if (backoff.down()) std::this_thread::sleep_for(20ms);
-    } else if (auto served = board.serve(20ms); !served) {
-      if (dds && board.stats().handshakes == 0) {
-        // Not the simulator (a foreign writer that came and went): wait on for it.
-        std::this_thread::sleep_for(20ms);
-        continue;
-      }
-      if (dds) {
-        // Over DDS the simulator's stream ends with its run (it left) or with its process (lost).
-        lost = dds->stream->peer() != io::DdsPeerState::kLeft;
-        ended = lost ? "the simulator is gone without ending the run (" + served.error() + ")"
-                     : "the simulator ended its run";
-        ctx.err << "board " << spec.name << ": " << ended << "\n" << std::flush;
-        break;
-      }
-      backoff.lost(steady());
-      ctx.err << "board " << spec.name << ": " << served.error() << ": reopening it with backoff\n" << std::flush;
-    }
+  loop.between = [&] {
     ex.run_injected();  // the shell's input, between frames
     board_view.between();
-    if (cycle = system->node().cycle_error(); !cycle.empty()) break;
-    if (std::chrono::steady_clock::now() >= next_stats) {
-      next_stats += args.stats_every;
-      ctx.err << "board: " << sim::mujoco::describe(board.stats()) << "\n" << std::flush;
-    }
-  }
+  };
+  loop.stats = [&board] { return sim::mujoco::describe(board.stats()); };
+  loop.node = &system->node();
+  loop.duration = args.duration;
+  loop.stats_every = args.stats_every;
+  const FrameBoardEnd end = run_frame_board_loop(loop, ctx.err);
+  const std::string& cycle = end.cycle;
+  const io::ReopenBackoff& backoff = end.line;
   system->node().log().remove_sink(log_sink);
   board_view.stop();
   const auto s = board.stats();
@@ -381,7 +356,7 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
           << " docking=" << s.dock_commands << " not_taken=" << s.write_errors << " losses=" << s.link_losses
           << " recoveries=" << s.link_recoveries << " line_losses=" << backoff.losses()
           << " line_reopens=" << backoff.reopens()
-          << " line_down_ms=" << kernel::to_milliseconds(backoff.down_for(steady()))
+          << " line_down_ms=" << kernel::to_milliseconds(backoff.down_for(end.at))
           << " line_open=" << (backoff.down() ? 0 : 1) << "\n";
   system.reset();
   port->close();
@@ -396,7 +371,7 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
   }
   if (backoff.down()) {
     ctx.err << kCommand << ": the serial line " << args.serial << " was down when the board stopped (down "
-            << fixed(std::chrono::duration<double>(backoff.down_for(steady())).count(), 1) << " s in all, "
+            << fixed(std::chrono::duration<double>(backoff.down_for(end.at)).count(), 1) << " s in all, "
             << backoff.losses() << " loss(es), " << backoff.reopens() << " reopening(s))\n";
     return kExitFailure;
   }
