@@ -152,7 +152,9 @@ TEST(HilRobotBoard, InLockstepABoardAndASimulatorKeptOffTheirCoresAreTheInProces
   EXPECT_EQ(bs.frames, kSteps);
   EXPECT_EQ(bs.handshakes, 1u);
   EXPECT_EQ(bs.missed, 0u);
-  EXPECT_EQ(bs.answers, kSteps + 1);
+  // Every frame answered; the last answer may find the simulator's end closed already.
+  EXPECT_EQ(bs.answers + bs.write_errors, kSteps + 1);
+  EXPECT_GE(bs.answers, kSteps);
 }
 
 // What a simulator end sees: the board's answers, decoded.
