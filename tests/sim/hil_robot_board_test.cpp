@@ -58,7 +58,7 @@ Trace in_process(const Scenario& sc, std::uint64_t steps) {
 // called before each serve, to keep the board off its core.
 class FrameBoard {
  public:
-  FrameBoard(const Scenario& sc, std::shared_ptr<io::IOStream> port, HilRobotBoardOptions bo,
+  FrameBoard(const Scenario& sc, std::shared_ptr<io::IOStream> port, FrameClockBoardOptions bo,
              std::function<void()> pause = {}) {
     bo.control_period = sc.control_period;
     board_ = std::make_unique<HilRobotBoard>(ex_, std::move(port), std::move(bo));
@@ -180,33 +180,52 @@ void send_ir(io::IOStream& end, std::uint32_t seq) {
   ASSERT_TRUE(end.write_all(io::encode_frame(encode_ir_payload(f))).ok());
 }
 
-TEST(HilRobotBoard, BadLostAndRepeatedFramesAreCountedAndANewRunGoesOnFromTheNodesTime) {
-  const Scenario sc = maze();
-  auto [a, b] = io::make_loopback_pair("hil2-bad");
-  std::shared_ptr<io::IOStream> sim_end = std::move(a), board_end = std::move(b);
+// The maze's robot on a board served on the test's thread, fed by hand through `sim`.
+struct HandFed {
+  Scenario sc = maze();
+  std::shared_ptr<io::IOStream> sim, board_end;
   std::vector<std::string> events;
   kernel::VirtualTimeExecutor ex;
-  HilRobotBoardOptions bo;
-  bo.control_period = sc.control_period;
-  bo.on_event = [&](const std::string& e) { events.push_back(e); };
-  HilRobotBoard board(ex, board_end, bo);
-  RobotSystemOptions ro;
-  ro.control_period = sc.control_period;
-  ro.read_program = file_program_reader(sc.base_dir);
-  auto built = RobotSystem::build(ex, sc.robots.at(0), board.devices(), std::move(ro));
-  ASSERT_TRUE(built.ok()) << built.error();
-  EXPECT_FALSE(board.serve(1ms).ok()) << "not started";
-  ASSERT_TRUE(board.start().ok());
-  const auto serve_all = [&] {
+  std::unique_ptr<HilRobotBoard> board;
+  std::unique_ptr<RobotSystem> system;
+
+  explicit HandFed(FrameClockBoardOptions bo) {
+    auto [a, b] = io::make_loopback_pair("hil2-hand");
+    sim = std::move(a);
+    board_end = std::move(b);
+    bo.control_period = sc.control_period;
+    bo.on_event = [this](const std::string& e) { events.push_back(e); };
+    board = std::make_unique<HilRobotBoard>(ex, board_end, bo);
+    RobotSystemOptions ro;
+    ro.control_period = sc.control_period;
+    ro.read_program = file_program_reader(sc.base_dir);
+    auto built = RobotSystem::build(ex, sc.robots.at(0), board->devices(), std::move(ro));
+    EXPECT_TRUE(built.ok()) << built.error();
+    if (built.ok()) system = std::move(built).value();
+  }
+  // Serves what came; the IR frames handled.
+  std::size_t serve() {
     std::size_t handled = 0;
     for (int i = 0; i < 5; ++i) {
-      auto got = board.serve(5ms);
+      auto got = board->serve(5ms);
       EXPECT_TRUE(got.ok());
       if (got.ok()) handled += *got;
     }
     return handled;
-  };
-  const kernel::Duration period = sc.control_period;
+  }
+};
+
+TEST(HilRobotBoard, BadLostAndRepeatedFramesAreCountedAndANewRunGoesOnFromTheNodesTime) {
+  HandFed h({});
+  ASSERT_TRUE(h.system);
+  HilRobotBoard& board = *h.board;
+  const std::shared_ptr<io::IOStream>& sim_end = h.sim;
+  const std::vector<std::string>& events = h.events;
+  kernel::VirtualTimeExecutor& ex = h.ex;
+  const auto serve_all = [&] { return h.serve(); };
+  const kernel::Duration period = h.sc.control_period;
+  EXPECT_FALSE(board.serve(1ms).ok()) << "not started";
+  ASSERT_TRUE(board.start().ok());
 
   send_ir(*sim_end, 0);
   send_ir(*sim_end, 1);
@@ -259,7 +278,7 @@ TEST(HilRobotBoard, BadLostAndRepeatedFramesAreCountedAndANewRunGoesOnFromTheNod
   EXPECT_NE(events.back().find("the simulator started anew"), std::string::npos) << events.back();
 
   // Silence past lost_periods, then a frame: lost, then back.
-  std::this_thread::sleep_for(period * (bo.lost_periods + 2));
+  std::this_thread::sleep_for(period * (board.options().lost_periods + 2));
   auto quiet = board.serve(1ms);
   ASSERT_TRUE(quiet.ok()) << quiet.error();
   EXPECT_EQ(*quiet, 0u);
@@ -285,17 +304,64 @@ TEST(HilRobotBoard, BadLostAndRepeatedFramesAreCountedAndANewRunGoesOnFromTheNod
   EXPECT_EQ(board.stats().frames, 6u);
 }
 
+// A frame far ahead of the node (a simulator that went on alone for a long while, or nonsense
+// from a peer) moves its clock one period, not all of them: no frame makes the board run more
+// than max_catch_up periods, and the run goes on from there.
+TEST(HilRobotBoard, AFrameFarAheadMovesTheNodeOnePeriodAndTheRunGoesOn) {
+  FrameClockBoardOptions bo;
+  bo.max_catch_up = 50;
+  HandFed h(bo);
+  ASSERT_TRUE(h.system);
+  ASSERT_TRUE(h.board->start().ok());
+  const std::shared_ptr<io::IOStream>& sim_end = h.sim;
+  const std::vector<std::string>& events = h.events;
+  kernel::VirtualTimeExecutor& ex = h.ex;
+  HilRobotBoard& board = *h.board;
+  const auto serve = [&] { return h.serve(); };
+  const kernel::Duration period = h.sc.control_period;
+  send_ir(*sim_end, 0);
+  send_ir(*sim_end, 1);
+  send_ir(*sim_end, 51);  // 50 periods on: caught up with
+  EXPECT_EQ(serve(), 2u);
+  EXPECT_EQ(ex.now(), period * 52 - kernel::Duration{1});
+  EXPECT_EQ(board.stats().jumps, 0u);
+  send_ir(*sim_end, 102);  // 51 on: one period
+  EXPECT_EQ(serve(), 1u);
+  EXPECT_EQ(ex.now(), period * 53 - kernel::Duration{1});
+  send_ir(*sim_end, kHilMaxSequence);  // the last number there is: one period too
+  EXPECT_EQ(serve(), 1u);
+  EXPECT_EQ(ex.now(), period * 54 - kernel::Duration{1});
+  auto s = board.stats();
+  EXPECT_EQ(s.jumps, 2u);
+  EXPECT_EQ(s.frames, 4u);
+  EXPECT_EQ(s.missed, 49u + 50u + (kHilMaxSequence - 103u));
+  ASSERT_FALSE(events.empty());
+  EXPECT_NE(events.back().find("periods ahead of the node: its clock moves one period"), std::string::npos)
+      << events.back();
+  // A new run after it starts from the node's time again.
+  send_ir(*sim_end, 0);
+  send_ir(*sim_end, 1);
+  EXPECT_EQ(serve(), 1u);
+  EXPECT_EQ(ex.now(), period * 55 - kernel::Duration{1});
+  std::vector<std::uint32_t> seqs;
+  for (const HilWheelFrame& w : answers(*sim_end, 7)) seqs.push_back(w.seq);
+  EXPECT_EQ(seqs, (std::vector<std::uint32_t>{0, 1, 51, 102, kHilMaxSequence, 0, 1}));
+}
+
 TEST(HilRobotBoard, ABadPeriodIsRefused) {
   auto [a, b] = io::make_loopback_pair("hil2-period");
   std::shared_ptr<io::IOStream> end = std::move(b);
   kernel::VirtualTimeExecutor ex;
-  HilRobotBoardOptions bo;
+  FrameClockBoardOptions bo;
   bo.control_period = kernel::Duration{0};
   EXPECT_THROW(HilRobotBoard(ex, end, bo), std::invalid_argument);
   bo.control_period = 2s;
   EXPECT_THROW(HilRobotBoard(ex, end, bo), std::invalid_argument);
   bo.control_period = 30ms;
   bo.lost_periods = 0;
+  EXPECT_THROW(HilRobotBoard(ex, end, bo), std::invalid_argument);
+  bo.lost_periods = 10;
+  bo.max_catch_up = 0;
   EXPECT_THROW(HilRobotBoard(ex, end, bo), std::invalid_argument);
 }
 

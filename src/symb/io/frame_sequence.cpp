@@ -19,7 +19,7 @@ SequenceStep FrameSequence::on_frame(std::uint32_t seq, kernel::Time t) {
       s.note_link = "link back after " + std::to_string(kernel::to_milliseconds(t - last_frame_)) +
                     " ms without frames (seq " + std::to_string(seq) + ")";
     else
-      s.note_link = "link up: first IR frame, seq " + std::to_string(seq);
+      s.note_link = "link up: first " + frame_ + ", seq " + std::to_string(seq);
   }
   s.recovered = !up_ && ever_up_;
   up_ = ever_up_ = true;
@@ -36,8 +36,8 @@ bool FrameSequence::lost(kernel::Time t) {
 }
 
 std::string FrameSequence::lost_note(kernel::Time t) const {
-  return "link lost: no IR frame for " + std::to_string(kernel::to_milliseconds(t - last_frame_)) + " ms (last seq " +
-         std::to_string(last_seq_) + "); waiting for frames";
+  return "link lost: no " + frame_ + " for " + std::to_string(kernel::to_milliseconds(t - last_frame_)) +
+         " ms (last seq " + std::to_string(last_seq_) + "); waiting for frames";
 }
 
 }  // namespace symb::io

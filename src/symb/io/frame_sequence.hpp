@@ -25,7 +25,9 @@ struct SequenceStep {
 
 class FrameSequence {
  public:
-  explicit FrameSequence(kernel::Duration lost_after) : lost_after_(lost_after) {}
+  // `frame` names the frames in the log lines ("IR frame", "sensor frame").
+  explicit FrameSequence(kernel::Duration lost_after, std::string frame = "IR frame")
+      : lost_after_(lost_after), frame_(std::move(frame)) {}
 
   // The receiver started at `t` (a link silent from here on is lost after lost_after).
   void start(kernel::Time t) { last_frame_ = t; }
@@ -41,6 +43,7 @@ class FrameSequence {
 
  private:
   kernel::Duration lost_after_;
+  std::string frame_;
   kernel::Time last_frame_{0};
   std::uint32_t last_seq_ = 0;
   bool have_seq_ = false;

@@ -83,7 +83,7 @@ struct BoardLockstepArgs {
 int run_board_lockstep(const sim::Scenario& sc, std::size_t index, const BoardLockstepArgs& a, const CliContext& ctx) {
   const sim::RobotSpec& spec = sc.robots[index];
   kernel::VirtualTimeExecutor ex;
-  sim::HilRobotBoardOptions bo;
+  sim::FrameClockBoardOptions bo;
   bo.control_period = sc.control_period;
   bo.on_event = [&ctx, &spec](const std::string& text) {
     ctx.err << "board " << spec.name << ": " << text << "\n" << std::flush;
@@ -148,27 +148,13 @@ int run_board_lockstep(const sim::Scenario& sc, std::size_t index, const BoardLo
   system->node().log().remove_sink(log_sink);
   board_view.stop();
   const sim::HilRobotBoardStats s = board.stats();
-  const io::ReopenBackoff& line = end.line;
-  ctx.out << "board: " << sim::describe(s) << "\n"
-          << "board-stats: good=" << s.frames << " bad=" << s.bad_frames() << " missed=" << s.missed
-          << " out_of_order=" << s.out_of_order << " malformed=" << s.malformed << " handshakes=" << s.handshakes
-          << " restarts=" << s.restarts << " answers=" << s.answers << " not_taken=" << s.write_errors
-          << " losses=" << s.link_losses << " recoveries=" << s.link_recoveries << " bytes_in=" << s.bytes_in
-          << " line_losses=" << line.losses() << " line_reopens=" << line.reopens()
-          << " line_down_ms=" << kernel::to_milliseconds(line.down_for(end.at))
-          << " line_open=" << (line.down() ? 0 : 1) << "\n";
+  ctx.out << "board: " << sim::describe(s) << "\n" << frame_board_stats_line(s, end) << "\n";
   system.reset();
   a.port->close();
   if (a.shell_port) a.shell_port->close();
-  if (!end.cycle.empty()) {
-    ctx.err << kBoardCommand << ": " << end.cycle << "\n";
-    return kExitFailure;
-  }
   // A dead link is a failed run: the serial line was down when the board stopped.
-  if (line.down()) {
-    ctx.err << kBoardCommand << ": the serial line " << a.serial << " was down when the board stopped (down "
-            << fixed(std::chrono::duration<double>(line.down_for(end.at)).count(), 1) << " s in all, " << line.losses()
-            << " loss(es), " << line.reopens() << " reopening(s))\n";
+  if (const std::string failure = frame_board_failure(end, a.serial); !failure.empty()) {
+    ctx.err << kBoardCommand << ": " << failure << "\n";
     return kExitFailure;
   }
   return kExitOk;

@@ -101,4 +101,24 @@ FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err
   return end;
 }
 
+std::string frame_board_stats_line(const sim::FrameClockStats& s, const FrameBoardEnd& end, const std::string& extra) {
+  const auto n = [](std::uint64_t v) { return std::to_string(v); };
+  return "board-stats: good=" + n(s.frames) + " bad=" + n(s.bad_frames()) + " missed=" + n(s.missed) +
+         " out_of_order=" + n(s.out_of_order) + " malformed=" + n(s.malformed) + " jumps=" + n(s.jumps) +
+         " handshakes=" + n(s.handshakes) + " restarts=" + n(s.restarts) + " answers=" + n(s.answers) + extra +
+         " not_taken=" + n(s.write_errors) + " losses=" + n(s.link_losses) + " recoveries=" + n(s.link_recoveries) +
+         " bytes_in=" + n(s.bytes_in) + " line_losses=" + n(end.line.losses()) +
+         " line_reopens=" + n(end.line.reopens()) +
+         " line_down_ms=" + std::to_string(kernel::to_milliseconds(end.line.down_for(end.at))) +
+         " line_open=" + (end.line.down() ? "0" : "1");
+}
+
+std::string frame_board_failure(const FrameBoardEnd& end, const std::string& serial) {
+  if (!end.cycle.empty()) return end.cycle;
+  if (!end.line.down()) return {};
+  return "the serial line " + serial + " was down when the board stopped (down " +
+         fixed(std::chrono::duration<double>(end.line.down_for(end.at)).count(), 1) + " s in all, " +
+         std::to_string(end.line.losses()) + " loss(es), " + std::to_string(end.line.reopens()) + " reopening(s))";
+}
+
 }  // namespace symb::apps::hil

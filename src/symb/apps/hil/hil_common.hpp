@@ -30,6 +30,7 @@
 #include "symb/kernel/time.hpp"
 #include "symb/os/node.hpp"
 #include "symb/os/syslog.hpp"
+#include "symb/sim/frame_clock_board.hpp"
 
 namespace symb::apps::hil {
 
@@ -105,5 +106,13 @@ struct FrameBoardEnd {
 };
 
 FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err);
+
+// The last line of such a board: "board-stats: good=N bad=N missed=N ... line_open=1", the
+// board's books and its line's; `extra` (" docking=2") goes after the answers.
+std::string frame_board_stats_line(const sim::FrameClockStats& s, const FrameBoardEnd& end,
+                                   const std::string& extra = {});
+// Empty, or why the run failed at its end: a message cycle, or a dead link (the serial line
+// `serial` down when the board stopped, with how long and how often).
+std::string frame_board_failure(const FrameBoardEnd& end, const std::string& serial);
 
 }  // namespace symb::apps::hil

@@ -9,14 +9,12 @@
 // found to be 3D.
 #include <chrono>
 #include <sstream>
-#include <thread>
 
 #include "symb/apps/hil/hil_commands.hpp"
 #include "symb/apps/hil/hil_common.hpp"
 #include "symb/apps/progress_line.hpp"
 #include "symb/apps/run/organism_recorder.hpp"
 #include "symb/apps/run/remote_robots.hpp"
-#include "symb/io/reopen_backoff.hpp"
 #include "symb/io/serial_port.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/shell/shell_task.hpp"
@@ -345,34 +343,18 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
   loop.duration = args.duration;
   loop.stats_every = args.stats_every;
   const FrameBoardEnd end = run_frame_board_loop(loop, ctx.err);
-  const std::string& cycle = end.cycle;
-  const io::ReopenBackoff& backoff = end.line;
   system->node().log().remove_sink(log_sink);
   board_view.stop();
   const auto s = board.stats();
   ctx.out << "board: " << sim::mujoco::describe(s) << "\n"
-          << "board-stats: good=" << s.frames << " bad=" << s.bad_frames() << " missed=" << s.missed
-          << " out_of_order=" << s.out_of_order << " malformed=" << s.malformed << " answers=" << s.answers
-          << " docking=" << s.dock_commands << " not_taken=" << s.write_errors << " losses=" << s.link_losses
-          << " recoveries=" << s.link_recoveries << " line_losses=" << backoff.losses()
-          << " line_reopens=" << backoff.reopens()
-          << " line_down_ms=" << kernel::to_milliseconds(backoff.down_for(end.at))
-          << " line_open=" << (backoff.down() ? 0 : 1) << "\n";
+          << frame_board_stats_line(s, end, " docking=" + std::to_string(s.dock_commands)) << "\n";
   system.reset();
   port->close();
   if (shell_port) shell_port->close();
-  if (!cycle.empty()) {
-    ctx.err << kCommand << ": " << cycle << "\n";
-    return kExitFailure;
-  }
-  if (lost) {
-    ctx.err << kCommand << ": " << ended << "\n";
-    return kExitFailure;
-  }
-  if (backoff.down()) {
-    ctx.err << kCommand << ": the serial line " << args.serial << " was down when the board stopped (down "
-            << fixed(std::chrono::duration<double>(backoff.down_for(end.at)).count(), 1) << " s in all, "
-            << backoff.losses() << " loss(es), " << backoff.reopens() << " reopening(s))\n";
+  // A message cycle first, then a simulator gone from DDS, then a dead serial line.
+  const std::string failure = end.cycle.empty() && lost ? ended : frame_board_failure(end, args.serial);
+  if (!failure.empty()) {
+    ctx.err << kCommand << ": " << failure << "\n";
     return kExitFailure;
   }
   return kExitOk;
