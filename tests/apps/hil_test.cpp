@@ -358,4 +358,39 @@ TEST_F(Hil, ADeadLinkFailsBothSides) {
   EXPECT_NE(b->output().find("was down when the board stopped"), std::string::npos) << b->output();
 }
 
+// The board on the frames has the wall-clock board's line handling: a line that goes away is
+// reopened with backoff, and one still down at the end fails the board, with its figures. Here
+// the simulator keeps the wall-clock pace (a board on the frames serves either kind).
+TEST_F(Hil, ABoardOnTheFramesReopensItsLineAndADeadOneFailsIt) {
+  auto b = board("--lockstep --stats-every 100ms");
+  Child sim("sim '" + kScenario + "' --serial '" + (dir_ / "tty" / "sim").string() + "' --out '" +
+                (dir_ / "dead").string() + "' --quiet --duration 3s",
+            dir_ / "dead.log");
+  const auto frames = [&] {
+    const std::string out = b->output();
+    const auto at = out.rfind("board: frames ");
+    long long n = -1;
+    if (at != std::string::npos) std::sscanf(out.c_str() + at, "board: frames %lld good", &n);
+    return n;
+  };
+  for (int i = 0; i < 1000 && frames() < 34; ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_GE(frames(), 34) << b->output();
+  link_->interrupt();
+  ASSERT_EQ(link_->wait(), 0) << link_->output();
+  link_.reset();
+  EXPECT_EQ(sim.wait(), 1) << sim.output();
+  b->interrupt();
+  EXPECT_EQ(b->wait(), 1) << b->output();
+  const std::string out = b->output();
+  EXPECT_NE(out.find("reopening it with backoff"), std::string::npos) << out;
+  EXPECT_NE(out.find("was down when the board stopped"), std::string::npos) << out;
+  const auto s = fields(out, "board-stats:");
+  ASSERT_FALSE(s.empty()) << out;
+  EXPECT_EQ(s.at("line_open"), 0);
+  EXPECT_EQ(s.at("line_losses"), 1);
+  EXPECT_EQ(s.at("line_reopens"), 0);
+  EXPECT_GE(s.at("good"), 34);
+  EXPECT_EQ(s.at("answers") + s.at("not_taken"), s.at("good") + s.at("handshakes") + s.at("restarts"));
+}
+
 }  // namespace
