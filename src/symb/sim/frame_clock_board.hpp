@@ -124,7 +124,6 @@ class FrameClockBoard {
   void event(const std::string& text);
   // A derived board's destructor calls this first: no tick may reach it once its members go.
   void stop_clock();
-  kernel::VirtualTimeExecutor& executor() { return executor_; }
 
  private:
   class Clock;

@@ -60,21 +60,20 @@ FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err
   using namespace std::chrono_literals;
   FrameBoardEnd end;
   const kernel::WallClock wall;  // the line's outages are timed on it (FrameBoardEnd::at)
-  const auto steady = [&wall] { return wall.now(); };
   const std::string who = "board " + loop.robot + ": ";
   InterruptFlag interrupt;
   const auto start = std::chrono::steady_clock::now();
   auto next_stats = start + loop.stats_every;
   while (!interrupt.raised() && (!loop.duration || std::chrono::steady_clock::now() - start < *loop.duration)) {
     if (end.line.down()) {
-      if (end.line.due(steady())) {
+      if (end.line.due(wall.now())) {
         if (auto st = loop.port->open(); st) {
           (void)loop.port->ioctl("flush");
-          err << who << "serial line open again after " << kernel::to_milliseconds(end.line.reopened(steady()))
+          err << who << "serial line open again after " << kernel::to_milliseconds(end.line.reopened(wall.now()))
               << " ms\n"
               << std::flush;
         } else {
-          const auto wait = end.line.failed(steady());
+          const auto wait = end.line.failed(wall.now());
           err << who << "reopen attempt " << end.line.attempts() << " failed: " << st.error() << "; next in "
               << kernel::to_milliseconds(wait) << " ms\n"
               << std::flush;
@@ -87,7 +86,7 @@ FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err
         std::this_thread::sleep_for(20ms);
         continue;
       }
-      end.line.lost(steady());
+      end.line.lost(wall.now());
       err << who << served.error() << ": reopening it with backoff\n" << std::flush;
     }
     if (loop.between) loop.between();
@@ -97,7 +96,7 @@ FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err
       err << "board: " << loop.stats() << "\n" << std::flush;
     }
   }
-  end.at = steady();
+  end.at = wall.now();
   return end;
 }
 
