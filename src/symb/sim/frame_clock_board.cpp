@@ -132,7 +132,7 @@ void FrameClockBoard::handle(std::span<const std::byte> payload, std::size_t& ha
   }
   if (seq != 0) {
     const std::int64_t tick = base_tick_ + seq;
-    clock_->hold(tick, std::move(f->values));
+    clock_->hold(tick, std::move(f).value().values);
     // Everything the node does before the world's next step: up to just before tick `tick` + 1.
     executor_.run_until(options_.control_period * (tick + 1) - kernel::Duration{1});
     ++handled;

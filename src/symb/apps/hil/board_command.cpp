@@ -73,7 +73,7 @@ struct BoardLockstepArgs {
   std::string serial, shell_path;
   std::optional<std::uint64_t> seed;
   std::optional<kernel::Duration> duration;
-  kernel::Duration stats_every;
+  kernel::Duration stats_every{0};
   bool quiet = false;
   view::ViewRequest view;
 };
