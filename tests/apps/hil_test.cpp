@@ -230,8 +230,8 @@ TEST_F(Hil, InLockstepTheRunIsTheInProcessOneBitForBit) {
   ASSERT_FALSE(board_stats.empty()) << board_output_;
   EXPECT_EQ(board_stats.at("good"), steps);  // every frame ran the node, none was let go
   EXPECT_EQ(board_stats.at("missed"), 0);
-  EXPECT_EQ(board_stats.at("handshakes"), 1);
-  EXPECT_EQ(board_stats.at("answers"), steps + 1);
+  EXPECT_GE(board_stats.at("handshakes"), 1);  // the simulator sends it again each second until answered
+  EXPECT_EQ(board_stats.at("answers"), steps + board_stats.at("handshakes"));
   EXPECT_EQ(board_stats.at("line_open"), 1);
 }
 
