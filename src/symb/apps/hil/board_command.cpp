@@ -99,54 +99,28 @@ int run_board_lockstep(const sim::Scenario& sc, std::size_t index, const BoardLo
     return kExitFailure;
   }
   std::unique_ptr<sim::RobotSystem> system = std::move(built).value();
-  auto log_sink = std::make_shared<PrefixedLogSink>(ctx.err, "board " + spec.name + ": ");
-  if (!a.quiet) {
-    for (const os::LogEntry& e : system->node().log().since(0)) log_sink->write(e);
-    system->node().log().add_sink(log_sink);
-  }
-  if (a.shell_port) {
-    auto table = std::make_shared<shell::DeviceTable>();
-    for (const auto& d : board.device_list()) (*table)[d->name()] = d;
-    (*table)["uart0"] = a.port;
-    (*table)["uart1"] = a.shell_port;
-    shell::ShellOptions so;
-    so.devices = table;
-    auto attached = shell::attach_shell(system->node(), a.shell_port, so);
-    if (!attached) {
-      ctx.err << kBoardCommand << ": shell: " << attached.error() << "\n";
-      return kExitFailure;
-    }
-  }
-  if (auto st = board.start(); !st) {
-    ctx.err << kBoardCommand << ": " << st.error() << "\n";
+  FrameBoardRun run;
+  run.board = &board;
+  run.executor = &ex;
+  run.node = &system->node();
+  run.devices = board.device_list();
+  run.robot = spec.name;
+  run.scenario = sc.name;
+  run.where = a.serial;
+  run.data = a.port;
+  run.shell_port = a.shell_port;
+  run.shell_path = a.shell_path;
+  run.quiet = a.quiet;
+  run.view = a.view;
+  run.stats = [&board] { return sim::describe(board.stats()); };
+  run.duration = a.duration;
+  run.stats_every = a.stats_every;
+  auto ran = run_frame_board(run, ctx);
+  if (!ran) {
+    ctx.err << kBoardCommand << ": " << ran.error() << "\n";
     return kExitFailure;
   }
-  // The web view reads the robot's node between two frames, where none of its tasks runs.
-  auto view_started = BoardView::start(a.view, spec.name, system->node(), sc.name, ctx.err);
-  if (!view_started) {
-    ctx.err << kBoardCommand << ": " << view_started.error() << "\n";
-    return kExitFailure;
-  }
-  BoardView board_view = std::move(view_started).value();
-  ctx.out << "board: robot " << spec.name << " of " << sc.name << " on " << a.serial
-          << (a.shell_port ? ", shell on " + a.shell_path : std::string()) << "; " << system->node().task_count()
-          << " tasks; its clock follows the simulator's frames; Ctrl-C to stop\n"
-          << std::flush;
-  FrameBoardLoop loop;
-  loop.robot = spec.name;
-  loop.serve = [&board](kernel::Duration timeout) { return board.serve(timeout); };
-  loop.port = a.port;
-  loop.between = [&] {
-    ex.run_injected();  // the shell's input, between frames
-    board_view.between();
-  };
-  loop.stats = [&board] { return sim::describe(board.stats()); };
-  loop.node = &system->node();
-  loop.duration = a.duration;
-  loop.stats_every = a.stats_every;
-  const FrameBoardEnd end = run_frame_board_loop(loop, ctx.err);
-  system->node().log().remove_sink(log_sink);
-  board_view.stop();
+  const FrameBoardEnd& end = *ran;
   const sim::HilRobotBoardStats s = board.stats();
   ctx.out << "board: " << sim::describe(s) << "\n" << frame_board_stats_line(s, end) << "\n";
   system.reset();

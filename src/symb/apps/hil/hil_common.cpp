@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "symb/os/param.hpp"
+#include "symb/shell/shell_task.hpp"
 
 namespace symb::apps::hil {
 
@@ -56,47 +57,80 @@ void BoardView::stop() {
   live_.reset();
 }
 
-FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err) {
+kernel::Result<FrameBoardEnd> run_frame_board(const FrameBoardRun& run, const CliContext& ctx) {
   using namespace std::chrono_literals;
+  os::Node& node = *run.node;
+  const std::string who = "board " + run.robot + ": ";
+  auto log_sink = std::make_shared<PrefixedLogSink>(ctx.err, who);
+  if (!run.quiet) {
+    for (const os::LogEntry& e : node.log().since(0)) log_sink->write(e);
+    node.log().add_sink(log_sink);
+  }
+  const auto fail = [&](const std::string& why) -> kernel::Result<FrameBoardEnd> {
+    node.log().remove_sink(log_sink);
+    return kernel::Error{why};
+  };
+  if (run.shell_port) {
+    auto table = std::make_shared<shell::DeviceTable>();
+    for (const auto& d : run.devices) (*table)[d->name()] = d;
+    (*table)["uart0"] = run.data;
+    (*table)["uart1"] = run.shell_port;
+    shell::ShellOptions so;
+    so.devices = table;
+    if (auto attached = shell::attach_shell(node, run.shell_port, so); !attached)
+      return fail("shell: " + attached.error());
+  }
+  if (auto st = run.board->start(); !st) return fail(st.error());
+  // The web view reads the node between two frames, where none of its tasks runs.
+  auto view_started = BoardView::start(run.view, run.robot, node, run.scenario, ctx.err);
+  if (!view_started) return fail(view_started.error());
+  BoardView view = std::move(view_started).value();
+  ctx.out << "board: " << run.what << " " << run.robot << " of " << run.scenario << " on " << run.where
+          << (run.shell_port ? ", shell on " + run.shell_path : std::string()) << "; " << node.task_count()
+          << " tasks; its clock follows the simulator's frames; Ctrl-C to stop\n"
+          << std::flush;
+
   FrameBoardEnd end;
   const kernel::WallClock wall;  // the line's outages are timed on it (FrameBoardEnd::at)
-  const std::string who = "board " + loop.robot + ": ";
   InterruptFlag interrupt;
   const auto start = std::chrono::steady_clock::now();
-  auto next_stats = start + loop.stats_every;
-  while (!interrupt.raised() && (!loop.duration || std::chrono::steady_clock::now() - start < *loop.duration)) {
+  auto next_stats = start + run.stats_every;
+  while (!interrupt.raised() && (!run.duration || std::chrono::steady_clock::now() - start < *run.duration)) {
     if (end.line.down()) {
       if (end.line.due(wall.now())) {
-        if (auto st = loop.port->open(); st) {
-          (void)loop.port->ioctl("flush");
-          err << who << "serial line open again after " << kernel::to_milliseconds(end.line.reopened(wall.now()))
-              << " ms\n"
-              << std::flush;
+        if (auto st = run.data->open(); st) {
+          (void)run.data->ioctl("flush");
+          ctx.err << who << "serial line open again after " << kernel::to_milliseconds(end.line.reopened(wall.now()))
+                  << " ms\n"
+                  << std::flush;
         } else {
           const auto wait = end.line.failed(wall.now());
-          err << who << "reopen attempt " << end.line.attempts() << " failed: " << st.error() << "; next in "
-              << kernel::to_milliseconds(wait) << " ms\n"
-              << std::flush;
+          ctx.err << who << "reopen attempt " << end.line.attempts() << " failed: " << st.error() << "; next in "
+                  << kernel::to_milliseconds(wait) << " ms\n"
+                  << std::flush;
         }
       }
       if (end.line.down()) std::this_thread::sleep_for(20ms);
-    } else if (auto served = loop.serve(20ms); !served) {
-      if (!loop.port) {
-        if (!loop.gone(served.error())) break;
+    } else if (auto served = run.board->serve(20ms); !served) {
+      if (!run.reopen) {
+        if (!run.gone(served.error())) break;
         std::this_thread::sleep_for(20ms);
         continue;
       }
       end.line.lost(wall.now());
-      err << who << served.error() << ": reopening it with backoff\n" << std::flush;
+      ctx.err << who << served.error() << ": reopening it with backoff\n" << std::flush;
     }
-    if (loop.between) loop.between();
-    if (end.cycle = loop.node->cycle_error(); !end.cycle.empty()) break;
+    run.executor->run_injected();  // the shell's input, between frames
+    view.between();
+    if (end.cycle = node.cycle_error(); !end.cycle.empty()) break;
     if (std::chrono::steady_clock::now() >= next_stats) {
-      next_stats += loop.stats_every;
-      err << "board: " << loop.stats() << "\n" << std::flush;
+      next_stats += run.stats_every;
+      ctx.err << "board: " << run.stats() << "\n" << std::flush;
     }
   }
   end.at = wall.now();
+  node.log().remove_sink(log_sink);
+  view.stop();
   return end;
 }
 

@@ -1,7 +1,7 @@
 // What the hardware-in-the-loop commands (`symb link`, `symb sim`, `symb board`) share: reading a
 // command line with one positional SCENARIO among options, Ctrl-C as a request to stop and
 // finish cleanly, the seed a robot's node gets (the same as in-process, so the board's random
-// streams are the in-process run's), a board's web view, and the loop of a board whose node's
+// streams are the in-process run's), a board's web view, and the run of a board whose node's
 // clock the simulator's frames drive.
 #pragma once
 
@@ -28,6 +28,7 @@
 #include "symb/kernel/clock.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
+#include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
 #include "symb/os/syslog.hpp"
 #include "symb/sim/frame_clock_board.hpp"
@@ -79,22 +80,31 @@ class BoardView {
   std::unique_ptr<view::LiveView> live_;
 };
 
-// The loop of a board whose node runs on the simulator's frames (a 3D module; a 2D robot with
-// `--lockstep`) until Ctrl-C, the duration, or a message cycle: serve the line, run what the shell
-// injected, give the web view its frames, print the statistics every `stats_every`. A serial line
-// that goes away is reopened by its path with backoff (100 ms doubling to 2 s), as the board on
-// the wall clock does; what happened goes to `err`, each line prefixed with "board NAME: ".
-struct FrameBoardLoop {
-  std::string robot;
-  // Reads the line up to the given wall time and handles what came (the board's serve()).
-  std::function<kernel::Result<std::size_t>(kernel::Duration)> serve;
-  // The serial line to reopen when serve() fails. Null (a DDS stream): `gone` decides instead.
-  std::shared_ptr<io::IOStream> port;
-  // serve() failed and there is no port: false ends the loop, true waits on.
+// A board whose node runs on the simulator's frames (a 3D module; a 2D robot with `--lockstep`),
+// run from its built node to its end: the node's log printed as it comes (unless quiet), its shell
+// on `shell_port` (the board's devices, uart0 the data line, uart1 the shell line), the clock
+// started, the web view, a line saying where it runs, then the loop until Ctrl-C, the duration or a
+// message cycle: serve the line, run what the shell injected, give the view its frames, print the
+// statistics every `stats_every`. A serial line that goes away is reopened by its path with
+// backoff (100 ms doubling to 2 s), as the board on the wall clock does; what happened goes to
+// ctx.err, each line prefixed with "board NAME: ".
+struct FrameBoardRun {
+  sim::FrameClockBoard* board = nullptr;
+  kernel::VirtualTimeExecutor* executor = nullptr;   // the node's, which the board drives
+  os::Node* node = nullptr;                          // its cycle_error() ends the loop
+  std::vector<std::shared_ptr<io::Device>> devices;  // the board's, for the shell's table
+  std::string what = "robot";                        // "robot" or "module", for the person
+  std::string robot, scenario, where;                // names, and where the data line is
+  std::shared_ptr<io::IOStream> data;                // the data line (the shell's uart0)
+  // Whether `data` is a serial line to reopen when serve() fails; if not (a DDS stream), `gone`
+  // decides: false ends the loop, true waits on.
+  bool reopen = true;
   std::function<bool(const std::string& error)> gone;
-  std::function<void()> between;       // between two serves: the shell's input, the view
+  std::shared_ptr<io::IOStream> shell_port;  // may be null
+  std::string shell_path;
+  bool quiet = false;
+  view::ViewRequest view;
   std::function<std::string()> stats;  // "frames 12 good, ..." for the periodic line
-  os::Node* node = nullptr;            // its cycle_error() ends the loop
   std::optional<kernel::Duration> duration;
   kernel::Duration stats_every = std::chrono::seconds(5);
 };
@@ -105,7 +115,8 @@ struct FrameBoardEnd {
   kernel::Time at{0};      // the loop's end, on the clock `line` was kept on: down_for(at)
 };
 
-FrameBoardEnd run_frame_board_loop(const FrameBoardLoop& loop, std::ostream& err);
+// Fails, before the loop, when the shell, the clock or the view cannot start.
+kernel::Result<FrameBoardEnd> run_frame_board(const FrameBoardRun& run, const CliContext& ctx);
 
 // The last line of such a board: "board-stats: good=N bad=N missed=N ... line_open=1", the
 // board's books and its line's; `extra` (" docking=2") goes after the answers.

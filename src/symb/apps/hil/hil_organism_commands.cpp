@@ -17,7 +17,6 @@
 #include "symb/apps/run/remote_robots.hpp"
 #include "symb/io/serial_port.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
-#include "symb/shell/shell_task.hpp"
 #include "symb/sim/mujoco/hil_module_board.hpp"
 #include "symb/sim/mujoco/hil_organism.hpp"
 #include "symb/sim/mujoco/organism_session.hpp"
@@ -286,46 +285,20 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
     return kExitFailure;
   }
   std::unique_ptr<sim::RobotSystem> system = std::move(built).value();
-  auto log_sink = std::make_shared<PrefixedLogSink>(ctx.err, "board " + spec.name + ": ");
-  if (!args.quiet) {
-    for (const os::LogEntry& e : system->node().log().since(0)) log_sink->write(e);
-    system->node().log().add_sink(log_sink);
-  }
-  if (shell_port) {
-    auto table = std::make_shared<shell::DeviceTable>();
-    for (const auto& d : board.devices()) (*table)[d->name()] = d;
-    (*table)["uart0"] = port;
-    (*table)["uart1"] = shell_port;
-    shell::ShellOptions so;
-    so.devices = table;
-    auto attached = shell::attach_shell(system->node(), shell_port, so);
-    if (!attached) {
-      ctx.err << kCommand << ": shell: " << attached.error() << "\n";
-      return kExitFailure;
-    }
-  }
-  if (auto st = board.start(); !st) {
-    ctx.err << kCommand << ": " << st.error() << "\n";
-    return kExitFailure;
-  }
-  // The web view reads the module's node between two frames, where none of its tasks runs.
-  auto view_started = BoardView::start(args.view, spec.name, system->node(), sc.name, ctx.err);
-  if (!view_started) {
-    ctx.err << kCommand << ": " << view_started.error() << "\n";
-    return kExitFailure;
-  }
-  BoardView board_view = std::move(view_started).value();
-  ctx.out << "board: module " << spec.name << " of " << sc.name << " on " << where
-          << (shell_port ? ", shell on " + args.shell : std::string()) << "; " << system->node().task_count()
-          << " tasks; its clock follows the simulator's frames; Ctrl-C to stop\n"
-          << std::flush;
   std::string ended;
   bool lost = false;
-  FrameBoardLoop loop;
-  loop.robot = spec.name;
-  loop.serve = [&board](kernel::Duration timeout) { return board.serve(timeout); };
-  if (!dds) loop.port = port;
-  loop.gone = [&](const std::string& error) {
+  FrameBoardRun run;
+  run.board = &board;
+  run.executor = &ex;
+  run.node = &system->node();
+  run.devices = board.devices();
+  run.what = "module";
+  run.robot = spec.name;
+  run.scenario = sc.name;
+  run.where = where;
+  run.data = port;
+  run.reopen = !dds;
+  run.gone = [&](const std::string& error) {
     // Not the simulator (a foreign writer that came and went): wait on for it.
     if (board.stats().handshakes == 0) return true;
     // Over DDS the simulator's stream ends with its run (it left) or with its process (lost).
@@ -334,17 +307,19 @@ int run_board_organism(const sim::Scenario& sc, const BoardOrganismArgs& args, c
     ctx.err << "board " << spec.name << ": " << ended << "\n" << std::flush;
     return false;
   };
-  loop.between = [&] {
-    ex.run_injected();  // the shell's input, between frames
-    board_view.between();
-  };
-  loop.stats = [&board] { return sim::mujoco::describe(board.stats()); };
-  loop.node = &system->node();
-  loop.duration = args.duration;
-  loop.stats_every = args.stats_every;
-  const FrameBoardEnd end = run_frame_board_loop(loop, ctx.err);
-  system->node().log().remove_sink(log_sink);
-  board_view.stop();
+  run.shell_port = shell_port;
+  run.shell_path = args.shell;
+  run.quiet = args.quiet;
+  run.view = args.view;
+  run.stats = [&board] { return sim::mujoco::describe(board.stats()); };
+  run.duration = args.duration;
+  run.stats_every = args.stats_every;
+  auto ran = run_frame_board(run, ctx);
+  if (!ran) {
+    ctx.err << kCommand << ": " << ran.error() << "\n";
+    return kExitFailure;
+  }
+  const FrameBoardEnd& end = *ran;
   const auto s = board.stats();
   ctx.out << "board: " << sim::mujoco::describe(s) << "\n"
           << frame_board_stats_line(s, end, " docking=" + std::to_string(s.dock_commands)) << "\n";
