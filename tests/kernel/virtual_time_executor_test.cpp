@@ -43,6 +43,41 @@ TEST_F(VirtualTimeExecutorTest, HigherPriorityFirstAtTheSameInstant) {
   EXPECT_EQ(log, (std::vector<std::string>{"hi:start@0", "lo:start@0", "hi:tick@10", "lo:tick@10"}));
 }
 
+// Inputs woken at the current instant wait apart from the timed events (a short list, not the
+// heap); the order is still time, then priority, then the order they were scheduled in, across
+// both: a tick queued a period earlier goes before an input of its priority woken now.
+TEST_F(VirtualTimeExecutorTest, InputsWokenNowMeetQueuedTicksInPriorityThenScheduleOrder) {
+  Recorder& a = make("a");
+  Recorder& b = make("b");
+  Recorder& c = make("c");
+  Recorder& d = make("d");
+  Recorder& e = make("e");
+  Recorder& f = make("f");
+  Recorder& g = make("g");
+  ex.attach(a, {5, 10ms, "a"});
+  ex.attach(b, {1, 10ms, "b"});
+  ex.attach(c, {3, {}, "c"});
+  ex.attach(d, {3, {}, "d"});
+  ex.attach(e, {0, {}, "e"});
+  ex.attach(f, {7, {}, "f"});
+  ex.attach(g, {1, {}, "g"});
+  ex.run_until_idle(Time{0});
+  log.clear();
+  a.on_tick = [&] {
+    c.slot->wake();
+    e.slot->wake();
+    d.slot->wake();
+    g.slot->wake();
+    f.slot->wake();
+    c.slot->wake();  // already due: once
+  };
+  ex.run_until(Time{10ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"a:tick@10", "f:input@10", "c:input@10", "d:input@10", "b:tick@10",
+                                           "g:input@10", "e:input@10"}));
+  EXPECT_EQ(ex.pending_events(), 2u);  // the next ticks of a and b
+  EXPECT_EQ(ex.next_event_time(), Time{20ms});
+}
+
 TEST_F(VirtualTimeExecutorTest, ManyWakesOneInput) {
   Recorder& a = make("a");
   ex.attach(a, {});

@@ -21,15 +21,13 @@ struct VirtualTimeExecutor::Slot final : ActivitySlot {
   bool detaching = false;
 
   void wake() override {
-    if (detaching) return;
-    if (suspended) {
-      input_while_suspended = true;
+    if (input_scheduled | detaching | suspended) [[unlikely]] {
+      if (!detaching && suspended) input_while_suspended = true;
       return;
     }
-    if (!input_scheduled) {
-      input_scheduled = true;
-      exec->schedule(*this, EventKind::kInput, exec->clock_.now());
-    }
+    input_scheduled = true;
+    exec->push_ready(
+        Event{exec->clock_.now(), exec->seq_++, this, priority, generation, tick_generation, EventKind::kInput});
   }
   void suspend() override {
     if (suspended || detaching) return;
@@ -126,7 +124,35 @@ std::size_t VirtualTimeExecutor::wait_injected(std::chrono::nanoseconds timeout)
 }
 
 void VirtualTimeExecutor::schedule(Slot& s, EventKind kind, Time t) {
-  push_event(Event{t, seq_++, &s, s.priority, s.generation, s.tick_generation, kind});
+  const Event e{t, seq_++, &s, s.priority, s.generation, s.tick_generation, kind};
+  if (kind == EventKind::kInput && t == clock_.now())
+    push_ready(e);
+  else
+    push_event(e);
+}
+
+void VirtualTimeExecutor::push_ready(const Event& e) {
+  // Its sequence number is the newest, so it comes after every entry of its priority or higher:
+  // those move up past it (the list holds zero to two entries in a step of a robot's chain).
+  std::size_t i = ready_.size();
+  ready_.push_back(e);
+  while (i > 0 && ready_[i - 1].priority >= e.priority) {
+    ready_[i] = ready_[i - 1];
+    --i;
+  }
+  ready_[i] = e;
+}
+
+VirtualTimeExecutor::Event VirtualTimeExecutor::pop_next() {
+  if (!ready_.empty()) {
+    const Event& r = ready_.back();
+    if (events_.empty() || events_.front().time != r.time || !first_at_instant(events_.front(), r)) {
+      const Event e = r;
+      ready_.pop_back();
+      return e;
+    }
+  }
+  return pop_event();
 }
 
 void VirtualTimeExecutor::push_event(const Event& e) {
@@ -170,6 +196,7 @@ void VirtualTimeExecutor::prefetch(int stage) const {
     case 0: prefetch_bytes(this, sizeof(*this)); break;
     case 1:
       prefetch_bytes(events_.data(), events_.size() * sizeof(Event));
+      prefetch_bytes(ready_.data(), ready_.size() * sizeof(Event));
       prefetch_bytes(slots_.data(), slots_.size() * sizeof(slots_[0]));
       break;
     case 2:
@@ -207,8 +234,8 @@ std::uint64_t VirtualTimeExecutor::run_until_idle(Time limit) {
   std::uint64_t handled = 0;
   for (;;) {
     if (inbox_pending_.load(std::memory_order_relaxed)) run_injected();
-    if (events_.empty() || events_.front().time > limit || stop_requested_) break;
-    const Event e = pop_event();
+    if ((ready_.empty() && events_.empty()) || next_event_time() > limit || stop_requested_) break;
+    const Event e = pop_next();
     clock_.advance_to(e.time);
     handle(e);
     ++handled;

@@ -61,13 +61,16 @@ class VirtualTimeExecutor final : public Executor {
   // [now, until) of a lockstep run, whose instant `until` belongs to the next window.
   std::uint64_t run_before(Time until);
   // The time of the next queued event (possibly one that will turn out stale), or kTimeNever.
-  Time next_event_time() const { return events_.empty() ? kTimeNever : events_.front().time; }
+  Time next_event_time() const {
+    if (!ready_.empty()) return ready_.back().time;
+    return events_.empty() ? kTimeNever : events_.front().time;
+  }
   // True when injected work waits (cheap: one atomic load).
   bool has_injected() const { return inbox_pending_.load(std::memory_order_acquire); }
   // Makes the running run_*() return after the current handler.
   void stop() { stop_requested_ = true; }
   Time now() const { return clock_.now(); }
-  std::size_t pending_events() const { return events_.size(); }
+  std::size_t pending_events() const { return events_.size() + ready_.size(); }
   // For a caller that runs many executors one after another (the lockstep executor's lanes): asks
   // the memory system for what the next run will read, one level of pointers a call, so that
   // calls a few executors ahead overlap their loads with the runs in between. Stage 0: the object
@@ -96,6 +99,10 @@ class VirtualTimeExecutor final : public Executor {
       return a.seq > b.seq;
     }
   };
+  // Of two events at one instant, whether `a` comes before `b`.
+  static bool first_at_instant(const Event& a, const Event& b) {
+    return a.priority != b.priority ? a.priority > b.priority : a.seq < b.seq;
+  }
 
   void schedule(Slot& s, EventKind kind, Time t);
   // A binary heap by hand rather than std::priority_queue: std::push_heap writes the new event
@@ -103,6 +110,11 @@ class VirtualTimeExecutor final : public Executor {
   // tenth of a message delivery. Here the event stays in registers until its place is found.
   void push_event(const Event& e);
   Event pop_event();
+  // Input scheduled at the current instant (a wake: most events of a step) skips the heap: it
+  // joins `ready_`, a short list in handling order, and the next event is the better of its last
+  // entry and the heap's top. The order is the heap's own (time, priority, schedule order).
+  void push_ready(const Event& e);
+  Event pop_next();
   void handle(const Event& e);
   void finalize(Slot& s);
   void finalize_pending();
@@ -114,6 +126,9 @@ class VirtualTimeExecutor final : public Executor {
 
   VirtualClock clock_;
   std::vector<Event> events_;  // a heap: events_[0] is the next to handle (see Later)
+  // Events at now() (push_ready): the last one is handled first. Never older than now(): the
+  // clock moves on only once they are all handled.
+  std::vector<Event> ready_;
   std::vector<std::unique_ptr<Slot>> slots_;
   std::vector<Slot*> free_slots_;
   std::vector<Slot*> to_finalize_;

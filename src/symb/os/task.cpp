@@ -42,6 +42,16 @@ void Task::send(Port port, const Payload& payload) {
   record_->node.send_from(*record_, m);
 }
 
+void Task::send(Port port, std::span<const float> values) {
+  // The numbers go straight into the message (a Payload made first would be copied into it).
+  const Message m{.source = record_->id,
+                  .port = port,
+                  .hops = record_->next_hops,
+                  .time = record_->node.now(),
+                  .payload = Payload(values)};
+  record_->node.send_from(*record_, m);
+}
+
 void Task::notify() { record_->notify(); }
 
 void Task::probe(std::string_view channel, std::span<const float> values) const {

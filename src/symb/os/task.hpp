@@ -117,8 +117,8 @@ class Task {
   std::size_t pending_messages() const;
   // Sends to every task hooked to this one. Timestamped with the node clock.
   void send(Port port, const Payload& payload);
-  void send(Port port, std::span<const float> values) { send(port, Payload(values)); }
-  void send(Port port, std::initializer_list<float> values) { send(port, Payload(values)); }
+  void send(Port port, std::span<const float> values);
+  void send(Port port, std::initializer_list<float> values) { send(port, std::span<const float>(values)); }
   void log(LogLevel level, std::string_view text) const;
   // Node::notify(id()) without finding the task first: for a notifier the task attached in
   // on_start and detaches in on_stop (a device saying its data is ready, thousands of times a
