@@ -284,13 +284,19 @@ constexpr const char* kChildFlag = "--sim-rtf-pair=";
 // A repetition's process: `bench_sim_rtf --sim-rtf-pair=ROBOTS,RAW_FIRST,FILE` prints the three
 // figures on one line (or `error: ...`) and exits.
 int pair_child(std::string_view spec) {
-  int robots = 0, raw_first = 0;
-  char path[4096] = {};
-  if (std::sscanf(std::string(spec).c_str(), "%d,%d,%4095s", &robots, &raw_first, path) != 3) {
-    std::printf("error: bad %s%.*s\n", kChildFlag, static_cast<int>(spec.size()), spec.data());
+  int robots = 0, raw_first = 0, consumed = 0;
+  const std::string text(spec);
+  if (std::sscanf(text.c_str(), "%d,%d,%n", &robots, &raw_first, &consumed) != 2 || consumed == 0 || robots < 1 ||
+      static_cast<std::size_t>(consumed) >= text.size()) {
+    std::printf("error: bad %s%s\n", kChildFlag, text.c_str());
     return 2;
   }
-  auto t = measure_pair(robots, raw_first != 0, path);
+  symb::kernel::Result<PairTimes> t = symb::kernel::Error{"not run"};
+  try {  // the bench's helpers throw on a scenario they cannot read
+    t = measure_pair(robots, raw_first != 0, text.substr(static_cast<std::size_t>(consumed)));
+  } catch (const std::exception& e) {
+    t = symb::kernel::Error{e.what()};
+  }
   if (!t) {
     std::printf("error: %s\n", t.error().c_str());
     return 1;
@@ -326,23 +332,26 @@ symb::kernel::Result<PairTimes> run_pair_process(const std::string& self, int ro
   if (spawned != 0) return symb::kernel::Error{"cannot start " + self + ": " + std::strerror(spawned)};
   int status = 0;
   ::waitpid(pid, &status, 0);
+  // The figures are the last line (whatever the run printed before it).
+  const std::size_t end = text.find_last_not_of('\n');
+  const std::size_t last = end == std::string::npos ? 0 : text.find_last_of('\n', end);
+  const std::string line = end == std::string::npos ? "" : text.substr(last == std::string::npos ? 0 : last + 1);
   PairTimes t;
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
-      std::sscanf(text.c_str(), "%lf %lf %lf", &t.raw_cpu, &t.symb_cpu, &t.simulated) != 3)
+      std::sscanf(line.c_str(), "%lf %lf %lf", &t.raw_cpu, &t.symb_cpu, &t.simulated) != 3)
     return symb::kernel::Error{"repetition process for " + std::to_string(robots) +
                                " robots: " + (text.empty() ? std::string("no output") : text)};
   return t;
 }
 
-std::string self_path;  // this program, for its repetition processes
-
-void BM_Pair(benchmark::State& state) {
+// `self`: this program, for its repetition processes; `done`: the case's repetitions so far, whose
+// count alternates the order in which the two sides are built.
+void BM_Pair(benchmark::State& state, const std::string& self, int& done) {
   const int robots = static_cast<int>(state.range(0));
   const fs::path file = write_scenario(robots);
-  static std::map<int, int> repetition;
   for (auto _ : state) {
-    const bool raw_first = repetition[robots]++ % 2 == 0;
-    auto t = run_pair_process(self_path, robots, raw_first, file);
+    const bool raw_first = done++ % 2 == 0;
+    auto t = run_pair_process(self, robots, raw_first, file);
     if (!t) {
       state.SkipWithError(t.error().c_str());
       break;
@@ -384,9 +393,10 @@ bool same_trajectories(int robots, std::string& why) {
 // of the program to the next on the shared box, and the whole program stays under half a minute.
 int pairs_for(int robots) { return robots <= 10 ? 9 : 5; }
 
-void register_all() {
+void register_all(const std::string& self) {
   for (int n : {1, 10, 100}) {
-    benchmark::RegisterBenchmark("BM_Pair", BM_Pair)
+    benchmark::RegisterBenchmark(
+        "BM_Pair", [self, done = std::make_shared<int>(0)](benchmark::State& state) { BM_Pair(state, self, *done); })
         ->Arg(n)
         ->Iterations(1)
         ->Repetitions(pairs_for(n))
@@ -416,8 +426,7 @@ double quantile(std::vector<double> v, double q) {
 int main(int argc, char** argv) {
   if (argc == 2 && std::string_view(argv[1]).starts_with(kChildFlag))
     return pair_child(std::string_view(argv[1]).substr(std::string_view(kChildFlag).size()));
-  self_path = fs::read_symlink("/proc/self/exe").string();
-  register_all();
+  register_all(fs::read_symlink("/proc/self/exe").string());
   std::string why;
   const bool same = same_trajectories(10, why);
   symb::bench::CollectingReporter reporter(false);
