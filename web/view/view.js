@@ -51,7 +51,7 @@ const handlers = {
     for (const b of document.querySelectorAll('.controls button')) b.disabled = !m.virtual;
     showStatus(m);
     fitCanvas();
-    draw();
+    requestDraw();
   },
   step(m) {
     view.poses = m.xy;
@@ -68,7 +68,7 @@ const handlers = {
     const k = view.selected / m.stride;
     if (Number.isInteger(k) && 3 * k + 2 < m.xy.length)
       $('robot-pos').textContent = `x ${m.xy[3 * k].toFixed(1)} y ${m.xy[3 * k + 1].toFixed(1)} cm, ${m.xy[3 * k + 2]}°`;
-    draw();
+    requestDraw();
   },
   organism(m) {
     const o = view.organism;
@@ -81,7 +81,7 @@ const handlers = {
     const links = Organism.topology(o);
     $('topology').textContent = links.length ? `docked: ${links.join(', ')}` : 'docked: none';
     $('topology').dataset.pairs = links.length;
-    draw();
+    requestDraw();
   },
   graph(m) {
     for (const e of document.querySelectorAll('.robot-name')) e.textContent = m.robot;
@@ -228,6 +228,19 @@ function fitCanvas() {
     canvas.width = 800;
     canvas.height = 560;
   }
+}
+
+// The world is drawn at most once per animation frame, not at every frame from the run: frames
+// that arrive together cost one drawing, and a page in a background tab (no animation frames)
+// draws nothing until it is shown again.
+let drawRequested = false;
+function requestDraw() {
+  if (drawRequested) return;
+  drawRequested = true;
+  requestAnimationFrame(() => {
+    drawRequested = false;
+    draw();
+  });
 }
 
 function draw() {
