@@ -72,16 +72,16 @@ namespace detail {
 TaskRecord::TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> t, const TaskOptions& o,
                        bool concurrent)
     : node(n),
-      id(i),
-      name(std::move(nm)),
       task(std::move(t)),
+      id(i),
+      in_mu(concurrent),
+      queue(o.queue_capacity),
+      out_mu(concurrent),
       priority(o.priority),
       period_ns(o.period.count()),
       ports(o.ports ? std::make_unique<const PortDeclaration>(*o.ports) : nullptr),
-      random(n.seed(), fnv1a(name)),
-      out_mu(concurrent),
-      in_mu(concurrent),
-      queue(o.queue_capacity) {
+      name(std::move(nm)),
+      random(n.seed(), fnv1a(name)) {
   task->record_ = this;
 }
 
@@ -92,7 +92,7 @@ void TaskRecord::on_activity_attached(kernel::ActivitySlot& s) {
 
 void TaskRecord::prefetch(int level) const {
   switch (level) {
-    case 0: kernel::prefetch_bytes(this, sizeof(*this)); break;
+    case 0: kernel::prefetch_bytes(this, hot_bytes()); break;
     case 1:
       // What a handler reads first beyond the record: the task object, the queue's head (the
       // message to handle, or where the next one lands; a task is typically handed one or two a

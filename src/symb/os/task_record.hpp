@@ -149,43 +149,54 @@ struct TaskRecord final : kernel::Activity {
   }
   void apply_parameters_now();
 
+  // Hot fields first, in the order a delivery and a handler read them: being handed a message and
+  // handling it reads the record's first 168 bytes, sending the 40 after them, and the rest is for
+  // the shell and rare paths. In a swarm every record is out of the cache at each step, so each
+  // cache line of it that a step reads is a miss. hot_bytes() is what prefetch asks for.
   Node& node;
-  const TaskId id;
-  const std::string name;
   std::unique_ptr<Task> task;
-  std::atomic<TaskState> state{TaskState::kCreated};
-  std::atomic<int> priority;
-  std::atomic<std::int64_t> period_ns;
   kernel::ActivitySlot* slot = nullptr;  // set under in_mu
-  std::unique_ptr<ParamState> params;
+  const TaskId id;
+  std::atomic<TaskState> state{TaskState::kCreated};
   // Set with every push to params->pending: every handler tests it, without a lock, here in the
   // record rather than behind `params` (one cache line fewer per handler in a large swarm).
   std::atomic<bool> params_pending{false};
-  // Checked by every hook (port_layout.hpp); null: unchecked.
-  const std::unique_ptr<const PortDeclaration> ports;
-  kernel::RandomStream random;
-
-  // Output side: the hooks of this task as a sender.
-  kernel::OptionalMutex out_mu;
-  std::vector<Hook> hooks;
-  std::atomic<std::uint64_t> sent{0};  // written under out_mu (its own sends, and Node::send_as)
   // Hops of what this task sends now (see kMaxHops): the handled message's + 1 inside
   // on_message, 0 elsewhere. The task's own context only.
   std::uint16_t next_hops = 0;
-  // The longest chain this task handled (most hops), and the source of the last message it
-  // handled that was more than half way to kMaxHops: the trail that names a cycle. Written by the
-  // task's own context only.
+  // The longest chain this task handled (most hops); see deep_source. Its own context only.
   std::atomic<std::uint16_t> longest_chain{0};
-  std::atomic<std::uint64_t> deep_source{~std::uint64_t{0}};
 
   // Input side, under in_mu.
-  kernel::OptionalMutex in_mu;
-  kernel::RingBuffer<Message> queue;
-  TrafficCounters traffic;             // `delivered` is mirrored from `delivered` below when read
-  std::unique_ptr<InputHooks> inputs;  // see input_hooks()
   bool wake_pending = false;
-  bool notified = false;                    // Node::notify: on_notify() is due
+  bool notified = false;  // Node::notify: on_notify() is due
+  kernel::OptionalMutex in_mu;
+  std::unique_ptr<InputHooks> inputs;  // see input_hooks()
+  kernel::RingBuffer<Message> queue;
   std::atomic<std::uint64_t> delivered{0};  // written by the task's own context only
+  TrafficCounters traffic;                  // `delivered` is mirrored from `delivered` above when read
+
+  // Output side: the hooks of this task as a sender.
+  kernel::OptionalMutex out_mu;
+  std::atomic<std::uint64_t> sent{0};  // written under out_mu (its own sends, and Node::send_as)
+  std::vector<Hook> hooks;
+
+  // Cold: read by the shell, the node's queries and rare paths.
+  std::atomic<int> priority;
+  std::atomic<std::int64_t> period_ns;
+  std::unique_ptr<ParamState> params;
+  // Checked by every hook (port_layout.hpp); null: unchecked.
+  const std::unique_ptr<const PortDeclaration> ports;
+  // The source of the last message this task handled that was more than half way to kMaxHops:
+  // with longest_chain, the trail that names a cycle. Written by the task's own context only.
+  std::atomic<std::uint64_t> deep_source{~std::uint64_t{0}};
+  const std::string name;
+  kernel::RandomStream random;
+
+  // The bytes from the record's start that deliveries and handlers read (prefetch asks for these).
+  std::size_t hot_bytes() const {
+    return static_cast<std::size_t>(reinterpret_cast<const char*>(&hooks + 1) - reinterpret_cast<const char*>(this));
+  }
 };
 
 }  // namespace symb::os::detail

@@ -133,15 +133,17 @@ class ActuatorSinkTask : public os::Task {
  private:
   void arm_watchdog();
 
+  // What every command and watchdog tick reads first, together in the object's first lines (in
+  // a swarm each robot's sink is out of the cache at each step); the rest after.
   std::shared_ptr<Actuator> actuator_;
   Options options_;
+  kernel::Time last_applied_{0};  // the watchdog's reference: start, last applied command
+  bool timed_out_ = false;        // the safe output is on since the last expiry
+  kernel::Counter received_, applied_, failed_, ignored_, timeouts_;  // kernel/counter.hpp
   std::array<float, os::Payload::kInlineValues> narrowed_{};
   os::WarningLimiter fail_warning_;
   os::WarningLimiter clamp_warning_;
   os::WarningLimiter timeout_warning_;
-  kernel::Time last_applied_{0};  // the watchdog's reference: start, last applied command
-  bool timed_out_ = false;        // the safe output is on since the last expiry
-  kernel::Counter received_, applied_, failed_, ignored_, timeouts_;  // kernel/counter.hpp
 };
 
 }  // namespace symb::robot

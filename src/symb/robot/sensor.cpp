@@ -17,10 +17,10 @@ using kernel::Error;
 
 Sensor::Sensor(std::string name, std::vector<ChannelSpec> channels, Options options)
     : io::Device(std::move(name)),
-      channels_(std::move(channels)),
-      ranges_(ranges_of(channels_)),
       mu_(options.threads == DeviceThreads::kAny),
-      mailbox_capacity_(options.mailbox) {
+      ranges_(ranges_of(channels)),  // declared before channels_: made from the argument
+      mailbox_capacity_(options.mailbox),
+      channels_(std::move(channels)) {
   if (auto st = validate_channels(channels_); !st)
     throw std::invalid_argument("sensor '" + this->name() + "': " + st.error());
   if (options.mailbox == 0)
@@ -200,7 +200,8 @@ void SensorTask::on_start() {
   link_->self = id();
   if (!sensor_->is_open())
     if (auto st = sensor_->open(); !st) log(os::LogLevel::kWarn, st.error());
-  seen_ = sensor_->stats();
+  const SensorStats counted = sensor_->stats();
+  seen_ = {counted.clamped_values, counted.rejected, counted.overwritten};
   // The notifier runs inside publish(), under the sensor's lock (or, for a device called one
   // context at a time, on that context), and the task detaches in on_stop under that same lock:
   // while it runs, the task, the link and the node it names are alive. It captures two pointers,
@@ -286,7 +287,7 @@ void SensorTask::report(const SensorStats& st) {
   const std::uint64_t clamped = st.clamped_values - seen_.clamped_values;
   const std::uint64_t rejected = st.rejected - seen_.rejected;
   const std::uint64_t overwritten = st.overwritten - seen_.overwritten;
-  seen_ = st;
+  seen_ = {st.clamped_values, st.rejected, st.overwritten};
   if (clamped > 0 && clamp_warning_.note(t, clamped))
     log(os::LogLevel::kWarn, std::to_string(clamp_warning_.count()) + " value(s) of '" + sensor_->name() +
                                  "' outside their channel range, clamped");

@@ -152,22 +152,23 @@ class Sensor : public io::Device {
   // drains every period). Fewer than out.size() taken: the mailbox is empty.
   SensorStats take(std::span<SensorSample> out, std::size_t* taken);
 
-  const std::vector<ChannelSpec> channels_;
-  const std::vector<ChannelRange> ranges_;  // channels_' ranges, packed: what publish() reads
-  std::mutex open_mu_;                      // serialises open/close (and the driver's activate/deactivate)
+  // What every publish() reads and writes comes first, together (in a swarm each robot's sensor is
+  // out of the cache at each step); the channels and the open/close lock after.
   std::atomic<bool> open_{false};
   // Mirrors `notify_ != nullptr` for has_listener(), which a simulator asks every step.
   std::atomic<bool> listening_{false};
-
-  mutable kernel::OptionalMutex mu_;  // everything below; off for DeviceThreads::kOneAtATime
+  mutable kernel::OptionalMutex mu_;  // the fields from here to latest_; off for DeviceThreads::kOneAtATime
+  bool notified_ = false;
+  const std::vector<ChannelRange> ranges_;  // the channels' ranges, packed: what publish() reads
   // Made at the first attach: a sensor no task listens to (a simulated robot's pose and ground
   // drivers, in most scenarios) keeps only its latest sample.
   std::optional<kernel::RingBuffer<SensorSample>> mailbox_;
-  std::size_t mailbox_capacity_;
   std::function<void()> notify_;
-  bool notified_ = false;
-  std::optional<SensorSample> latest_;
   SensorStats stats_;
+  std::optional<SensorSample> latest_;
+  std::size_t mailbox_capacity_;
+  const std::vector<ChannelSpec> channels_;
+  std::mutex open_mu_;  // serialises open/close (and the driver's activate/deactivate)
 };
 
 struct SensorTaskStats {
@@ -207,15 +208,23 @@ class SensorTask : public os::Task {
   void forward(std::span<const SensorSample> samples);
   void report(const SensorStats& now_seen);
 
+  // The sensor's counters that report() warns of, as they were at its last call.
+  struct Seen {
+    std::uint64_t clamped_values = 0, rejected = 0, overwritten = 0;
+  };
+
+  // What every drain reads, together in the object's first lines (in a swarm each robot's task is
+  // out of the cache at each step); the rest after.
   std::shared_ptr<Sensor> sensor_;
+  kernel::Counter forwarded_;  // kernel/counter.hpp, as clamped_ and rejected_
   Options options_;
-  std::shared_ptr<Link> link_;
+  Seen seen_;
   bool attached_ = false;
-  SensorStats seen_;  // the sensor's counters at the last report
+  std::shared_ptr<Link> link_;
   os::WarningLimiter clamp_warning_;
   os::WarningLimiter reject_warning_;
   os::WarningLimiter overwrite_warning_;
-  kernel::Counter forwarded_, clamped_, rejected_;  // kernel/counter.hpp
+  kernel::Counter clamped_, rejected_;
 };
 
 }  // namespace symb::robot

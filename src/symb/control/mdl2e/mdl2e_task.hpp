@@ -144,8 +144,9 @@ class Mdl2eTask : public os::Task {
   os::WarningLimiter limit_warning_;
 
   struct Counters {  // kernel/counter.hpp
-    kernel::Counter steps, tick_steps, skipped_ticks, idle_ticks, sensor_messages, external_messages, ignored,
-        wrong_count, not_finite, bad_external, other, task_actions, task_action_failures, clamped;
+    // The ones of every step first, side by side (in a swarm each task is out of the cache at each step).
+    kernel::Counter steps, tick_steps, clamped, sensor_messages, skipped_ticks, idle_ticks, external_messages, ignored,
+        wrong_count, not_finite, bad_external, other, task_actions, task_action_failures;
     Mdl2eStats snapshot() const {
       return {.steps = steps.load(),
               .tick_steps = tick_steps.load(),
