@@ -198,11 +198,11 @@ int main(int argc, char** argv) {
       "\nlarge swarms, equal density (4,000 cm^2 a robot), MDL2e controllers, dt 30 ms, median of repetitions\n");
   std::printf("%7s %10s %10s %18s %14s %16s %16s\n", "robots", "raw Enki", "raw Box2D", "symb run (2 thr)",
               "vs raw Box2D", "CPU s / sim s", "heap / robot");
-  std::map<int, double> rtf, cpu;
+  std::map<int, double> rtf, cpu, raw_box;
   for (int r : kSizes) {
     const std::string a = "/" + std::to_string(r);
     const double enki = reporter.median("BM_RawEnki" + a, "rtf");
-    const double box = reporter.median("BM_RawBox2d" + a, "rtf");
+    const double box = raw_box[r] = reporter.median("BM_RawBox2d" + a, "rtf");
     rtf[r] = reporter.median("BM_SymbRun" + a, "rtf");
     cpu[r] = reporter.median("BM_SymbRun" + a, "cpu_per_sim_s");
     const double heap = reporter.median("BM_SymbRun" + a, "heap_per_robot");
@@ -215,8 +215,6 @@ int main(int argc, char** argv) {
   // The raw Box2D loop's own exponent, from the CPU time of its thread per simulated second (the
   // inverse of its real-time factor): how the engine, the IR on its grid and the interpreters
   // scale with no framework at all, what the full stack's exponent is to be read against.
-  std::map<int, double> raw_box;
-  for (int r : {100, 10000}) raw_box[r] = reporter.median("BM_RawBox2d/" + std::to_string(r), "rtf");
   const double raw_exponent =
       raw_box[100] > 0 && raw_box[10000] > 0 ? std::log(raw_box[100] / raw_box[10000]) / std::log(10000.0 / 100.0) : 0;
   const bool met = rtf[1000] >= kTarget1000 && rtf[10000] >= kTarget10000 && exponent > 0 &&

@@ -29,8 +29,7 @@ const { chromium } = require(path.join(playwrightDir, 'node_modules', 'playwrigh
 // takes a fraction of it).
 const kWait = 20000;
 const out = fs.mkdtempSync(path.join(os.tmpdir(), 'symb-view-'));
-const children = [];
-const named = new Map();  // what a run was started for -> its process
+const children = new Map();  // what a process was started for -> the process
 
 function fail(message) {
   console.error(`FAIL: ${message}`);
@@ -46,8 +45,7 @@ function startRun(scenario, extra = []) {
 // Starts `symb ARGS` and resolves with the view URL it prints (on stderr or stdout).
 function startSymb(args, what) {
   const child = spawn(symb, args, { stdio: ['ignore', 'pipe', 'pipe'] });
-  children.push(child);
-  named.set(what, child);
+  children.set(what, child);
   const scenario = what;
   return new Promise((resolve, reject) => {
     let err = '';
@@ -76,8 +74,7 @@ async function check(name, fn) {
 async function startBoard() {
   const tty = path.join(out, 'tty');
   const link = spawn(symb, ['link', '--dir', tty], { stdio: 'ignore' });
-  children.push(link);
-  named.set('link', link);
+  children.set('link', link);
   for (let i = 0; i < 250 && !fs.existsSync(path.join(tty, 'shell')); ++i) await new Promise((r) => setTimeout(r, 20));
   return startSymb(['board', path.join(scenarios, 'maze.yaml'), '--serial', path.join(tty, 'board'), '--view', '0',
                     '--duration', '60s', '--quiet'], 'board');
@@ -106,7 +103,7 @@ async function wave(browser, urls, checks) {
 
 // The runs started for `whats` are done with: they stop, so that the next wave has the cores.
 function stop(...whats) {
-  for (const w of whats) named.get(w)?.kill('SIGKILL');
+  for (const w of whats) children.get(w)?.kill('SIGKILL');
 }
 
 (async () => {
@@ -234,10 +231,10 @@ function stop(...whats) {
     ]);
   } finally {
     await browser.close();
-    for (const c of children) c.kill('SIGKILL');  // their files are not wanted: no need to wait for them
+    for (const c of children.values()) c.kill('SIGKILL');  // their files are not wanted: no need to wait for them
     fs.rmSync(out, { recursive: true, force: true });
   }
 })().catch((e) => {
   fail(e.message);
-  for (const c of children) c.kill('SIGKILL');
+  for (const c of children.values()) c.kill('SIGKILL');
 });
