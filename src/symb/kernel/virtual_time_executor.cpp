@@ -123,7 +123,7 @@ std::size_t VirtualTimeExecutor::wait_injected(std::chrono::nanoseconds timeout)
   return run_injected();
 }
 
-void VirtualTimeExecutor::schedule(Slot& s, EventKind kind, Time t) {
+[[gnu::always_inline]] void VirtualTimeExecutor::schedule(Slot& s, EventKind kind, Time t) {
   const Event e{t, seq_++, &s, s.priority, s.generation, s.tick_generation, kind};
   if (kind == EventKind::kInput && t == clock_.now())
     push_ready(e);
@@ -131,7 +131,7 @@ void VirtualTimeExecutor::schedule(Slot& s, EventKind kind, Time t) {
     push_event(e);
 }
 
-void VirtualTimeExecutor::push_ready(const Event& e) {
+[[gnu::always_inline]] void VirtualTimeExecutor::push_ready(const Event& e) {
   // Its sequence number is the newest, so it comes after every entry of its priority or higher:
   // those move up past it (the list holds zero to two entries in a step of a robot's chain).
   std::size_t i = ready_.size();
@@ -143,7 +143,7 @@ void VirtualTimeExecutor::push_ready(const Event& e) {
   ready_[i] = e;
 }
 
-VirtualTimeExecutor::Event VirtualTimeExecutor::pop_next() {
+[[gnu::always_inline]] VirtualTimeExecutor::Event VirtualTimeExecutor::pop_next() {
   if (!ready_.empty()) {
     const Event& r = ready_.back();
     if (events_.empty() || events_.front().time != r.time || !first_at_instant(events_.front(), r)) {
@@ -155,7 +155,7 @@ VirtualTimeExecutor::Event VirtualTimeExecutor::pop_next() {
   return pop_event();
 }
 
-void VirtualTimeExecutor::push_event(const Event& e) {
+[[gnu::always_inline]] void VirtualTimeExecutor::push_event(const Event& e) {
   const Later later;
   std::size_t i = events_.size();
   events_.emplace_back();
@@ -168,7 +168,7 @@ void VirtualTimeExecutor::push_event(const Event& e) {
   events_[i] = e;
 }
 
-VirtualTimeExecutor::Event VirtualTimeExecutor::pop_event() {
+[[gnu::always_inline]] VirtualTimeExecutor::Event VirtualTimeExecutor::pop_event() {
   const Later later;
   const Event top = events_.front();
   // The last event sifts down from the root, compared where it lies (a copy of it on the stack
@@ -246,7 +246,7 @@ std::uint64_t VirtualTimeExecutor::run_until_idle(Time limit) {
   return handled;
 }
 
-void VirtualTimeExecutor::handle(const Event& e) {
+[[gnu::always_inline]] void VirtualTimeExecutor::handle(const Event& e) {
   Slot& s = *e.slot;
   if (e.generation != s.generation || s.detaching) return;  // stale: the activity is gone
   current_ = &s;

@@ -233,8 +233,9 @@ void TaskRecord::on_activity_stop() {
 
 void TaskRecord::on_activity_released() { node.release(*this); }
 
-kernel::ActivitySlot* TaskRecord::offer(const Message& m, std::uint32_t edge, int hook_priority, QueuePolicy policy,
-                                        kernel::Duration suppress_window, bool* accepted) {
+[[gnu::always_inline]] kernel::ActivitySlot* TaskRecord::offer(const Message& m, std::uint32_t edge, int hook_priority,
+                                                               QueuePolicy policy, kernel::Duration suppress_window,
+                                                               bool* accepted) {
   std::lock_guard lock(in_mu);
   if (accepted != nullptr) *accepted = false;
   InHook* e = in_hook(edge);
@@ -953,7 +954,8 @@ void Node::send_from(TaskRecord& from, const Message& m) {
   send_locked(from, m, out);
 }
 
-void Node::send_locked(TaskRecord& from, const Message& m, std::unique_lock<kernel::OptionalMutex>& out) {
+[[gnu::always_inline]] void Node::send_locked(TaskRecord& from, const Message& m,
+                                              std::unique_lock<kernel::OptionalMutex>& out) {
   kernel::bump(from.sent);
   bool sinks_due = false;
   for (auto& h : from.hooks) {

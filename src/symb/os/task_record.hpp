@@ -123,8 +123,9 @@ struct TaskRecord final : kernel::Activity {
 
   // Offers `m` to this task's queue through hook slot `edge` (0: posted); returns the slot to
   // wake (outside any lock) or null. `*accepted` (when given) tells whether the message was queued.
-  kernel::ActivitySlot* offer(const Message& m, std::uint32_t edge, int priority, QueuePolicy policy,
-                              kernel::Duration suppress_window, bool* accepted = nullptr);
+  // Inline, defined [[gnu::always_inline]] in node.cpp (its only user): see Node::send_locked.
+  inline kernel::ActivitySlot* offer(const Message& m, std::uint32_t edge, int priority, QueuePolicy policy,
+                                     kernel::Duration suppress_window, bool* accepted = nullptr);
   // Under in_mu: the counters of hook slot `edge` (0: none).
   InHook* in_hook(std::uint32_t edge) { return edge == 0 ? nullptr : &inputs->at(edge - 1); }
   // Under in_mu: the input side's hook slots and windows, made on first use.

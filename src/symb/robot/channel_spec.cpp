@@ -1,5 +1,6 @@
 #include "symb/robot/channel_spec.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 
@@ -59,9 +60,11 @@ Conditioned condition(std::span<const Channel> channels, std::span<const float> 
       return r;
     }
   }
+  // NaN is out by now, so the bounds apply as a plain max and min (no NaN test per value, and no
+  // branch per bound: every robot's every reading and command comes through here).
   for (std::size_t i = 0; i < in.size(); ++i) {
-    const float v = channels[i].clamp(in[i]);
-    if (v != in[i]) ++r.clamped;
+    const float v = std::min(std::max(in[i], channels[i].min), channels[i].max);
+    r.clamped += v != in[i] ? 1 : 0;
     out[i] = v;
   }
   return r;
