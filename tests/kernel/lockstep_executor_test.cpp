@@ -184,6 +184,27 @@ TEST(LockstepExecutor, TheBarrierOrdersCrossLaneWork) {
   EXPECT_LE(ex.stats().lanes_wall, ex.stats().run_wall);
 }
 
+// Past the first windows only a sample of them is timed; the lanes' share is scaled up to every
+// window. Here the lane's work (a spin of 200 us a window) is most of each window: summed over the
+// timed windows alone the share would be about a ninth (64 + 436 / 16 of 500 windows).
+TEST(LockstepExecutor, TheLanesShareIsEstimatedOverEveryWindow) {
+  LockstepExecutor ex({.threads = 1, .quantum = 1ms});
+  LockstepProbe world(ex), robot(ex.lane(0));
+  world.on_tick = [&] { robot.slot->wake(); };
+  robot.on_input = [] {
+    const auto until = std::chrono::steady_clock::now() + 200us;
+    while (std::chrono::steady_clock::now() < until) {
+    }
+  };
+  ex.lane(0).attach(robot, {0, Duration{0}, "robot"});
+  ex.attach(world, {100, 1ms, "world"});
+  ex.run_until(Time{499ms});
+  const LockstepExecutor::Stats s = ex.stats();
+  ASSERT_EQ(s.windows, 500u);
+  EXPECT_LE(s.lanes_wall, s.run_wall);
+  EXPECT_GT(static_cast<double>(s.lanes_wall.count()), 0.5 * static_cast<double>(s.run_wall.count()));
+}
+
 TEST(LockstepExecutor, SuspendResumeDetachAndPriorityInsideALane) {
   LockstepExecutor ex({.threads = 2, .quantum = 10ms});
   std::vector<std::string> log;
