@@ -185,8 +185,9 @@ TEST(LockstepExecutor, TheBarrierOrdersCrossLaneWork) {
 }
 
 // Past the first windows only a sample of them is timed; the lanes' share is scaled up to every
-// window. Here the lane's work (a spin of 200 us a window) is most of each window: summed over the
-// timed windows alone the share would be about a ninth (64 + 436 / 16 of 500 windows).
+// window. Here the lane's work (a spin of 200 us a window) is most of each window, but only about
+// a fifth of the windows are timed (64 + 436 / 16 of 500): summed over those alone, the share
+// would stay well under half.
 TEST(LockstepExecutor, TheLanesShareIsEstimatedOverEveryWindow) {
   LockstepExecutor ex({.threads = 1, .quantum = 1ms});
   LockstepProbe world(ex), robot(ex.lane(0));

@@ -104,7 +104,7 @@ class LockstepExecutor final : public Executor {
   // observers) runs on one thread. Counted over every run_*() so far. The lanes' share is
   // estimated from a sample of the windows (the first kTimedWindows, then one in kTimedEvery): two
   // clock reads a window cost 60 ns, which for one robot was a twentieth of the framework's time a
-  // step; the windows of a run are alike, so the sample's mean is the run's.
+  // step; a report of where the time went needs no more than this estimate.
   struct Stats {
     std::uint64_t windows = 0;  // phases (B) run
     // Wall clock inside phase (B), estimated; at most run_wall once a run has ended.
