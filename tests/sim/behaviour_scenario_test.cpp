@@ -13,16 +13,12 @@
 #include "symb/shell/shell.hpp"
 #include "symb/sim/scenario_session.hpp"
 
+#include "support/shipped_scenario.hpp"
+
 namespace symb::sim {
 namespace {
 
 using namespace std::chrono_literals;
-
-Scenario load_behaviour(const std::string& name) {
-  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
-  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
-  return s ? *s : Scenario{};
-}
 
 struct BehaviourOutcome {
   std::vector<Pose> poses;  // every step (30 ms)
@@ -51,7 +47,7 @@ BehaviourOutcome run_behaviour(const Scenario& scenario, std::uint64_t seed, con
 }
 
 TEST(SubsumptionScenario, TheRobotStopsInTheTargetZoneAndStaysThere) {
-  const Scenario sc = load_behaviour("subsumption.yaml");
+  const Scenario sc = test::load_shipped("subsumption.yaml");
   ASSERT_EQ(sc.world.zones.size(), 1u);
   const ZoneSpec& target = sc.world.zones[0];
   for (std::uint64_t seed : {1, 2, 3}) {
@@ -76,7 +72,7 @@ TEST(SubsumptionScenario, TheRobotStopsInTheTargetZoneAndStaysThere) {
 // deleted at the start, so the robot crosses the target zone and wanders on; once it has left the
 // zone a new stop layer is created and hooked in above the others, and the robot then stops in it.
 TEST(SubsumptionScenario, AStopLayerAddedThroughTheShellAtRuntimeTakesOver) {
-  const Scenario sc = load_behaviour("subsumption.yaml");
+  const Scenario sc = test::load_shipped("subsumption.yaml");
   const ZoneSpec& target = sc.world.zones.at(0);
   kernel::VirtualTimeExecutor executor;
   auto session = ScenarioSession::create(sc, executor);
@@ -116,7 +112,7 @@ TEST(SubsumptionScenario, AStopLayerAddedThroughTheShellAtRuntimeTakesOver) {
 }
 
 TEST(MotorSchemaScenario, TheRobotReachesTheGoalAtTheFarEndOfTheMaze) {
-  const Scenario sc = load_behaviour("motor_schemas.yaml");
+  const Scenario sc = test::load_shipped("motor_schemas.yaml");
   constexpr double kGoalX = 175, kGoalY = 25, kWithin = 15;
   for (std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE("seed " + std::to_string(seed));

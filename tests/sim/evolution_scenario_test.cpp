@@ -29,19 +29,19 @@ namespace {
 // The seeds of the evolution test (every one in release; the sanitizer builds check the same
 // code for memory errors and races on one seed: 10-20x slower).
 #ifdef SYMB_SANITIZER
-constexpr std::uint64_t kSeeds = 1;
+constexpr std::uint64_t kEvolutionSeeds = 1;
 #else
-constexpr std::uint64_t kSeeds = 5;
+constexpr std::uint64_t kEvolutionSeeds = 5;
 #endif
 
 using namespace std::chrono_literals;
 
 using maze_test::add_fitness;
 using maze_test::bare_maze;
-using maze_test::load;
 using maze_test::maze_with_perceptron;
 using maze_test::Replay;
 using maze_test::replay;
+using test::load_shipped;
 
 // The fitness task reports every 5 steps (150 ms), as scenarios/evolve_maze.yaml has it: a
 // candidate's window starts and ends up to 4 steps late, for a fifth of the messages.
@@ -117,7 +117,7 @@ TEST(EvolutionScenario, OnePlusOneOnlineReachesBraitenbergInTheMazeWithFiveSeeds
               static_cast<unsigned long long>(baseline.contact_steps), baseline.distance);
   ASSERT_TRUE(testing::near_measured(baseline.fitness, kBraitenbergFitness, 0.005));
   EXPECT_EQ(baseline.contact_steps, 0u);
-  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+  for (std::uint64_t seed = 1; seed <= kEvolutionSeeds; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     const Evolved e = evolve(seed, kBudget, run_options());
     EXPECT_GT(e.evaluations, 300u);  // 120 min / 21 s = 342

@@ -17,6 +17,7 @@
 #include "symb/sim/scenario_session.hpp"
 
 #include "support/measured.hpp"
+#include "support/shipped_scenario.hpp"
 #include "support/tsan_skip.hpp"
 
 namespace symb::sim {
@@ -32,12 +33,6 @@ using namespace std::chrono_literals;
 constexpr double kLindaMeasuredM[] = {50.9, 50.4, 51.1};
 constexpr double kRateCodedM = 53.0;
 constexpr double kLindaMarginM = 2.5;
-
-Scenario load_linda(const std::string& name) {
-  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
-  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
-  return s ? *s : Scenario{};
-}
 
 TaskSpec* task(Scenario& s, const std::string& name) {
   for (TaskSpec& t : s.robots.at(0).tasks)
@@ -67,7 +62,7 @@ LindaOutcome run_linda(const Scenario& scenario, kernel::Duration duration, std:
 
 TEST(LindaScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
   SYMB_SKIP_UNDER_TSAN();
-  const Scenario sc = load_linda("linda_maze.yaml");
+  const Scenario sc = test::load_shipped("linda_maze.yaml");
   for (std::uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE(seed);
     const LindaOutcome o = run_linda(sc, 10min, seed);
@@ -84,7 +79,7 @@ TEST(LindaScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
 // drives as far, but the noise makes it graze a wall now and then: measured (10 minutes, seeds 1
 // and 2) 52.6-53.0 m and 2-3 brief contacts (12-15 steps of 20,000).
 TEST(LindaScenario, RateCodedSensorsAlsoDriveTheMaze) {
-  Scenario sc = load_linda("linda_maze.yaml");
+  Scenario sc = test::load_shipped("linda_maze.yaml");
   auto set = [&sc](const std::string& task_name, const std::string& param, const std::string& value) {
     TaskSpec* t = task(sc, task_name);
     ASSERT_NE(t, nullptr);
@@ -129,7 +124,7 @@ class SpikeCounter : public os::Task {
 
 TEST(LindaSwap, NetworkRegrownFromAnotherGenomeAndReplacedWhileTheRobotDrives) {
   kernel::VirtualTimeExecutor executor;
-  auto s = ScenarioSession::create(load_linda("linda_maze.yaml"), executor);
+  auto s = ScenarioSession::create(test::load_shipped("linda_maze.yaml"), executor);
   ASSERT_TRUE(s.ok()) << (s ? "" : s.error());
   ScenarioSession& session = **s;
   os::Node& node = session.robot(0).node();

@@ -17,6 +17,8 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/sim/scenario_session.hpp"
 
+#include "support/shipped_scenario.hpp"
+
 namespace symb::sim {
 namespace {
 
@@ -36,12 +38,6 @@ void mix_bits(std::uint64_t& h, double v) {
   std::uint64_t bits = 0;
   std::memcpy(&bits, &v, sizeof v);
   h = (h ^ bits) * 1099511628211ull;
-}
-
-Scenario load_shipped(const std::string& name) {
-  auto s = load_scenario(kScenarioDir + "/" + name);
-  EXPECT_TRUE(s.ok()) << (s.ok() ? "" : s.error());
-  return s.ok() ? std::move(s).value() : Scenario{};
 }
 
 // threads 0: the single VirtualTimeExecutor. `prefetch`: LockstepExecutor::Options::prefetch, a
@@ -87,7 +83,7 @@ LockstepOutcome run_session(const Scenario& scenario, unsigned threads, kernel::
 }
 
 TEST(LockstepSession, SwarmIsTheSameWithOneTwoAndFourThreads) {
-  const Scenario swarm = load_shipped("swarm.yaml");
+  const Scenario swarm = test::load_shipped("swarm.yaml");
   const LockstepOutcome one = run_session(swarm, 1, 10s);
   EXPECT_EQ(one.steps, 333u);
   EXPECT_GT(one.distance, 12 * 50.0);  // the robots really drive: 50 cm each on average at least
@@ -101,7 +97,7 @@ TEST(LockstepSession, SwarmIsTheSameWithOneTwoAndFourThreads) {
 }
 
 TEST(LockstepSession, RadioSwarmIsTheSameWithOneTwoAndFourThreads) {
-  const Scenario medea = load_shipped("medea_swarm.yaml");
+  const Scenario medea = test::load_shipped("medea_swarm.yaml");
   const LockstepOutcome one = run_session(medea, 1, 20s);
   EXPECT_GT(one.radio.delivered, 100u);  // the robots do meet over the radio
   for (unsigned threads : {2u, 4u}) {
@@ -133,7 +129,7 @@ TEST(LockstepSession, EventsBetweenWorldStepsAreTheSameWithAnyNumberOfThreads) {
   ASSERT_TRUE(parsed.ok()) << parsed.error();
   const LockstepOutcome one = run_session(*parsed, 1, 4s);
   EXPECT_EQ(one.events_done, 3u);
-  EXPECT_NE(one.hash, run_session(load_shipped("swarm.yaml"), 1, 4s).hash);  // the events change the run
+  EXPECT_NE(one.hash, run_session(test::load_shipped("swarm.yaml"), 1, 4s).hash);  // the events change the run
   EXPECT_EQ(run_session(*parsed, 2, 4s).hash, one.hash);
   EXPECT_EQ(run_session(*parsed, 4, 4s).hash, one.hash);
   EXPECT_EQ(run_session(*parsed, 0, 4s).hash, one.hash) << "the single virtual-time executor";

@@ -39,10 +39,10 @@ using namespace std::chrono_literals;
 
 using maze_test::add_fitness;
 using maze_test::bare_maze;
-using maze_test::load;
 using maze_test::maze_with_perceptron;
 using maze_test::Replay;
 using maze_test::replay;
+using test::load_shipped;
 
 struct MuEvolved {
   evo::Member best;

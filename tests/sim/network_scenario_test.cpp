@@ -19,6 +19,7 @@
 #include "symb/sim/scenario_session.hpp"
 
 #include "support/measured.hpp"
+#include "support/shipped_scenario.hpp"
 
 namespace symb::sim {
 namespace {
@@ -34,15 +35,9 @@ const std::map<std::string, double> kNetworkMeasuredM = {
     {"maze.yaml", 50.4}, {"maze_rooms.yaml", 51.6}, {"maze_spiral.yaml", 52.0}};
 constexpr double kNetworkMarginM = 2.5;
 
-Scenario load_network(const std::string& name) {
-  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
-  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
-  return s ? *s : Scenario{};
-}
-
 // The maze's controller replaced by the Braitenberg perceptron of braitenberg.yaml.
 Scenario with_braitenberg(Scenario s) {
-  const Scenario b = load_network("braitenberg.yaml");
+  const Scenario b = test::load_shipped("braitenberg.yaml");
   for (RobotSpec& r : s.robots)
     for (TaskSpec& t : r.tasks)
       if (t.name == "controller") {
@@ -72,7 +67,7 @@ NetworkOutcome run_network(const Scenario& scenario, kernel::Duration duration) 
 }
 
 TEST(BraitenbergScenario, TenMinutesInTheMazeWithoutTouchingAWall) {
-  const Scenario sc = load_network("braitenberg.yaml");
+  const Scenario sc = test::load_shipped("braitenberg.yaml");
   ASSERT_EQ(sc.robots.at(0).tasks.at(0).type, "mlp");
   const NetworkOutcome o = run_network(sc, 10min);
   std::printf("braitenberg.yaml: %.1f m, %llu contact steps\n", o.distance / 100,
@@ -91,7 +86,7 @@ TEST(BraitenbergScenario, EveryShippedMazeTenMinutesWithoutTouchingAWall) {
   ASSERT_GE(mazes.size(), 3u);
   for (const std::string& name : mazes) {
     SCOPED_TRACE(name);
-    const NetworkOutcome o = run_network(with_braitenberg(load_network(name)), 10min);
+    const NetworkOutcome o = run_network(with_braitenberg(test::load_shipped(name)), 10min);
     std::printf("braitenberg in %s: %.1f m, %llu contact steps\n", name.c_str(), o.distance / 100,
                 static_cast<unsigned long long>(o.contact_steps));
     EXPECT_EQ(o.contact_steps, 0u);
@@ -148,7 +143,7 @@ std::string elman_weights() {
 
 TEST(NetworkHotSwap, ControllerReplacedByAnotherNetworkWhileTheRobotDrives) {
   kernel::VirtualTimeExecutor executor;
-  auto s = ScenarioSession::create(load_network("braitenberg.yaml"), executor);
+  auto s = ScenarioSession::create(test::load_shipped("braitenberg.yaml"), executor);
   ASSERT_TRUE(s.ok()) << (s ? "" : s.error());
   ScenarioSession& session = **s;
   os::Node& node = session.robot(0).node();
@@ -220,7 +215,7 @@ TEST(NetworkHotSwap, ControllerReplacedByAnotherNetworkWhileTheRobotDrives) {
 // by a hook; then stage 1 is replaced by an mlp task with the same weights while the robot drives.
 TEST(NetworkCircuit, TwoStagesDriveTheMazeAndAStageIsSwappedAtRuntime) {
   kernel::VirtualTimeExecutor executor;
-  Scenario sc = load_network("braitenberg.yaml");
+  Scenario sc = test::load_shipped("braitenberg.yaml");
   sc.robots[0].tasks.clear();
   sc.robots[0].hooks.clear();
   auto s = ScenarioSession::create(sc, executor);

@@ -11,17 +11,13 @@
 #include "symb/robot/thymio_aseba.hpp"
 #include "symb/sim/sim_drivers.hpp"
 
+#include "support/shipped_scenario.hpp"
+
 namespace symb::sim {
 namespace {
 
-Scenario load(const std::string& name) {
-  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
-  EXPECT_TRUE(s) << s.error();
-  return s ? std::move(s).value() : Scenario{};
-}
-
 TEST(PlaygroundWorld, MazeWallsAndRobotStartsInCentimetresAndRadians) {
-  Scenario sc = load("maze.yaml");
+  Scenario sc = test::load_shipped("maze.yaml");
   auto text = playground_world(sc, 40000);
   ASSERT_TRUE(text) << text.error();
   const std::string& x = *text;
@@ -43,7 +39,7 @@ TEST(PlaygroundWorld, MazeWallsAndRobotStartsInCentimetresAndRadians) {
 }
 
 TEST(PlaygroundWorld, RobotsGetConsecutivePortsAndImpossibleWorldsAreRefused) {
-  Scenario sc = load("swarm.yaml");
+  Scenario sc = test::load_shipped("swarm.yaml");
   ASSERT_GE(sc.robots.size(), 2u);
   auto text = playground_world(sc);
   ASSERT_TRUE(text) << text.error();
@@ -52,7 +48,7 @@ TEST(PlaygroundWorld, RobotsGetConsecutivePortsAndImpossibleWorldsAreRefused) {
   auto over = playground_world(sc, static_cast<std::uint16_t>(65536 - sc.robots.size() + 1));
   ASSERT_FALSE(over);
   EXPECT_NE(over.error().find("do not fit"), std::string::npos) << over.error();
-  Scenario organism = load("caterpillar.yaml");
+  Scenario organism = test::load_shipped("caterpillar.yaml");
   auto three_d = playground_world(organism);
   ASSERT_FALSE(three_d);
   EXPECT_NE(three_d.error().find("no Aseba Playground counterpart"), std::string::npos) << three_d.error();

@@ -20,6 +20,7 @@
 #include "symb/shell/shell.hpp"
 
 #include "support/measured.hpp"
+#include "support/shipped_scenario.hpp"
 
 namespace symb::sim {
 namespace {
@@ -35,12 +36,6 @@ namespace fs = std::filesystem;
 const std::map<std::string, double> kSessionMeasuredM = {
     {"maze.yaml", 51.4}, {"maze_rooms.yaml", 55.1}, {"maze_spiral.yaml", 55.6}};
 constexpr double kSessionMarginM = 2.6;
-
-Scenario load_session(const std::string& name) {
-  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
-  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
-  return s ? *s : Scenario{};
-}
 
 struct SessionOutcome {
   double distance = 0;
@@ -81,7 +76,7 @@ TEST(MazeDemo, EveryShippedMazeTenMinutesMovingWithoutTouchingAWall) {
   ASSERT_GE(mazes.size(), 3u) << "keep several mazes";
   for (const std::string& name : mazes) {
     SCOPED_TRACE(name);
-    const Scenario sc = load_session(name);
+    const Scenario sc = test::load_shipped(name);
     const SessionOutcome o = run_session(sc, 10min);
     std::printf("%s: %.1f m, %llu contact steps\n", name.c_str(), o.distance / 100,
                 static_cast<unsigned long long>(o.contact_steps));
@@ -95,7 +90,7 @@ TEST(MazeDemo, EveryShippedMazeTenMinutesMovingWithoutTouchingAWall) {
 // A scenario hook between two task types whose ports disagree is refused when the session builds
 // the robot, naming both ends and both layouts.
 TEST(MazeDemo, AHookBetweenIncompatibleLayoutsIsAnError) {
-  Scenario s = load_session("maze.yaml");
+  Scenario s = test::load_shipped("maze.yaml");
   ASSERT_FALSE(s.robots.empty());
   TaskSpec layer;
   layer.name = "layer";
@@ -120,7 +115,7 @@ TEST(MazeDemo, ADeviceHookBetweenIncompatibleLayoutsIsAnError) {
       {"pose", "controller", {"'pose' (sensor)", "'controller' (mdl2e)", "carries pose"}},
   };
   for (const auto& [from, to, parts] : cases) {
-    Scenario s = load_session("maze.yaml");
+    Scenario s = test::load_shipped("maze.yaml");
     ASSERT_FALSE(s.robots.empty());
     HookSpec hook;
     hook.from = from;
@@ -135,7 +130,7 @@ TEST(MazeDemo, ADeviceHookBetweenIncompatibleLayoutsIsAnError) {
 }
 
 TEST(MazeDemo, SameSeedSameRunDifferentSeedDifferentRun) {
-  Scenario sc = load_session("maze.yaml");
+  Scenario sc = test::load_shipped("maze.yaml");
   const SessionOutcome a = run_session(sc, 60s), b = run_session(sc, 60s);
   ASSERT_EQ(a.poses.size(), b.poses.size());
   for (std::size_t i = 0; i < a.poses.size(); ++i) {
@@ -168,7 +163,7 @@ double right_wall_in_sight(const Scenario& scenario, kernel::Duration duration) 
 }
 
 TEST(MazeDemo, WallFollowingKeepsAWallOnItsRight) {
-  Scenario follower = load_session("wall_following.yaml");
+  Scenario follower = test::load_shipped("wall_following.yaml");
   const SessionOutcome o = run_session(follower, 5min);
   EXPECT_GT(o.distance, 1500.0) << "it drives along the wall, not on the spot";
   // Following a wall, measured: the wall is in the right sensor's sight 84% of the time; the
@@ -186,7 +181,7 @@ TEST(MazeDemo, WallFollowingKeepsAWallOnItsRight) {
 class ShellOnRunningRobot : public ::testing::Test {
  protected:
   void SetUp() override {
-    auto s = ScenarioSession::create(load_session("maze.yaml"), executor_);
+    auto s = ScenarioSession::create(test::load_shipped("maze.yaml"), executor_);
     ASSERT_TRUE(s.ok()) << (s ? "" : s.error());
     session_ = std::move(s).value();
     session_->runner().add_observer([this](const StepRecord& r) { speeds_.push_back(r.robots[0].state); });

@@ -14,17 +14,15 @@
 #include "symb/os/node.hpp"
 #include "symb/sim/scenario_session.hpp"
 
+#include "support/shipped_scenario.hpp"
+
 namespace symb::sim::maze_test {
 
-inline Scenario load(const std::string& name) {
-  auto s = load_scenario(std::string(SYMB_SCENARIO_DIR) + "/" + name);
-  EXPECT_TRUE(s.ok()) << (s ? "" : s.error());
-  return s ? *s : Scenario{};
-}
+using test::load_shipped;
 
 // The maze with no controller: only the device tasks.
 inline Scenario bare_maze() {
-  Scenario s = load("maze.yaml");
+  Scenario s = load_shipped("maze.yaml");
   for (RobotSpec& r : s.robots) {
     r.tasks.clear();
     r.hooks.clear();
@@ -34,7 +32,7 @@ inline Scenario bare_maze() {
 
 // The maze with a 7-2 tanh perceptron whose weights are `weights` (numbers or a file reference).
 inline Scenario maze_with_perceptron(const std::string& weights) {
-  Scenario s = load("braitenberg.yaml");  // maze.yaml's world, the mlp controller
+  Scenario s = load_shipped("braitenberg.yaml");  // maze.yaml's world, the mlp controller
   for (RobotSpec& r : s.robots)
     for (TaskSpec& t : r.tasks)
       for (os::ParamAssignment& p : t.params)

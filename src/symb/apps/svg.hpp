@@ -9,6 +9,9 @@
 
 namespace symb::apps {
 
+// Room below a picture for its caption line, px.
+inline constexpr double kSvgCaptionHeight = 28;
+
 // The i-th of a sequence of well-separated hues (golden-angle steps), as #rrggbb.
 std::string svg_colour(std::size_t i);
 // `text` with &, < and > escaped for an SVG text node.

@@ -21,7 +21,7 @@ constexpr std::string_view kCommands[] = {"run",  "evolve", "sim",     "board", 
                                           "demo", "shell",  "version", "help",  "serve"};
 constexpr std::string_view kDemos[] = {"swarm"};
 
-void print_help(std::ostream& out) {
+void print_symb_help(std::ostream& out) {
   out << "symb " << symb_version()
       << " - Symbricator: bio-inspired robot control and evolution (SymbricatorRTOS re-implemented)\n\n"
       << "Usage: symb <command> [options]\n\n"
@@ -75,7 +75,7 @@ std::string_view symb_version() { return SYMB_VERSION; }
 
 int run_symb(std::span<const std::string_view> args, const CliContext& ctx) {
   if (args.empty()) {
-    print_help(ctx.err);
+    print_symb_help(ctx.err);
     ctx.err << "\nsymb: missing command\n";
     return kExitUsage;
   }
@@ -83,7 +83,7 @@ int run_symb(std::span<const std::string_view> args, const CliContext& ctx) {
   const auto rest = args.subspan(1);
   if (command == "-h" || command == "--help" || command == "help") {
     if (!rest.empty()) return usage_error(ctx, "symb", UsageError{"unexpected argument " + quote_arg(rest.front())});
-    print_help(ctx.out);
+    print_symb_help(ctx.out);
     return kExitOk;
   }
   if (command == "version" || command == "--version") {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <initializer_list>
@@ -97,6 +98,12 @@ struct Payload {
 // the project 1000 (bench_pingpong's batch of 500 round trips): the bound leaves them a margin of
 // 5000 and 10, and still cuts a cycle within milliseconds (virtual time: about 2 ms of CPU). A
 // cycle with a tick between answers is not cut: it advances.
+// Whether every number is finite: what a handler checks before it acts on numbers from a hook
+// (a NaN from a faulty sensor or a bad genome must not reach the wheels).
+inline bool all_finite(std::span<const float> v) {
+  return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
+}
+
 inline constexpr std::uint16_t kMaxHops = 10000;
 
 struct Message {

@@ -37,4 +37,7 @@ inline constexpr os::PortLayout kJointTarget{"joint-target", "[angle rad]"};
 inline constexpr os::PortLayout kOscillatorPhase{"oscillator-phase", "[id, phase rad]"};
 }  // namespace layout
 
+// A controller's input of the IR sensor task's vectors (the maze demo's `ir -> controller`).
+inline constexpr os::PortSpec kIrInput{kDataPort, "ir", layout::kSensorVector};
+
 }  // namespace symb::robot

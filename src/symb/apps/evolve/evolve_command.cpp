@@ -83,7 +83,7 @@ int run_collect(std::span<const std::string_view> args, const CliContext& ctx) {
   return kExitOk;
 }
 
-void print_help(std::ostream& out) {
+void print_evolve_help(std::ostream& out) {
   out << "Usage: " << kCommand << " SCENARIO [options]\n\n"
       << "Runs an evolution experiment headless on the deterministic virtual-time executor: a\n"
       << "scenario whose robot has an evolution task (type one_plus_one: (1+1)-ONLINE, or\n"
@@ -117,7 +117,7 @@ int run_evolve_command(std::span<const std::string_view> args, const CliContext&
   EvolveOptions options;
   bool islands = false;
   IslandOptions island_options;
-  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_help);
+  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_evolve_help);
   if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& parsed = std::get<SplitArgs>(split);
   options.scenario_path = std::string(parsed.positional.front());

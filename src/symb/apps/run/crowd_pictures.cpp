@@ -15,9 +15,8 @@ namespace {
 
 constexpr double kCrowdLongSide = 900;  // px for the arena's longer side, as maze_svg
 constexpr double kCrowdMargin = 20;
-constexpr double kCaption = 28;
-constexpr double kLegend = 130;  // px right of the arena
-constexpr int kBins = 20;        // per histogram
+constexpr double kCrowdLegend = 130;  // px right of the arena
+constexpr int kBins = 20;             // per histogram
 
 // Viridis at ten even steps: sequential, perceptually even, readable in grey and by the colour-blind.
 constexpr std::array<std::array<int, 3>, 10> kViridis = {{{0x44, 0x01, 0x54},
@@ -97,7 +96,7 @@ void write_density_svg(std::ostream& out, const sim::WorldSpec& world, const Den
                 world.height * (kCrowdLongSide / longer)};
   const double top = static_cast<double>(grid.max());
   char buf[240];
-  out << svg_picture_open(f.w + 2 * kCrowdMargin + kLegend, f.h + 2 * kCrowdMargin + kCaption);
+  out << svg_picture_open(f.w + 2 * kCrowdMargin + kCrowdLegend, f.h + 2 * kCrowdMargin + kSvgCaptionHeight);
   std::snprintf(buf, sizeof buf,
                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f7f7f2\" stroke=\"#333\"/>\n",
                 kCrowdMargin, kCrowdMargin, f.w, f.h);
@@ -193,7 +192,7 @@ void write_robot_stats_svg(std::ostream& out, std::span<const RobotSummary> robo
   }
   constexpr double kPanelW = 320, kPanelH = 240, kPad = 45;
   char buf[260];
-  out << svg_plot_open(3 * kPanelW + kCrowdMargin, kPanelH + 2 * kCrowdMargin + kCaption + 20);
+  out << svg_plot_open(3 * kPanelW + kCrowdMargin, kPanelH + 2 * kCrowdMargin + kSvgCaptionHeight + 20);
   for (int p = 0; p < 3; ++p) {
     std::vector<double>& v = stats[p].values;
     std::sort(v.begin(), v.end());

@@ -12,7 +12,6 @@ namespace {
 
 constexpr double kMazeLongSide = 900;  // px for the arena's longer side
 constexpr double kMazeMargin = 20;     // px around it
-constexpr double kCaption = 28;        // px below it
 
 }  // namespace
 
@@ -27,7 +26,7 @@ void write_maze_svg(std::ostream& out, const sim::WorldSpec& world, std::span<co
   const double stroke = robots.size() > 30 ? 1.0 : 1.8;
   char buf[200];
 
-  out << svg_picture_open(w + 2 * kMazeMargin, h + 2 * kMazeMargin + kCaption);
+  out << svg_picture_open(w + 2 * kMazeMargin, h + 2 * kMazeMargin + kSvgCaptionHeight);
   std::snprintf(buf, sizeof buf,
                 "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f7f7f2\" stroke=\"#333\" "
                 "stroke-width=\"%.1f\"/>\n",

@@ -17,7 +17,7 @@ using sim::mujoco::Vec3;
 constexpr double kOrganismLongSide = 900;  // px for the drawing's longer side
 constexpr double kOrganismMargin = 50;     // px around it: room for the axis labels
 constexpr double kTitle = 30;              // px above it
-constexpr double kLegend = 120;            // px right of it for the modules' names
+constexpr double kOrganismLegend = 120;    // px right of it for the modules' names
 constexpr double kMinSpan = 0.3;           // m: a module that barely moved is still drawn at a readable size
 
 struct Point2 {
@@ -161,7 +161,7 @@ void write_path_view_svg(std::ostream& out, PathView view, const std::vector<Mod
   const auto py = [&](double v) { return kTitle + kOrganismMargin / 2 + (v1 - v) * scale; };
   char buf[256];
 
-  out << svg_plot_open(w + kOrganismMargin * 1.5 + kLegend, h + kTitle + kOrganismMargin * 1.5);
+  out << svg_plot_open(w + kOrganismMargin * 1.5 + kOrganismLegend, h + kTitle + kOrganismMargin * 1.5);
   out << "<text x=\"" << kOrganismMargin << "\" y=\"20\" font-size=\"14\" fill=\"#222\">"
       << (view == PathView::kTop ? "top view (x-y), " : "side view (x-z), ") << svg_escape(caption) << "</text>\n";
   // A metre grid, labelled.

@@ -59,7 +59,7 @@ constexpr OptionSpec kOptions[] = {
     {"--help", "", "this help"},
 };
 
-void print_help(std::ostream& out) {
+void print_run_help(std::ostream& out) {
   out << "Usage: " << kCommand << " SCENARIO [options]\n\n"
       << "Runs a scenario file (a world, robots and each robot's task graph; see docs/scenarios.md)\n"
       << "in this process, on the Enki simulator, headless. Each robot is a node running its task\n"
@@ -130,7 +130,7 @@ std::variant<std::string, UsageError> read_genome_weights(std::string_view path)
 
 int run_run_command(std::span<const std::string_view> args, const CliContext& ctx) {
   RunOptions options;
-  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_help);
+  auto split = scenario_command_args(args, kOptions, ctx, kCommand, print_run_help);
   if (const int* status = std::get_if<int>(&split)) return *status;
   const SplitArgs& parsed = std::get<SplitArgs>(split);
   const auto& opts = parsed.options;

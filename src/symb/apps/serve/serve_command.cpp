@@ -42,7 +42,7 @@ constexpr OptionSpec kServeOptions[] = {
     {"--help", "", "print this help"},
 };
 
-void print_help(std::ostream& out) {
+void print_serve_help(std::ostream& out) {
   out << "Usage: symb serve --node NAME [options]\n\n"
       << "One node in its own process, joined to the nodes of other processes over Cyclone DDS\n"
       << "(docs/bus.md). Every process declares the same --hook list and builds the ends it holds.\n\n"
@@ -87,7 +87,7 @@ int run_serve_command(std::span<const std::string_view> args, const CliContext& 
   if (auto* e = std::get_if<UsageError>(&split)) return usage_error(ctx, kCommand, *e);
   const SplitArgs& a = std::get<SplitArgs>(split);
   if (a.help) {
-    print_help(ctx.out);
+    print_serve_help(ctx.out);
     return kExitOk;
   }
   std::string name;

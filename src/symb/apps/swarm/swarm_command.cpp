@@ -25,7 +25,7 @@ constexpr OptionSpec kOptions[] = {
     {"--help", "", "this help"},
 };
 
-void print_help(std::ostream& out) {
+void print_swarm_help(std::ostream& out) {
   out << "Usage: " << kCommand << " [options]\n\n"
       << "N robots wander in a square walled arena. Each robot is its own node (own seed, own\n"
       << "SysLog) running the task graph kinematics -> proximity -> wander -> kinematics, made\n"
@@ -54,7 +54,7 @@ int run_swarm_command(std::span<const std::string_view> args, const CliContext& 
   bool print_hash = false, quiet = false;
   for (const ParsedOption& o : std::get<std::vector<ParsedOption>>(parsed)) {
     if (o.name == "--help") {
-      print_help(ctx.out);
+      print_swarm_help(ctx.out);
       return kExitOk;
     }
   }

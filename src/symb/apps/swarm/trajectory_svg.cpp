@@ -13,7 +13,6 @@ namespace {
 
 constexpr double kSide = 800;             // px for the arena
 constexpr double kTrajectoryMargin = 20;  // px around it
-constexpr double kCaption = 28;           // px below it
 
 }  // namespace
 
@@ -23,7 +22,7 @@ void write_trajectory_svg(std::ostream& out, double arena, std::span<const Traje
   // SVG's y axis points down; the arena's points up (north).
   const auto px = [&](double x) { return kTrajectoryMargin + x * scale; };
   const auto py = [&](double y) { return kTrajectoryMargin + (arena - y) * scale; };
-  const double width = kSide + 2 * kTrajectoryMargin, height = kSide + 2 * kTrajectoryMargin + kCaption;
+  const double width = kSide + 2 * kTrajectoryMargin, height = kSide + 2 * kTrajectoryMargin + kSvgCaptionHeight;
   // Thinner, fainter lines when there are many robots, so that a crowd stays readable.
   const double stroke = robots.size() > 200 ? 0.6 : robots.size() > 30 ? 1.0 : 1.6;
   const double opacity = robots.size() > 200 ? 0.5 : 0.8;

@@ -23,10 +23,6 @@ struct Token {
 
 std::string where(const Token& t) { return kernel::location_prefix(t.line, t.column); }
 
-std::string shown(std::string_view s) {
-  return s.size() <= kShown ? std::string(s) : std::string(s.substr(0, kShown)) + "...";
-}
-
 // Splits into whitespace-separated tokens, dropping `#` comments.
 std::vector<Token> tokenize(std::string_view text) {
   std::vector<Token> out;
@@ -68,9 +64,10 @@ kernel::Result<float> number(const Token& t) {
   if (begin != end && *begin == '+') ++begin;  // from_chars refuses a leading '+'
   auto [ptr, ec] = std::from_chars(begin, end, v);
   if (ec == std::errc::result_out_of_range || (ec == std::errc() && ptr == end && std::fabs(v) > 3e38))
-    return Error{where(t) + "'" + shown(t.text) + "' is out of range"};
-  if (ec != std::errc() || ptr != end) return Error{where(t) + "'" + shown(t.text) + "' is not a number"};
-  if (!std::isfinite(v)) return Error{where(t) + "'" + shown(t.text) + "' is not a finite number"};
+    return Error{where(t) + "'" + kernel::shortened(t.text, kShown) + "' is out of range"};
+  if (ec != std::errc() || ptr != end)
+    return Error{where(t) + "'" + kernel::shortened(t.text, kShown) + "' is not a number"};
+  if (!std::isfinite(v)) return Error{where(t) + "'" + kernel::shortened(t.text, kShown) + "' is not a finite number"};
   return static_cast<float>(v);
 }
 
@@ -83,8 +80,9 @@ kernel::Result<std::size_t> count(const Token& t, std::size_t max) {
   std::size_t v = 0;
   auto [ptr, ec] = std::from_chars(t.text.data(), t.text.data() + t.text.size(), v);
   if (ec != std::errc() || ptr != t.text.data() + t.text.size())
-    return Error{where(t) + "'" + shown(t.text) + "' is not a whole number"};
-  if (v < 1 || v > max) return Error{where(t) + "must be 1.." + std::to_string(max) + ", got " + shown(t.text)};
+    return Error{where(t) + "'" + kernel::shortened(t.text, kShown) + "' is not a whole number"};
+  if (v < 1 || v > max)
+    return Error{where(t) + "must be 1.." + std::to_string(max) + ", got " + kernel::shortened(t.text, kShown)};
   return v;
 }
 
@@ -111,7 +109,8 @@ kernel::Result<Description> parse_description(std::string_view text) {
   while (i < tokens.size()) {
     const Token& key = tokens[i];
     if (!key.first_on_line)
-      return Error{where(key) + "one key a line: '" + shown(key.text) + "' follows the previous key's value"};
+      return Error{where(key) + "one key a line: '" + kernel::shortened(key.text, kShown) +
+                   "' follows the previous key's value"};
     // The values: the rest of the line, and for lists the lines after it that start with a number.
     std::vector<Token> values;
     std::size_t j = i + 1;
@@ -199,7 +198,7 @@ kernel::Result<Description> parse_description(std::string_view text) {
         st = list(*d.weights);
       }
     } else {
-      return Error{where(key) + "unknown key '" + shown(key.text) +
+      return Error{where(key) + "unknown key '" + kernel::shortened(key.text, kShown) +
                    "' (type, inputs, layers, activation, input_scale, output_scale, tau, weights)"};
     }
     if (!st) return Error{st.error()};

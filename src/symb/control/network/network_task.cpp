@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "symb/control/network/description.hpp"
+#include "symb/kernel/source_text.hpp"
 #include "symb/os/message.hpp"
 
 namespace symb::control {
@@ -11,11 +12,6 @@ namespace symb::control {
 using kernel::Error;
 
 namespace {
-
-// References are echoed in errors; longer ones are cut there.
-std::string shown(std::string_view s) {
-  return s.size() <= 120 ? std::string(s) : std::string(s.substr(0, 120)) + "...";
-}
 
 bool starts_like_number(std::string_view s) {
   const std::size_t i = s.find_first_not_of(" \t\r\n");
@@ -39,17 +35,21 @@ kernel::Result<NetworkOutput> parse_network_output(std::string_view text) {
   if (text == "wheels") return NetworkOutput::kWheels;
   if (text == "raw") return NetworkOutput::kRaw;
   if (text == "both") return NetworkOutput::kBoth;
-  return Error{"output must be wheels, raw or both, got '" + shown(text) + "'"};
+  return Error{"output must be wheels, raw or both, got '" + kernel::shortened(text, kernel::kQuotedReference) + "'"};
 }
 
 kernel::Result<std::vector<float>> read_weights(std::string_view value, const ControlResources& resources) {
   if (starts_like_number(value)) return network::parse_numbers(value);
   const std::string reference(value);
-  if (!resources.read_program) return Error{"cannot read weight file '" + shown(reference) + "' (no read_program)"};
+  if (!resources.read_program)
+    return Error{"cannot read weight file '" + kernel::shortened(reference, kernel::kQuotedReference) +
+                 "' (no read_program)"};
   auto text = resources.read_program(reference);
-  if (!text) return Error{"weight file '" + shown(reference) + "': " + text.error()};
+  if (!text)
+    return Error{"weight file '" + kernel::shortened(reference, kernel::kQuotedReference) + "': " + text.error()};
   auto numbers = network::parse_numbers(*text);
-  if (!numbers) return Error{"weight file '" + shown(reference) + "': " + numbers.error()};
+  if (!numbers)
+    return Error{"weight file '" + kernel::shortened(reference, kernel::kQuotedReference) + "': " + numbers.error()};
   return numbers;
 }
 

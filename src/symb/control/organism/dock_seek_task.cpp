@@ -168,7 +168,7 @@ void DockSeekTask::on_message(const os::Message& m) {
     const auto id = node().find(task);
     return id && *id == m.source;
   };
-  const bool finite = std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
+  const bool finite = os::all_finite(v);
   if (m.payload.blob || !finite) {
     counters_.ignored.bump();
     return;

@@ -41,7 +41,6 @@ void add_gain(os::ParamTable<P>& p) {
 
 // Schemas send [vx, vy] into the sum, which sends wheel commands.
 constexpr os::PortSpec kSchemaOut{0, "vector", robot::layout::kSchemaVector};
-constexpr os::PortSpec kIrIn{0, "ir", robot::layout::kSensorVector};
 constexpr os::PortSpec kPoseIn{0, "pose", robot::layout::kPose};
 
 }  // namespace
@@ -68,7 +67,7 @@ kernel::Status register_schema_task_types(os::TaskTypeRegistry& registry, const 
                                 return std::make_unique<AvoidObstacleSchema>(o);
                               });
     t.defaults = os::TaskOptions{.priority = 2, .period = kernel::Duration{0}, .queue_capacity = 4};
-    t.inputs = {kIrIn};
+    t.inputs = {robot::kIrInput};
     t.outputs = {kSchemaOut};
     if (auto st = registry.add(std::move(t)); !st) return st;
   }

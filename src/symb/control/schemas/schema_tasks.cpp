@@ -16,14 +16,10 @@ namespace {
 
 using behaviour::Point;
 
-bool all_finite(std::span<const float> v) {
-  return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
-}
-
 std::optional<Pose2> read_pose(const os::Message& m) {
   if (m.payload.blob || m.port != kSchemaInputPort) return std::nullopt;
   const auto v = m.numbers();
-  if (v.size() != 3 || !all_finite(v)) return std::nullopt;
+  if (v.size() != 3 || !os::all_finite(v)) return std::nullopt;
   return Pose2{v[0], v[1], v[2]};
 }
 
@@ -109,7 +105,7 @@ Vec2 AvoidObstacleSchema::vector_for(std::span<const float> ir, const AvoidObsta
 bool AvoidObstacleSchema::take(const os::Message& m) {
   if (m.payload.blob || m.port != kSchemaInputPort) return false;
   const auto v = m.numbers();
-  if (v.size() != robot::thymio::kIrCount || !all_finite(v)) return false;
+  if (v.size() != robot::thymio::kIrCount || !os::all_finite(v)) return false;
   ir_.assign(v.begin(), v.end());
   return true;
 }
@@ -239,7 +235,7 @@ std::pair<float, float> SchemaSum::wheels_for(Vec2 v, const SchemaSumOptions& o)
 void SchemaSum::on_message(const os::Message& m) {
   if (m.payload.blob || m.port != kSchemaVectorPort) return;
   const auto v = m.numbers();
-  if (v.size() != 2 || !all_finite(v)) return;
+  if (v.size() != 2 || !os::all_finite(v)) return;
   for (auto& e : entries_)
     if (e.source == m.source) {
       e.v = {v[0], v[1]};

@@ -7,6 +7,7 @@
 #include "symb/control/snn/reference_network.hpp"
 #include "symb/control/snn/spike_coding_tasks.hpp"
 #include "symb/control/snn/spiking_network_task.hpp"
+#include "symb/kernel/source_text.hpp"
 
 namespace symb::control {
 
@@ -16,10 +17,6 @@ using namespace std::chrono_literals;
 using kernel::Error;
 
 constexpr double kMaxGenomeText = 200000;
-
-std::string shown(std::string_view s) {
-  return s.size() <= 120 ? std::string(s) : std::string(s.substr(0, 120)) + "...";
-}
 
 bool is_inline_genome(std::string_view value) {
   if (value.find('\n') != std::string_view::npos) return true;
@@ -96,7 +93,8 @@ os::TaskType izhikevich_type() {
       "thalamic noise input; AER spikes out on port 0",
       std::move(p), [](const P& c) -> Result<std::unique_ptr<SpikingNetworkTask>> {
         if (c.example != "reference_2003")
-          return Error{"example: unknown network '" + shown(c.example) + "' (known: reference_2003)"};
+          return Error{"example: unknown network '" + kernel::shortened(c.example, kernel::kQuotedReference) +
+                       "' (known: reference_2003)"};
         auto integration = snn::parse_integration(c.integration);
         if (!integration) return Error{"integration: " + integration.error()};
         const auto exc = static_cast<std::size_t>(c.excitatory);
@@ -190,7 +188,7 @@ kernel::Result<snn::GrownNetwork> grow_genome(std::string_view genome, std::uint
     text = std::string(genome);
   } else {
     const std::string reference(genome);
-    where = "genome '" + shown(reference) + "'";
+    where = "genome '" + kernel::shortened(reference, kernel::kQuotedReference) + "'";
     if (!resources.read_program) return Error{"cannot read " + where + " (no read_program)"};
     auto read = resources.read_program(reference);
     if (!read) return Error{where + ": " + read.error()};

@@ -16,10 +16,6 @@ float finite_clamped(double v, double limit) {
   return static_cast<float>(std::clamp(v, -limit, limit));
 }
 
-bool all_finite(std::span<const float> v) {
-  return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
-}
-
 }  // namespace
 
 void SubsumptionLayer::act(double left, double right) {
@@ -67,7 +63,7 @@ kernel::Status WanderLayer::on_parameter_changed(std::string_view name) {
 void AvoidLayer::on_message(const os::Message& m) {
   if (m.payload.blob || m.port != kLayerInputPort) return;
   const auto v = m.numbers();
-  if (v.size() < 5 || !all_finite(v)) return;
+  if (v.size() < 5 || !os::all_finite(v)) return;
   const kernel::Time t = now();
   const bool sees = std::any_of(v.begin(), v.begin() + 5, [&](float x) { return x > o_.threshold; });
   if (sees) {
@@ -95,7 +91,7 @@ void AvoidLayer::on_message(const os::Message& m) {
 void StopInZoneLayer::on_message(const os::Message& m) {
   if (m.payload.blob || m.port != kLayerInputPort) return;
   const auto v = m.numbers();
-  if (v.size() != 2 || !all_finite(v)) return;
+  if (v.size() != 2 || !os::all_finite(v)) return;
   const auto inside = [&](float x) { return x >= o_.zone_min && x <= o_.zone_max; };
   const kernel::Time t = now();
   if (!(inside(v[0]) && inside(v[1]))) {

@@ -37,7 +37,6 @@ kernel::Status check_inhibit(const LayerOptions& o) {
 
 // Layers send wheel commands.
 constexpr os::PortSpec kLayerOut{kLayerOutputPort, "wheels", robot::layout::kWheelCommand};
-constexpr os::PortSpec kIrIn{0, "ir", robot::layout::kSensorVector};
 
 }  // namespace
 
@@ -83,7 +82,7 @@ kernel::Status register_subsumption_task_types(os::TaskTypeRegistry& registry, c
           return std::make_unique<AvoidLayer>(o, o);
         });
     t.defaults = os::TaskOptions{.priority = 2, .period = kernel::Duration{0}, .queue_capacity = 4};
-    t.inputs = {kIrIn};
+    t.inputs = {robot::kIrInput};
     t.outputs = {kLayerOut};
     if (auto st = registry.add(std::move(t)); !st) return st;
   }

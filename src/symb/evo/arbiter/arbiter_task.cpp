@@ -13,10 +13,6 @@ namespace {
 
 double seconds(kernel::Duration d) { return std::chrono::duration<double>(d).count(); }
 
-bool all_finite(std::span<const float> v) {
-  return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
-}
-
 }  // namespace
 
 double danger(std::span<const float> ir, const ArbiterOptions& options) {
@@ -68,7 +64,7 @@ void ArbiterTask::switch_to(std::optional<os::TaskId> id) {
 
 void ArbiterTask::on_message(const os::Message& m) {
   const auto values = m.numbers();
-  if (m.port != 0 || m.payload.blob || values.size() < 2 || (values.size() > 2 && !all_finite(values))) {
+  if (m.port != 0 || m.payload.blob || values.size() < 2 || (values.size() > 2 && !os::all_finite(values))) {
     std::lock_guard lock(mu_);
     ++stats_.ignored;
     return;

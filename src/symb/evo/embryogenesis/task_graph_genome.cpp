@@ -6,6 +6,7 @@
 #include <set>
 #include <utility>
 
+#include "symb/evo/genome/real_genome.hpp"
 #include "symb/kernel/source_text.hpp"
 
 namespace symb::evo {
@@ -170,15 +171,6 @@ std::string quoted(std::string_view v) {
 template <typename T>
 const T& pick(const std::vector<T>& v, kernel::RandomStream& random) {
   return v[static_cast<std::size_t>(random.below(v.size()))];
-}
-
-double reflect(double x, double lo, double hi) {
-  if (!(hi > lo)) return lo;
-  const double span = hi - lo;
-  double y = std::fmod(x - lo, 2 * span);
-  if (y < 0) y += 2 * span;
-  if (y > span) y = 2 * span - y;
-  return std::clamp(lo + y, lo, hi);
 }
 
 // A new value of `spec` near `current` (or its default), within its range; nullopt for a type
