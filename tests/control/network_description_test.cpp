@@ -88,8 +88,8 @@ TEST(NetworkDescription, ValidTextsParse) {
 
 TEST(NetworkDescription, MistakesAreLocated) {
   struct Case {
-    const char* text;
-    const char* error;  // the expected start of the message
+    std::string text;
+    std::string error;  // the expected start of the message
   };
   const Case cases[] = {
       {"type mlp\nlayers 2\ninputs 7\nweights 1 2 x\n", "4:13: 'x' is not a number"},
@@ -111,6 +111,9 @@ TEST(NetworkDescription, MistakesAreLocated) {
       {"type mlp\nlayers 2\nweights 1e99\n", "3:9: '1e99' is out of range"},
       {"type mlp\nlayers 2\nweights nan\n", "3:9: 'nan' is not a finite number"},
       {"type mlp\nlayers 2\ninputs 1.5\n", "3:8: '1.5' is not a whole number"},
+      // A token nobody means is quoted cut at 24 bytes, so a bad line never floods the log.
+      {"type mlp\nlayers 2\nbogus" + std::string(200, 'k') + " 1\n",
+       "3:1: unknown key 'bogus" + std::string(19, 'k') + "...'"},
       {"", "1:1: missing 'type'"},
   };
   for (const Case& c : cases) {
