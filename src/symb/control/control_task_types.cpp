@@ -8,14 +8,11 @@
 #include "symb/control/schemas/schema_task_types.hpp"
 #include "symb/control/snn/snn_task_types.hpp"
 #include "symb/control/subsumption/subsumption_task_types.hpp"
+#include "symb/kernel/source_text.hpp"
 
 namespace symb::control {
 
-std::string shown_reference(const std::string& reference) {
-  constexpr std::size_t kShown = 120;
-  if (reference.size() <= kShown) return reference;
-  return reference.substr(0, kShown) + "...";
-}
+std::string shown_reference(std::string_view reference) { return kernel::shortened(reference, 120); }
 
 kernel::Status register_control_task_types(os::TaskTypeRegistry& registry, ControlResources resources) {
   if (auto st = register_mdl2e_task_types(registry, resources); !st) return st;

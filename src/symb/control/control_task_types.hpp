@@ -30,7 +30,7 @@ struct ControlResources {
 
 // A reference as errors quote it: cut after 120 characters, so a program pasted whole into a
 // parameter does not flood the reply.
-std::string shown_reference(const std::string& reference);
+std::string shown_reference(std::string_view reference);
 
 // Adds the types above. Fails (adding nothing more) when a name is already taken. A program that
 // cannot be read or compiled makes creation fail with an error naming the reference and, for a

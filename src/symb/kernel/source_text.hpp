@@ -41,9 +41,6 @@ inline std::string shortened(std::string_view s, std::size_t max) {
   return s.size() <= max ? std::string(s) : std::string(s.substr(0, max)) + "...";
 }
 
-// How much of a reference (a file name, a path) a message quotes.
-inline constexpr std::size_t kQuotedReference = 120;
-
 // "LINE:COLUMN: ", the prefix of every located message.
 inline std::string location_prefix(std::size_t line, std::size_t column) {
   return std::to_string(line) + ":" + std::to_string(column) + ": ";

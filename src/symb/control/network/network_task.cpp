@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "symb/control/control_task_types.hpp"
 #include "symb/control/network/description.hpp"
-#include "symb/kernel/source_text.hpp"
 #include "symb/os/message.hpp"
 
 namespace symb::control {
@@ -35,21 +35,18 @@ kernel::Result<NetworkOutput> parse_network_output(std::string_view text) {
   if (text == "wheels") return NetworkOutput::kWheels;
   if (text == "raw") return NetworkOutput::kRaw;
   if (text == "both") return NetworkOutput::kBoth;
-  return Error{"output must be wheels, raw or both, got '" + kernel::shortened(text, kernel::kQuotedReference) + "'"};
+  return Error{"output must be wheels, raw or both, got '" + shown_reference(text) + "'"};
 }
 
 kernel::Result<std::vector<float>> read_weights(std::string_view value, const ControlResources& resources) {
   if (starts_like_number(value)) return network::parse_numbers(value);
   const std::string reference(value);
   if (!resources.read_program)
-    return Error{"cannot read weight file '" + kernel::shortened(reference, kernel::kQuotedReference) +
-                 "' (no read_program)"};
+    return Error{"cannot read weight file '" + shown_reference(reference) + "' (no read_program)"};
   auto text = resources.read_program(reference);
-  if (!text)
-    return Error{"weight file '" + kernel::shortened(reference, kernel::kQuotedReference) + "': " + text.error()};
+  if (!text) return Error{"weight file '" + shown_reference(reference) + "': " + text.error()};
   auto numbers = network::parse_numbers(*text);
-  if (!numbers)
-    return Error{"weight file '" + kernel::shortened(reference, kernel::kQuotedReference) + "': " + numbers.error()};
+  if (!numbers) return Error{"weight file '" + shown_reference(reference) + "': " + numbers.error()};
   return numbers;
 }
 

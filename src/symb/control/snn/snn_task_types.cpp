@@ -3,11 +3,11 @@
 #include <memory>
 #include <string>
 
+#include "symb/control/control_task_types.hpp"
 #include "symb/control/snn/genome.hpp"
 #include "symb/control/snn/reference_network.hpp"
 #include "symb/control/snn/spike_coding_tasks.hpp"
 #include "symb/control/snn/spiking_network_task.hpp"
-#include "symb/kernel/source_text.hpp"
 
 namespace symb::control {
 
@@ -93,8 +93,7 @@ os::TaskType izhikevich_type() {
       "thalamic noise input; AER spikes out on port 0",
       std::move(p), [](const P& c) -> Result<std::unique_ptr<SpikingNetworkTask>> {
         if (c.example != "reference_2003")
-          return Error{"example: unknown network '" + kernel::shortened(c.example, kernel::kQuotedReference) +
-                       "' (known: reference_2003)"};
+          return Error{"example: unknown network '" + shown_reference(c.example) + "' (known: reference_2003)"};
         auto integration = snn::parse_integration(c.integration);
         if (!integration) return Error{"integration: " + integration.error()};
         const auto exc = static_cast<std::size_t>(c.excitatory);
@@ -188,7 +187,7 @@ kernel::Result<snn::GrownNetwork> grow_genome(std::string_view genome, std::uint
     text = std::string(genome);
   } else {
     const std::string reference(genome);
-    where = "genome '" + kernel::shortened(reference, kernel::kQuotedReference) + "'";
+    where = "genome '" + shown_reference(reference) + "'";
     if (!resources.read_program) return Error{"cannot read " + where + " (no read_program)"};
     auto read = resources.read_program(reference);
     if (!read) return Error{where + ": " + read.error()};
