@@ -149,6 +149,41 @@ TEST(ActuatorSinkTask, AppliesEveryMessageAndCountsWhatItRefuses) {
   EXPECT_EQ(warns, 2u);  // one refusal (the second falls in the same second), one clamp
 }
 
+// Sends a command every tick and notes what the actuator shows right after the send.
+class WatchingCommander : public os::Task {
+ public:
+  explicit WatchingCommander(std::shared_ptr<Actuator> watched) : watched_(std::move(watched)) {}
+  std::vector<std::vector<float>> seen;
+
+ protected:
+  void on_tick() override {
+    const float v = static_cast<float>(seen.size() + 1) / 10;
+    send(kDataPort, {v, v, v});
+    seen.push_back(watched_->output());
+  }
+
+ private:
+  std::shared_ptr<Actuator> watched_;
+};
+
+TEST(ActuatorSinkTask, UnderVirtualTimeACommandIsAppliedInsideItsSendersSend) {
+  kernel::VirtualTimeExecutor ex;
+  os::Node node(ex, {"bot"});
+  auto leds = std::make_shared<FakeLeds>(DeviceThreads::kOneAtATime);
+  auto sink = *node.create("leds", std::make_unique<ActuatorSinkTask>(leds));
+  auto c = std::make_unique<WatchingCommander>(leds);
+  WatchingCommander* cmd = c.get();
+  auto cmd_id = *node.create("cmd", std::move(c), {.period = 10ms, .autostart = false});
+  ASSERT_TRUE(node.hook(cmd_id, sink));
+  ASSERT_TRUE(node.start(cmd_id));
+  ex.run_for(20ms);
+  ASSERT_EQ(cmd->seen.size(), 2u);
+  EXPECT_EQ(cmd->seen[0], (std::vector<float>(3, 0.1f)));
+  EXPECT_EQ(cmd->seen[1], (std::vector<float>(3, 0.2f)));
+  EXPECT_EQ(node.info(sink)->traffic.delivered, 2u);
+  EXPECT_EQ(node.info(sink)->queue_depth, 0u);
+}
+
 TEST(ActuatorSinkTask, NarrowerRangesLimitTheOutput) {
   kernel::VirtualTimeExecutor ex;
   os::Node node(ex, {"bot"});

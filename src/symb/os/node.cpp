@@ -74,6 +74,7 @@ TaskRecord::TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> 
     : node(n),
       task(std::move(t)),
       id(i),
+      immediate(!concurrent && task->immediate_),
       in_mu(concurrent),
       queue(o.queue_capacity),
       out_mu(concurrent),
@@ -140,8 +141,18 @@ void TaskRecord::fault(const char* where, const char* what) {
     fault(where, "an exception that is not a std::exception"); \
   }
 
+// Marks a handler of the record as running, for take_now.
+struct InHandler {
+  bool& flag;
+  explicit InHandler(bool& f) : flag(f) { flag = true; }
+  ~InHandler() { flag = false; }
+  InHandler(const InHandler&) = delete;
+  InHandler& operator=(const InHandler&) = delete;
+};
+
 void TaskRecord::on_activity_start() {
   if (state.load() != TaskState::kRunning) return;
+  const InHandler busy(in_handler);
   SYMB_GUARDED("on_start", task->on_start())
 }
 
@@ -170,6 +181,7 @@ void TaskRecord::on_activity_input() {
   // The message being handled, moved out of the queue (outside in_mu, so senders can queue more
   // meanwhile). Its payload's numbers are left unset: only the ones a message carries are copied in.
   Message handling{.source = {}, .port = 0, .hops = 0, .edge = 0, .time = {}, .payload = Payload(Payload::kUnset)};
+  const InHandler busy(in_handler);
   for (;;) {
     bool notification = false;
     {
@@ -201,25 +213,64 @@ void TaskRecord::on_activity_input() {
       SYMB_GUARDED("on_notify", task->on_notify())
       continue;
     }
-    const Message& m = handling;
-    kernel::bump(delivered);
-    next_hops = static_cast<std::uint16_t>(m.hops + 1);
-    if (m.hops > longest_chain.load(std::memory_order_relaxed)) longest_chain.store(m.hops, std::memory_order_relaxed);
-    if (m.hops > kMaxHops / 2) [[unlikely]]
-      deep_source.store((std::uint64_t{m.source.index} << 32) | m.source.generation, std::memory_order_relaxed);
-    if (node.tracing_.load(std::memory_order_relaxed)) node.trace(*this, m);
-    SYMB_GUARDED("on_message", task->on_message(m))
+    handle_message(handling);
     handling.payload.blob.reset();  // a large payload is freed when its last handler is done
   }
+}
+
+[[gnu::always_inline]] inline void TaskRecord::handle_message(const Message& m) {
+  kernel::bump(delivered);
+  next_hops = static_cast<std::uint16_t>(m.hops + 1);
+  if (m.hops > longest_chain.load(std::memory_order_relaxed)) longest_chain.store(m.hops, std::memory_order_relaxed);
+  if (m.hops > kMaxHops / 2) [[unlikely]]
+    deep_source.store((std::uint64_t{m.source.index} << 32) | m.source.generation, std::memory_order_relaxed);
+  if (node.tracing_.load(std::memory_order_relaxed)) node.trace(*this, m);
+  SYMB_GUARDED("on_message", task->on_message(m))
+}
+
+bool TaskRecord::can_take_now() const {
+  // Asked only from inside a handler of the sender, under a non-concurrent executor (in_mu is
+  // off): so on the executor's one context, inside its run, where a task deleted by a handler is
+  // freed only once that handler is done. The receiver is idle unless it is inside a handler
+  // itself, on this very stack further up. Parameters waiting are applied by an activation, as
+  // the message then is.
+  return !in_handler && !taking_now && !wake_pending && !notified && queue.empty() &&
+         !params_pending.load(std::memory_order_relaxed) && node.immediate_depth_ < Node::kMaxImmediateDepth &&
+         state.load(std::memory_order_relaxed) == TaskState::kRunning;
+}
+
+void TaskRecord::take_now(const Message& m, std::uint32_t edge, QueuePolicy policy) {
+  taking_now = false;
+  // A receiver handled earlier in the same send may have suspended or deleted this one: then the
+  // message joins its queue, as a message for a task that is not running does. What it may have
+  // sent this one meanwhile is queued (taking_now) and came later than this message: it is
+  // handled after it, by the activation its queueing scheduled.
+  if (in_handler || params_pending.load(std::memory_order_relaxed) ||
+      node.immediate_depth_ >= Node::kMaxImmediateDepth ||
+      state.load(std::memory_order_relaxed) != TaskState::kRunning) {
+    if (kernel::ActivitySlot* wake = enqueue(m, edge, policy, in_hook(edge))) wake->wake();
+    return;
+  }
+  if (InHook* e = in_hook(edge)) {
+    ++e->traffic.delivered;
+    if (!e->hooked) retire_in_hook_if_done(edge);
+  }
+  const InHandler busy(in_handler);
+  ++node.immediate_depth_;
+  handle_message(m);
+  next_hops = 0;
+  --node.immediate_depth_;
 }
 
 void TaskRecord::on_activity_tick() {
   apply_pending_parameters();
   if (state.load(std::memory_order_relaxed) != TaskState::kRunning) return;
+  const InHandler busy(in_handler);
   SYMB_GUARDED("on_tick", task->on_tick())
 }
 
 void TaskRecord::on_activity_stop() {
+  const InHandler busy(in_handler);
   try {
     task->on_stop();
   } catch (const std::exception& e) {
@@ -239,23 +290,12 @@ void TaskRecord::on_activity_released() { node.release(*this); }
   std::lock_guard lock(in_mu);
   if (accepted != nullptr) *accepted = false;
   InHook* e = in_hook(edge);
-  ++traffic.attempted;
-  if (e != nullptr) ++e->traffic.attempted;
-  if (inputs) {
-    for (const auto& w : inputs->suppression) {
-      if (hook_priority < w.level && m.time < w.until) {
-        ++traffic.suppressed;
-        if (e != nullptr) ++e->traffic.suppressed;
-        return nullptr;
-      }
-    }
-  }
-  if (suppress_window.count() > 0) {
-    // Keep the window of this level, or the one that ends first, up to date.
-    const kernel::Time until = m.time + suppress_window;
-    SuppressionWindow& target = input_hooks().window_for(hook_priority, m.time);
-    if (target.level != hook_priority || target.until < until) target = {hook_priority, until};
-  }
+  if (!admit(m, e, hook_priority, suppress_window)) return nullptr;
+  return enqueue(m, edge, policy, e, accepted);
+}
+
+[[gnu::always_inline]] inline kernel::ActivitySlot* TaskRecord::enqueue(const Message& m, std::uint32_t edge,
+                                                                        QueuePolicy policy, InHook* e, bool* accepted) {
   if (queue.full()) {
     if (policy == QueuePolicy::kRefuse) {
       ++traffic.refused;
@@ -277,6 +317,28 @@ void TaskRecord::on_activity_released() { node.release(*this); }
   if (wake_pending || slot == nullptr) return nullptr;
   wake_pending = true;
   return slot;
+}
+
+[[gnu::always_inline]] inline bool TaskRecord::admit(const Message& m, InHook* e, int hook_priority,
+                                                     kernel::Duration suppress_window) {
+  ++traffic.attempted;
+  if (e != nullptr) ++e->traffic.attempted;
+  if (inputs) {
+    for (const auto& w : inputs->suppression) {
+      if (hook_priority < w.level && m.time < w.until) {
+        ++traffic.suppressed;
+        if (e != nullptr) ++e->traffic.suppressed;
+        return false;
+      }
+    }
+  }
+  if (suppress_window.count() > 0) {
+    // Keep the window of this level, or the one that ends first, up to date.
+    const kernel::Time until = m.time + suppress_window;
+    SuppressionWindow& target = input_hooks().window_for(hook_priority, m.time);
+    if (target.level != hook_priority || target.until < until) target = {hook_priority, until};
+  }
+  return true;
 }
 
 SuppressionWindow& InputHooks::window_for(int level, kernel::Time now) {
@@ -958,6 +1020,17 @@ void Node::send_from(TaskRecord& from, const Message& m) {
                                               std::unique_lock<kernel::OptionalMutex>& out) {
   kernel::bump(from.sent);
   bool sinks_due = false;
+  // Receivers that take the message at once (Task::take_messages_at_once): admitted and counted
+  // here with the others, handed the message once every hook has had it. So no handler runs
+  // while this loop walks the hooks (a handler may rewire them), and what a receiver sends from
+  // its handler reaches the others behind this message, as it would through their queues.
+  constexpr std::size_t kAtOnce = 4;
+  struct AtOnce {
+    TaskRecord* receiver;
+    std::uint32_t edge;
+    QueuePolicy policy;
+  } at_once[kAtOnce];
+  std::size_t n_at_once = 0;
   for (auto& h : from.hooks) {
     if (!h.enabled || (h.port >= 0 && h.port != m.port)) {
       ++h.skipped;
@@ -983,11 +1056,29 @@ void Node::send_from(TaskRecord& from, const Message& m) {
       ++e.traffic.inhibited;
       continue;
     }
+    if (h.receiver->immediate && from.in_handler && n_at_once < kAtOnce && h.receiver->can_take_now()) {
+      if (h.receiver->admit(m, h.receiver->in_hook(h.edge), h.priority, h.suppress_window)) {
+        h.receiver->taking_now = true;
+        at_once[n_at_once++] = {h.receiver, h.edge, h.policy};
+      }
+      continue;
+    }
     // The wake happens while out_mu is held: that keeps the receiver alive (see Hook).
     if (kernel::ActivitySlot* wake = h.receiver->offer(m, h.edge, h.priority, h.policy, h.suppress_window))
       wake->wake();
   }
-  if (!sinks_due) return;
+  // Alive until then: a non-concurrent executor frees a task deleted by a handler only once the
+  // handler (here the sender's) is done.
+  const auto take_at_once = [&] {
+    for (std::size_t i = 0; i < n_at_once; ++i) at_once[i].receiver->take_now(m, at_once[i].edge, at_once[i].policy);
+  };
+  if (!sinks_due) {
+    if (n_at_once > 0) {
+      out.unlock();
+      take_at_once();
+    }
+    return;
+  }
   // Handed over outside out_mu: a sink may lead into another node (a network writer delivering to
   // a reader of this process on this thread), whose locks must not nest inside this sender's.
   constexpr std::size_t kInline = 4;
@@ -1005,6 +1096,7 @@ void Node::send_from(TaskRecord& from, const Message& m) {
   out.unlock();
   for (std::size_t i = 0; i < n; ++i) inline_due[i]->on_message(m);
   for (const auto& sink : more_due) sink->on_message(m);
+  take_at_once();
 }
 
 Status Node::send_as(TaskId sender, Port port, const Payload& payload) {

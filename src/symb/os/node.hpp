@@ -175,6 +175,10 @@ class Node {
   std::string cycle_error() const;
   // The longest chain of answers any task of this node handled (in hops, kMaxHops at most).
   std::uint32_t longest_chain() const;
+  // How deep messages to tasks that take them at once (Task::take_messages_at_once) may nest,
+  // one handler sending to the next inside its own send: past this the message is queued, so
+  // the stack stays bounded whatever the task graph.
+  static constexpr int kMaxImmediateDepth = 8;
 
   // --- probes: tasks' internal state for people and plots ----------------------------------------
   // Installs (or, with an empty function, removes) the sink of Task::probe(). Without a sink a
@@ -220,6 +224,9 @@ class Node {
   std::uint16_t retired_longest_chain_ = 0;
   std::string cycle_error_;
   std::atomic<bool> tracing_{false};
+  // Handlers of tasks that take messages at once now running inside a send (kMaxImmediateDepth);
+  // only under a non-concurrent executor, on its one context.
+  int immediate_depth_ = 0;
   mutable kernel::OptionalMutex trace_mu_;
   std::uint64_t trace_hash_ = 0xcbf29ce484222325ULL;
   std::atomic<bool> probing_{false};

@@ -99,6 +99,20 @@ class Task {
   // the value: the options are then put back and the error is the change's reply (logged).
   virtual kernel::Status on_parameter_changed(std::string_view /*name*/) { return {}; }
 
+  // Declares, from the constructor, that this task takes its messages at once: under a
+  // non-concurrent executor (virtual time, lockstep) a message another task sends it from a
+  // handler is handed to on_message before that send() returns, once the send has reached every
+  // hook, with no queue and no activation of its own. Only when its queue is empty and it is not
+  // inside a handler already; otherwise, and under the thread executor, and for a send from
+  // outside any handler (Node::send_as, Node::post), the message is queued as usual. For a task
+  // whose on_message only acts on a device, as the paper's standard actuator "changes the robot's
+  // state immediately": at a robot's every step that spares a queue round trip and an event per
+  // command. The message is the one a queue would hand over (time, source, hops), counted as one
+  // (accounting, suppression, tracing), and a throw faults the task as it would. What such a
+  // task sends from on_message goes out from within its sender's send; a chain of such tasks is
+  // cut to a queue at Node::kMaxImmediateDepth.
+  void take_messages_at_once() { immediate_ = true; }
+
   // Declares where this task keeps its parameters: `options`, a member of the task, whose type is
   // the config struct of its type's ParamTable or one of that struct's bases. A running task's
   // live parameters are written there. Call from the constructor.
@@ -150,6 +164,7 @@ class Task {
     void* object = nullptr;
   };
   detail::TaskRecord* record_ = nullptr;
+  bool immediate_ = false;         // take_messages_at_once()
   std::vector<Binding> bindings_;  // a heap block only for a task that binds parameters
 };
 

@@ -126,6 +126,21 @@ struct TaskRecord final : kernel::Activity {
   // Inline, defined [[gnu::always_inline]] in node.cpp (its only user): see Node::send_locked.
   inline kernel::ActivitySlot* offer(const Message& m, std::uint32_t edge, int priority, QueuePolicy policy,
                                      kernel::Duration suppress_window, bool* accepted = nullptr);
+  // For a task that takes messages at once (`immediate`), from inside a handler of the sender
+  // (Node::send_locked): whether it may be handed a message now (not inside a handler, nothing
+  // queued, no notification or parameters waiting, running, the nesting below its bound); if so
+  // the send admits the message (admit) and, once every hook has had it, calls take_now, which
+  // hands it to on_message, or queues it if the receiver can no longer take it.
+  bool can_take_now() const;
+  void take_now(const Message& m, std::uint32_t edge, QueuePolicy policy);
+  // The queue's side of offer, after admit: returns the slot to wake, or null.
+  inline kernel::ActivitySlot* enqueue(const Message& m, std::uint32_t edge, QueuePolicy policy, InHook* e,
+                                       bool* accepted = nullptr);
+  // The accounting and suppression every message offered goes through first: false when a
+  // suppression window drops it (counted). Under in_mu.
+  inline bool admit(const Message& m, InHook* e, int priority, kernel::Duration suppress_window);
+  // What every handled message does around on_message: its hops, chain trail, trace.
+  inline void handle_message(const Message& m);
   // Under in_mu: the counters of hook slot `edge` (0: none).
   InHook* in_hook(std::uint32_t edge) { return edge == 0 ? nullptr : &inputs->at(edge - 1); }
   // Under in_mu: the input side's hook slots and windows, made on first use.
@@ -171,6 +186,14 @@ struct TaskRecord final : kernel::Activity {
   // Input side, under in_mu.
   bool wake_pending = false;
   bool notified = false;  // Node::notify: on_notify() is due
+  // Task::take_messages_at_once under a non-concurrent executor: see take_now.
+  const bool immediate;
+  // Admitted a message that take_now will hand over later in the same send.
+  bool taking_now = false;
+  // A handler of this task is running: the guard of take_now, and what lets this task's sends
+  // be taken at once (a send from outside any handler, Node::send_as, is queued). Its own
+  // context only.
+  bool in_handler = false;
   kernel::OptionalMutex in_mu;
   std::unique_ptr<InputHooks> inputs;  // see input_hooks()
   kernel::RingBuffer<Message> queue;

@@ -117,6 +117,8 @@ ActuatorSinkTask::ActuatorSinkTask(std::shared_ptr<Actuator> actuator, Options o
       clamp_warning_(options_.warn_interval),
       timeout_warning_(options_.warn_interval) {
   bind_parameters(options_);
+  // on_message acts on the actuator alone: a command is applied inside its sender's send.
+  take_messages_at_once();
   if (!actuator_) throw std::invalid_argument("actuator sink: no actuator");
   if (options_.timeout.count() < 0) throw std::invalid_argument("actuator sink: negative timeout");
   if (!options_.ranges.empty()) {

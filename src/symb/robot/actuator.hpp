@@ -13,6 +13,10 @@
 //    applied one at a time, in the order they take the actuator's lock. An actuator made
 //    DeviceThreads::kOneAtATime (a simulated robot's, under a non-concurrent executor) has no lock
 //    and is called from one context at a time.
+//  - The sink takes its messages at once (os::Task::take_messages_at_once): under virtual time a
+//    command is applied inside the sender's send, not at an activation of its own after the
+//    sender's handler; what the world sees at its next step is the same. A command sent at the
+//    instant a watchdog tick is due therefore counts as heard by that tick.
 //  - The sink counts and logs (at a limited rate) what it had to clamp or reject; it never
 //    faults on bad input.
 //  - The sink's watchdog (Options::timeout, 0 = off): when no command has been applied for
