@@ -261,5 +261,34 @@ TEST(ImmediateDelivery, AReceiverDeletedByAnEarlierOneInTheSameSendLosesNothingU
   EXPECT_TRUE(node.hook_traffic().closes());
 }
 
+class CountingSink final : public HookSink {
+ public:
+  CountingSink() : HookSink("counter") {}
+  std::size_t count = 0;
+  void on_message(const Message&) override { ++count; }
+};
+
+TEST(ImmediateDelivery, ASenderHookedToASinkAndToAReceiverThatTakesAtOnceReachesBoth) {
+  kernel::VirtualTimeExecutor ex;
+  Node node(ex, {"bot", 1});
+  auto at_once = std::make_unique<AtOnceCollector>();
+  AtOnceCollector* a = at_once.get();
+  auto sink = std::make_shared<CountingSink>();
+  std::vector<std::size_t> seen;
+  auto sender = std::make_unique<Scripted>();
+  sender->tick = [&](Scripted& self) {
+    self.send(0, {1.0f});
+    seen.push_back(a->count());
+  };
+  const TaskId sid = *node.create("sender", std::move(sender), {.period = 10ms, .autostart = false});
+  ASSERT_TRUE(node.hook(sid, *node.create("at_once", std::move(at_once))));
+  ASSERT_TRUE(node.hook(sid, sink));
+  ASSERT_TRUE(node.start(sid));
+  ex.run_for(30ms);
+  EXPECT_EQ(seen, (std::vector<std::size_t>{1, 2, 3}));
+  EXPECT_EQ(sink->count, 3u);
+  EXPECT_TRUE(node.hook_traffic().closes());
+}
+
 }  // namespace
 }  // namespace symb::os

@@ -1023,7 +1023,8 @@ void Node::send_from(TaskRecord& from, const Message& m) {
   // Receivers that take the message at once (Task::take_messages_at_once): admitted and counted
   // here with the others, handed the message once every hook has had it. So no handler runs
   // while this loop walks the hooks (a handler may rewire them), and what a receiver sends from
-  // its handler reaches the others behind this message, as it would through their queues.
+  // its handler reaches the others behind this message, as it would through their queues. Past
+  // kAtOnce of them in one send, the rest are queued.
   constexpr std::size_t kAtOnce = 4;
   struct AtOnce {
     TaskRecord* receiver;
@@ -1094,9 +1095,11 @@ void Node::send_from(TaskRecord& from, const Message& m) {
       more_due.push_back(h.sink->sink);
   }
   out.unlock();
+  // The receivers first: their handlers catch what they throw, a sink might not, and a message
+  // admitted but never handed over would be lost from the books.
+  take_at_once();
   for (std::size_t i = 0; i < n; ++i) inline_due[i]->on_message(m);
   for (const auto& sink : more_due) sink->on_message(m);
-  take_at_once();
 }
 
 Status Node::send_as(TaskId sender, Port port, const Payload& payload) {
