@@ -16,7 +16,7 @@
 // threads: a run is the same, bit for bit, with 1, 2 or 4 threads. With one thread it is also
 // the VirtualTimeExecutor's run of the same nodes, as long as no lane event at an instant t has a
 // higher priority than a main-lane event at t (a world step at t comes first here whatever the
-// priorities; the world runner's 100 is above every task's).
+// priorities; a scenario session's world runner is above every priority a task can have).
 //
 // Threads: run_*(), lane(), stop(), run_injected() and wait_injected() are for the thread that
 // runs the executor (lane() outside phase B); inject() on the executor or on any lane may come

@@ -1,6 +1,7 @@
 #include "symb/sim/scenario_session.hpp"
 
 #include <exception>
+#include <limits>
 
 #include "symb/io/plugin_library.hpp"
 #include "symb/sim/world_factory.hpp"
@@ -41,6 +42,10 @@ kernel::Result<std::unique_ptr<ScenarioSession>> ScenarioSession::create(const S
     for (const RobotSpec& r : scenario.robots) s->world_->add_robot(r.name, r.kind, r.start);
     WorldRunner::Options ro;
     ro.period = scenario.control_period;
+    // Above any priority a task can have (a scenario and the shell give at most 1000): at an
+    // instant it shares with a robot's tasks the world moves first, on the main lane of a lockstep
+    // executor as on a single virtual-time one, so both give the same run.
+    ro.priority = std::numeric_limits<int>::max();
     s->world_->set_parallel(executor.parallel());
     s->runner_ = std::make_unique<WorldRunner>(executor, *s->world_, ro);
   } catch (const std::exception& e) {

@@ -1,6 +1,7 @@
 // Running a scenario in-process (`symb run`): the scenario session in deterministic virtual time
 // (a 2D one on the lockstep executor, its robots' nodes on `threads` worker threads, the same run
-// for any number; a 3D one on the virtual-time executor) or on OS threads with realtime, a
+// for any number, or with one robot on the virtual-time executor, the same run again; a 3D one on
+// the virtual-time executor) or on OS threads with realtime, a
 // progress report, an optional command shell on one robot, and what a person wants to look at
 // afterwards, in an output folder:
 //   trajectory.svg  walls and every robot's path, contacts marked
@@ -103,6 +104,9 @@ struct RunResult {
   std::uint64_t seed = 0;
   bool realtime = false;
   unsigned threads = 1;  // the lockstep executor's worker threads (2D virtual time)
+  // Whether the robots' nodes ran on the lockstep executor (2D virtual time with more than one
+  // robot, remote robots or threads asked for); otherwise on one virtual-time executor.
+  bool lockstep = false;
   // 2D virtual time: the share of the run's wall clock spent with the robots' nodes running, the
   // part more threads can shorten (the world's step, radio and recording run on one thread).
   double nodes_share = 0;
