@@ -95,6 +95,11 @@ TEST(ThreadsRun, OneRobotRunsTheSameOnTheVirtualTimeExecutorAsInLockstep) {
       files[k][0] = read_whole(*o.out_dir / "steps.csv");
       files[k][1] = read_whole(*o.out_dir / "probes.csv");
       files[k][2] = read_whole(*o.out_dir / "syslog.txt");
+      const std::string summary = read_whole(*o.out_dir / "summary.txt");
+      EXPECT_EQ(summary.find("executor: virtual time, one executor (a single robot)") != std::string::npos,
+                threads == 0)
+          << summary;
+      EXPECT_EQ(summary.find("robots' nodes:") != std::string::npos, threads == 2) << summary;
     }
     EXPECT_EQ(hashes[0], hashes[1]) << scenario;
     EXPECT_GT(files[0][0].size(), 10000u);

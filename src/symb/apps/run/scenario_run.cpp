@@ -48,7 +48,10 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
   s << "scenario: " << sc.name << " (" << sc.file << ")\n"
     << "seed: " << r.seed << "\n"
     << "executor: "
-    << (r.realtime ? "threads, wall clock" : "virtual time, " + std::to_string(r.threads) + " worker thread(s)") << "\n"
+    << (r.realtime                          ? std::string("threads, wall clock")
+        : !r.lockstep && r.organism.empty() ? std::string("virtual time, one executor (a single robot)")
+                                            : "virtual time, " + std::to_string(r.threads) + " worker thread(s)")
+    << "\n"
     << "control period: " << fixed(seconds(sc.control_period) * 1000, 1) << " ms\n"
     << "simulated: " << fixed(r.simulated_seconds, 2) << " s in " << r.steps << " steps\n";
   if (r.interrupted)
@@ -56,7 +59,7 @@ std::string summary_text(const sim::Scenario& sc, const RunResult& r) {
       << " s (a stop was requested: Ctrl-C or SIGTERM)\n";
   s << "wall clock: " << fixed(r.wall_seconds, 3) << " s\n"
     << "real-time factor: " << fixed(r.real_time_factor, 1) << "\n";
-  if (!r.realtime && r.organism.empty())
+  if (r.lockstep)
     s << "robots' nodes: " << fixed(100 * r.nodes_share, 0) << "% of the wall clock (the part --threads spreads)\n";
   if (!r.heap.empty()) s << r.heap << "\n";
   s << "trajectory hash: " << hex64(r.trajectory_hash) << "\n";
