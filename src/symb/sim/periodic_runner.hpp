@@ -24,7 +24,7 @@ class PeriodicRunner : private kernel::Activity {
  public:
   struct Options {
     kernel::Duration period = std::chrono::milliseconds(30);  // 33.33 Hz, the paper's control rate
-    int priority = 100;                                       // above every control task
+    int priority = 100;  // above the task types' defaults; a scenario session puts its world above any task
     std::string name = "world";
   };
 
