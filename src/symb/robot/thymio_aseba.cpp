@@ -186,6 +186,11 @@ kernel::Status AsebaThymio::handshake() {
 }
 
 kernel::Status AsebaThymio::write_targets(std::int16_t left, std::int16_t right) {
+  std::lock_guard write(write_mu_);
+  return write_targets_locked(left, right);
+}
+
+kernel::Status AsebaThymio::write_targets_locked(std::int16_t left, std::int16_t right) {
   io::aseba::NodeDescription node;
   AsebaLayout layout;
   {
@@ -211,6 +216,7 @@ kernel::Status AsebaThymio::write_targets(std::int16_t left, std::int16_t right)
 }
 
 kernel::Status AsebaThymio::write_wheels(float left, float right) {
+  std::lock_guard write(write_mu_);
   {
     std::lock_guard lock(mu_);
     if (!stats_.up || stopping_) {
@@ -218,7 +224,7 @@ kernel::Status AsebaThymio::write_wheels(float left, float right) {
       return kernel::Error{stopping_ ? "the Thymio's driver is stopped" : "the link to the Thymio is down"};
     }
   }
-  auto st = write_targets(to_target(left, options_.speed_scale), to_target(right, options_.speed_scale));
+  auto st = write_targets_locked(to_target(left, options_.speed_scale), to_target(right, options_.speed_scale));
   std::lock_guard lock(mu_);
   ++(st ? stats_.wheel_writes : stats_.wheel_refused);
   return st;
@@ -320,7 +326,6 @@ void AsebaThymio::lose(const std::string& why) {
     std::lock_guard lock(mu_);
     if (!stats_.up) return;
     stats_.up = false;
-    ++stats_.losses;
     node = stats_.node;
   }
   // Stop first, report after: the stop must not wait for whoever reads the report.
@@ -332,6 +337,8 @@ void AsebaThymio::lose(const std::string& why) {
   }
   {
     std::lock_guard lock(mu_);
+    // Counted once the stop is done: whoever sees the loss sees the wheels' targets it left.
+    ++stats_.losses;
     ++stats_.stops;
     stats_.left_target = stats_.right_target = 0;
     stats_.last_stop_delay = now() - noticed;

@@ -142,6 +142,7 @@ class AsebaThymio : public std::enable_shared_from_this<AsebaThymio> {
   void try_reconnect();
   kernel::Status handshake();
   kernel::Status write_targets(std::int16_t left, std::int16_t right);
+  kernel::Status write_targets_locked(std::int16_t left, std::int16_t right);  // write_mu_ held
   void report(os::LogLevel level, const std::string& text);
   kernel::Time now() const;
 
@@ -151,6 +152,9 @@ class AsebaThymio : public std::enable_shared_from_this<AsebaThymio> {
   std::shared_ptr<Sensor> ground_;
   std::shared_ptr<Actuator> wheels_;
 
+  // Orders the target writes: the stop a loss writes comes after any command already on its way,
+  // and a command that waited for it sees the link down. Taken before mu_, never inside it.
+  std::mutex write_mu_;
   mutable std::mutex mu_;  // everything below
   std::condition_variable cv_;
   Reporter reporter_;
