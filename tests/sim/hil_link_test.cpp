@@ -473,6 +473,41 @@ TEST(HilSimulatorTest, AnAnswerOvertakenByTheNextIsCountedSuperseded) {
   EXPECT_EQ(s.received, 1u + s.applied + s.superseded);  // the handshake's answer, and the rest
 }
 
+// A frame the board wrote for the run before (its watchdog's stop, [66, 0, 0]) can still be on its
+// way when a new run starts: held in `symb link`'s relay, it survives the flush of the
+// simulator's own line. It is no answer to the handshake, which goes out again until the board
+// answers seq 0, and it is not applied (it would make this run's answers look stale). Here it
+// comes in place of the answer to the first handshake.
+TEST(HilSimulatorTest, AFrameLeftFromAnEarlierRunIsNoAnswerToTheHandshake) {
+  HilSimulatorOptions o;
+  o.answer_wait = 200ms;  // the handshake's resend interval in lockstep
+  LockstepRig rig;
+  rig.open("hil-leftover", o);
+  ASSERT_FALSE(HasFatalFailure());
+  HilSimulator& simulator = *rig.simulator;
+  int handshakes = 0;  // the board's thread only
+  std::atomic<bool> answered_handshake{false};
+  ScriptedBoard board(*rig.pty, [&](const HilIrFrame& f) -> std::vector<HilWheelFrame> {
+    if (f.seq == 0 && handshakes++ == 0) return {HilWheelFrame{66, 0, 0}};
+    if (f.seq == 0) answered_handshake = true;
+    return {HilWheelFrame{f.seq, 100, 100}};
+  });
+  ASSERT_TRUE(simulator.wait_for_boards(20s).ok());
+  EXPECT_TRUE(answered_handshake.load()) << "the board had not answered this run's handshake";
+  auto steps = simulator.run_for(5 * 30ms);
+  board.stop();
+  ASSERT_TRUE(steps.ok()) << steps.error();
+  ASSERT_EQ(rig.left.size(), 5u);
+  EXPECT_EQ(rig.left[0], 0.0);
+  for (std::size_t k = 2; k <= 5; ++k)
+    EXPECT_NEAR(rig.left[k - 1], 100 * kCmPerSecondPerWheelUnit, 1e-9) << "step " << k;
+  const auto s = simulator.stats()[0];
+  EXPECT_EQ(s.stale, 1u);  // the frame from the earlier run
+  EXPECT_EQ(s.applied, 4u);
+  EXPECT_EQ(s.late, 0u);
+  EXPECT_EQ(s.frames_sent, 7u);  // two handshakes, five steps
+}
+
 // A serial path that goes away and comes back, as a USB adapter's does when it is pulled and
 // plugged in again: a symlink to a pseudo-terminal, removed with the pseudo-terminal, then made
 // again to a new one.

@@ -2,12 +2,13 @@
 // controller, V-A; protocol in hil_protocol.hpp and docs/hil.md). It steps a World at the
 // wall-clock pace of the control period and talks to one board per robot over a serial line:
 //
-//   handshake  [0, IR before the first step] every period until every board answered; the
-//              answers are never applied, so step 1 runs with the wheels at rest, as in-process
+//   handshake  [0, IR before the first step] every period until every board answered it with
+//              seq 0 (a frame left on the line from an earlier run is no answer); the answers
+//              are never applied, so step 1 runs with the wheels at rest, as in-process
 //   each period k = 1, 2, ...:
 //     1. read, WITHOUT blocking, whatever wheel frames arrived; keep the newest valid one (the
 //        highest sequence; among equals the last to arrive) and set the robot's wheels from it;
-//        frames older than one already applied are stale and dropped;
+//        frames older than one already applied (or newer than any sent) are stale and dropped;
 //     2. step the world by one period;
 //     3. send [k, IR after the step] to each board;
 //     4. hand a StepRecord to the observers (a RunRecorder).
@@ -90,7 +91,9 @@ struct HilRobotStats {
   io::FrameStats decoder;       // dropped(): bad frames (CRC, framing)
   std::uint64_t applied = 0;    // steps that took new speeds from a frame
   std::uint64_t late = 0;       // ... that answered an older IR frame than the newest sent
-  std::uint64_t stale = 0;      // frames older than one already applied: dropped
+  // Frames older than one already applied, or newer than any IR frame sent (left on the line
+  // from an earlier run): dropped.
+  std::uint64_t stale = 0;
   // Frames overtaken by a newer one before a step took them (an answer that came after its own
   // step's wait, then with the next): with applied and stale, every wheel frame received but the
   // handshake's answers.
