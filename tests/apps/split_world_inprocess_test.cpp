@@ -95,6 +95,7 @@ class RobotThread {
         }
         if (!robot_->serve(20ms).ok()) break;
       }
+      done_.store(true);
     });
   }
   ~RobotThread() { join(); }
@@ -102,12 +103,19 @@ class RobotThread {
     stop_.store(true);
     if (thread_.joinable()) thread_.join();
   }
+  // After the world's bye: the robot reads it and ends on its own (a sanitizer's box may take a
+  // while); stopped only if it has not within `within`.
+  void finish(std::chrono::milliseconds within) {
+    const auto deadline = std::chrono::steady_clock::now() + within;
+    while (!done_.load() && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(1ms);
+    join();
+  }
   sim::HilSplitRobot& robot() { return *robot_; }
 
  private:
   std::uint32_t silent_after_;
   std::unique_ptr<sim::HilSplitRobot> robot_;
-  std::atomic<bool> stop_{false};
+  std::atomic<bool> stop_{false}, done_{false};
   std::thread thread_;
 };
 
@@ -136,7 +144,7 @@ struct SplitRun {
     ex.run_until(sc.control_period * static_cast<std::int64_t>(steps) + 1ms);
     session->stop();
     world->say_bye(steps);
-    for (auto& r : robots) r->join();
+    for (auto& r : robots) r->finish(10s);
   }
   kernel::LockstepExecutor ex;
   std::unique_ptr<sim::ScenarioSession> session;
