@@ -26,6 +26,7 @@
 #include "symb/sim/robot_system.hpp"
 #include "symb/sim/scenario.hpp"
 
+#include "support/eventually.hpp"
 #include "support/measured.hpp"
 
 namespace symb::sim::mujoco {
@@ -211,6 +212,8 @@ TEST(HilOrganism, TheBoardsModuleMovesTheOrganismExactlyAsInProcess) {
     identical += same ? 1 : 0;
   }
   const auto st = pair.hil->stats();
+  // The last frame's answer is not waited for: the board is stopped once it has read that frame.
+  EXPECT_TRUE(symb::testing::eventually([&] { return pair.board->board().stats().frames >= kTicks; }));
   pair.board->join();
   const auto bs = pair.board->board().stats();
   std::printf("hil 3D: %zu of %llu ticks identical to in-process, worst distance %.3g m; sim: %s; board: %s\n",
