@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include "symb/io/frame_codec.hpp"
 #include "symb/io/loopback_stream.hpp"
 #include "symb/io/stream_task.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
@@ -148,6 +149,7 @@ struct Hil3Pair {
   std::unique_ptr<Hil3Board> board;
   std::unique_ptr<HilOrganism> hil;
   std::vector<Hil3Tick> ticks;
+  std::shared_ptr<io::IOStream> board_line;  // the board's end, for a frame written beside it
 
   Hil3Pair(Scenario scenario, std::size_t module, HilOrganismOptions options,
            std::chrono::milliseconds board_delay = std::chrono::milliseconds(0))
@@ -166,6 +168,7 @@ struct Hil3Pair {
       }
       ticks.push_back(std::move(t));
     });
+    board_line = board_end;
     board = std::make_unique<Hil3Board>(sc, module, board_end, board_delay);
     auto h = HilOrganism::create(*session, ex, module, sim_end, std::move(options));
     EXPECT_TRUE(h.ok()) << h.error();
@@ -253,6 +256,26 @@ TEST(HilOrganism, InLockstepABoardSlowToAnswerTheHandshakeGetsItOnce) {
   EXPECT_EQ(st.late + st.stale + st.missing, 0u);
   EXPECT_EQ(bs.frames, kTicks);
   EXPECT_EQ(bs.bad_frames(), 0u);
+}
+
+// A command numbered beyond any frame sent (one the board wrote for an earlier run, held up on
+// the line) is stale, as in 2D: applied, it would have made every later answer of the run look
+// older than it and the module would have stopped following its board.
+TEST(HilOrganism, ACommandNewerThanAnyFrameSentIsStale) {
+  const Scenario sc = hil3_scenario();
+  Hil3Pair pair(sc, 1, hil3_lockstep());
+  ASSERT_TRUE(pair.hil);
+  auto first = pair.hil->run_ticks(5);
+  ASSERT_TRUE(first.ok()) << first.error();
+  const HilModuleLayout layout = HilModuleLayout::of(sc.robots[1].module_kind);
+  ASSERT_TRUE(pair.board_line->write_all(io::encode_frame(encode_module_command(layout, {999, 0, 0, 0}))).ok());
+  auto second = pair.hil->run_ticks(10);
+  ASSERT_TRUE(second.ok()) << second.error();
+  const auto st = pair.hil->stats();
+  EXPECT_EQ(st.stale, 1u);
+  EXPECT_EQ(st.applied, 14u);  // every tick after the first, on its own answer
+  EXPECT_EQ(st.late, 0u);
+  EXPECT_EQ(st.missing, 0u);
 }
 
 TEST(HilOrganism, ALatchAndAnUnlatchFromTheBoardReachTheWorld) {

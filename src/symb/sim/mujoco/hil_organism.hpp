@@ -15,10 +15,11 @@
 // So a board that answers each frame in time drives its module exactly as the module's node does
 // in process (HilModuleBoard runs the node on the frames' clock): the same seed gives the same
 // organism, bit for bit. Late answers (for an older frame than the newest sent) are still used,
-// and counted; stale ones (older than one applied) are dropped; a silent board's module keeps its
-// last commands for `hold`, then its wheels stop and its hinge holds its angle, and it is reported.
-// The handshake is the 2D one: [0, readings before the first step] each period (each
-// `answer_wait` when that is longer) until the board answers; the answer is never applied.
+// and counted; stale ones (older than one applied, or newer than any frame sent: written for an
+// earlier run) are dropped; a silent board's module keeps its last commands for `hold`, then its
+// wheels stop and its hinge holds its angle, and it is reported. The handshake is the 2D one:
+// [0, readings before the first step] each period (each `answer_wait` when that is longer) until
+// the board answers it with seq 0; the answer is never applied.
 //
 // A line whose device goes away (a USB adapter pulled, `symb link` stopped) is reported, reopened
 // by its path with backoff and used again once it is back, as in 2D; stats() says how long it was
@@ -74,7 +75,7 @@ struct HilOrganismStats {
   io::FrameStats decoder;          // dropped(): bad frames (CRC, framing)
   std::uint64_t applied = 0;       // ticks that took new commands from a frame
   std::uint64_t late = 0;          // ... that answered an older frame than the newest sent
-  std::uint64_t stale = 0;         // frames older than one already applied: dropped
+  std::uint64_t stale = 0;         // older than one already applied, or newer than any sent: dropped
   // Frames overtaken by a newer one before a tick took them (an answer that came after its own
   // tick's wait, then with the next): with applied and stale, every command frame received but
   // the handshake's answers and the newest (applied at the next tick).
