@@ -215,7 +215,7 @@ TEST(HilOrganism, TheBoardsModuleMovesTheOrganismExactlyAsInProcess) {
     identical += same ? 1 : 0;
   }
   const auto st = pair.hil->stats();
-  // The last frame's answer is not waited for: the board is stopped once it has read that frame.
+  // The board counts a frame after its answer went out, so maybe not yet when the run returns.
   EXPECT_TRUE(symb::testing::eventually([&] { return pair.board->board().stats().frames >= kTicks; }));
   pair.board->join();
   const auto bs = pair.board->board().stats();

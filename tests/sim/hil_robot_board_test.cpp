@@ -133,7 +133,8 @@ TEST(HilRobotBoard, InLockstepABoardAndASimulatorKeptOffTheirCoresAreTheInProces
   ASSERT_TRUE(simulator.wait_for_boards(20s).ok());
   auto steps = simulator.run_for(sc.control_period * static_cast<std::int64_t>(kSteps));
   ASSERT_TRUE(steps.ok()) << steps.error();
-  // The last frame's answer is not waited for: the line is closed once the board has read it.
+  // Nobody waits for the last frame's answer, and the board counts a frame after answering it:
+  // the line is closed once the board has counted them all.
   EXPECT_TRUE(symb::testing::eventually([&] { return board.board().stats().frames >= kSteps; }));
   sim_end->close();
   board.join();
