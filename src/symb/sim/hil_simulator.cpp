@@ -22,10 +22,10 @@ struct HilSimulator::Robot {
   io::FrameDecoder decoder{256};
   HilRobotStats stats;
   std::uint64_t quiet_steps = 0;  // steps since the last applied frame
-  // Frames with seq 0 read: answers to this run's handshake. Any other frame may be one the board
-  // wrote for an earlier run (its watchdog's stop, with that run's last seq) that waited on the
-  // line: it says nothing about whether the board has seen this run's seq 0.
-  std::uint64_t handshake_answers = 0;
+  // A frame with seq 0 came: the board answered this run's handshake. Any other frame may be one
+  // the board wrote for an earlier run (its watchdog's stop, with that run's last seq) that waited
+  // on the line: it says nothing about whether the board has seen this run's seq 0.
+  bool handshake_answered = false;
   io::ReopenBackoff backoff;
 };
 
@@ -160,7 +160,7 @@ std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_
                                                        kernel::Duration wait) {
   Robot& r = robots_[i];
   std::optional<HilWheelFrame> best;
-  std::uint64_t received = 0, malformed = 0, stale = 0, superseded = 0, handshake = 0;
+  std::uint64_t received = 0, malformed = 0, stale = 0, superseded = 0;
   any_frame = false;
   const auto deadline = Clock::now() + wait;
   // A zero timeout polls; the loop ends as soon as nothing more is there, once the answer awaited
@@ -189,11 +189,11 @@ std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_
       ++received;
       any_frame = true;
       if (f->seq == 0) {  // an answer to the handshake: never applied
-        ++handshake;
+        r.handshake_answered = true;
         return;
       }
-      // Newer than any IR frame sent: written for an earlier run, and applying it would make this
-      // run's answers look stale.
+      // Older than one applied, or newer than any IR frame sent: the latter was written for an
+      // earlier run, and applying it would make this run's answers look stale.
       if (f->seq < r.stats.last_applied || f->seq > seq_) {
         ++stale;
         return;
@@ -202,7 +202,6 @@ std::optional<HilWheelFrame> HilSimulator::read_wheels(std::size_t i, bool& any_
       if (!best || f->seq >= best->seq) best = *f;
     });
   }
-  r.handshake_answers += handshake;
   std::lock_guard lock(stats_mu_);
   r.stats.received += received;
   r.stats.malformed += malformed;
@@ -231,7 +230,7 @@ kernel::Status HilSimulator::wait_for_boards(kernel::Duration timeout) {
       bool answered = false;
       {
         std::lock_guard lock(stats_mu_);
-        if (robots_[i].handshake_answers > 0 && !robots_[i].stats.answered) robots_[i].stats.answered = answered = true;
+        if (robots_[i].handshake_answered && !robots_[i].stats.answered) robots_[i].stats.answered = answered = true;
         all = all && robots_[i].stats.answered;
       }
       if (answered) event("robot " + robots_[i].stats.robot + ": board answered");

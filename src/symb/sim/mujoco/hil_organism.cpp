@@ -195,7 +195,7 @@ bool HilOrganism::read_board(kernel::Duration wait, std::uint32_t want) {
         if (want == 0) got = true;
         return;
       }
-      // Newer than any frame sent: written for an earlier run (as in 2D, hil_simulator.cpp).
+      // Older than one applied, or newer than any frame sent (written for an earlier run; as in 2D).
       if (c.seq < stats_.last_applied || c.seq > seq_) {
         ++stats_.stale;
         return;
