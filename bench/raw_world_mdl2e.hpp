@@ -2,10 +2,10 @@
 // framework. A 2D world (the scenario's engine, built by sim::make_world) stepped in a loop, and one
 // MDL2e interpreter per robot running the maze demo's program, called directly: no node, task,
 // hook, message or executor. The interpreter is stepped as the mdl2e task steps it under the
-// type's default priorities (mdl2e_task.hpp): at each period's instant its tick comes before the
-// sensor task's new vector, so it steps on the previous vector, then again on the new one; the
-// wheels take both commands and the next world step uses the last. Same scenario, same seed: the
-// robots end where `symb run`'s end, bit for bit (bench_sim_rtf checks it).
+// type's default priorities (mdl2e_task.hpp): at each period's instant the sensor task's new
+// vector comes first, so the controller's tick finds it waiting and steps once, on the new vector;
+// the next world step uses that command. Same scenario, same seed: the robots end where `symb
+// run`'s end, bit for bit (bench_sim_rtf checks it).
 #pragma once
 
 #include <time.h>
@@ -87,11 +87,10 @@ class RawWorldMdl2e {
     const kernel::Time now{std::chrono::microseconds(30'000 * steps_)};
     for (std::size_t i = 0; i < robots_.size(); ++i) {
       Robot& r = robots_[i];
-      if (steps_ > 1) command(r, now);  // the tick, on the previous vector
       const sim::IrReadings ir = world_->ir(i);
       for (std::size_t k = 0; k < sim::kIrCount; ++k)
         r.sensors[k] = std::clamp(ir[k], 0.0f, static_cast<float>(sim::kIrMax));
-      command(r, now);  // the new vector
+      command(r, now);
     }
   }
 

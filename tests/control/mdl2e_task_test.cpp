@@ -579,7 +579,7 @@ TEST(ControlTaskTypes, RegistersMdl2eWithItsSchemaAndDefaults) {
   ASSERT_TRUE(register_control_task_types(registry, scenario_files()));
   const os::TaskType* t = registry.find("mdl2e");
   ASSERT_NE(t, nullptr);
-  EXPECT_EQ(t->defaults.priority, 2);
+  EXPECT_EQ(t->defaults.priority, 0);  // below the sensor type's 1: the newest data first
   EXPECT_EQ(t->defaults.period, kernel::Duration{30ms});
   EXPECT_EQ(t->defaults.queue_capacity, 4u);
   ASSERT_NE(t->param("program"), nullptr);
@@ -698,7 +698,7 @@ TEST(ControlTaskTypes, ShippedObstacleAvoidanceDrivesTheRobotThroughTheNode) {
   auto ctl = create(node, "avoid", "program=obstacle_avoidance.mdl2e speed_limit=90");
   ASSERT_TRUE(ctl) << ctl.error();
   EXPECT_EQ(node.info(*ctl)->period, kernel::Duration{30ms});
-  EXPECT_EQ(node.info(*ctl)->priority, 2);
+  EXPECT_EQ(node.info(*ctl)->priority, 0);
   ASSERT_TRUE(node.hook(ir, *ctl, {.policy = os::QueuePolicy::kKeepNewest}));
   ASSERT_TRUE(node.hook(*ctl, wheels));
 
@@ -715,6 +715,12 @@ TEST(ControlTaskTypes, ShippedObstacleAvoidanceDrivesTheRobotThroughTheNode) {
   EXPECT_EQ(rec->last().right, 80);
   ex.run_until(ms(600));
   EXPECT_EQ(rec->last().left, 90);
+  // Under the defaults the vector is queued before the controller's tick at each instant: one
+  // command per period, each from that period's vector (the wall from 300 ms turns at 300 ms).
+  EXPECT_EQ(rec->size(), 20u);
+  for (long long t = 30; t <= 600; t += 30) ASSERT_EQ(rec->at(ms(t)).size(), 1u) << t << " ms";
+  EXPECT_EQ(rec->at(ms(300))[0].left, -80);
+  EXPECT_EQ(rec->at(ms(270))[0].left, 90);
   ex.run_until(ms(899));
   os::Message bump;
   bump.port = kExternalPort;

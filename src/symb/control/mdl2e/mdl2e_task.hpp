@@ -18,11 +18,11 @@
 //    the queue (that message steps right after, at the same instant) or when a step was already
 //    taken at this instant. So when a vector and a tick meet at one instant, what happens depends
 //    on who runs first, which under virtual time is the higher priority:
-//      - the sensor task above the controller: the vector is queued before the tick, one step
-//        (should the waiting message turn out to be bad, the tick's step is taken then);
-//      - the controller above the sensor (the type defaults: 2 and 1): the tick steps on the
-//        previous vector, then the vector steps again; two commands at one instant, the last one
-//        computed from the newest data.
+//      - the sensor task above the controller (the type defaults: 1 and 0): the vector is queued
+//        before the tick, one step, on the newest data (should the waiting message turn out to
+//        be bad, the tick's step is taken then);
+//      - the controller above the sensor: the tick steps on the previous vector, then the vector
+//        steps again; two commands at one instant, the last one computed from the newest data.
 //  - Start: the plan is entered at the first good sensor vector; until then ticks send nothing
 //    (no wheel command is better than one computed from no data; an actuator watchdog stops the
 //    wheels). A program that declares no sensors starts at its first tick or input message.

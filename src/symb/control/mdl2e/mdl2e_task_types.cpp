@@ -67,7 +67,10 @@ kernel::Status register_mdl2e_task_types(os::TaskTypeRegistry& registry, const C
         if (!task) return kernel::Error{"program '" + shown_reference(o.program) + "': " + task.error()};
         return task;
       });
-  mdl2e_type.defaults.priority = 2;
+  // Below the sensor type's 1: at an instant where a reading and a tick meet, the reading is
+  // queued first and the tick leaves the step to it, so the controller steps once a period on the
+  // newest data instead of twice (once on the previous vector, a command the wheels never keep).
+  mdl2e_type.defaults.priority = 0;
   mdl2e_type.defaults.period = 30ms;
   mdl2e_type.defaults.queue_capacity = 4;
   mdl2e_type.inputs = {{kSensorPort, "sensors", robot::layout::kSensorVector},
