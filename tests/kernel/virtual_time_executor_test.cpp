@@ -136,6 +136,35 @@ TEST_F(VirtualTimeExecutorTest, SetPeriodRestartsChain) {
   EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:tick@10", "a:tick@37", "a:tick@62"}));
 }
 
+// A handler that says its ticks before t are not needed skips them on the chain's own grid: the
+// next tick is the first multiple of the period at or after t (t itself when it is on the grid).
+// A new period or a resume starts a chain that knows nothing of the hint.
+TEST_F(VirtualTimeExecutorTest, SkippedTicksKeepTheChainsGrid) {
+  Recorder& a = make("a");
+  ex.attach(a, {0, 10ms, "a"});
+  int ticks = 0;
+  a.on_tick = [&] {
+    ++ticks;
+    if (ticks == 1) a.slot->skip_ticks_before(Time{35ms});  // next: 40, not 20 or 30
+    if (ticks == 2) a.slot->skip_ticks_before(Time{60ms});  // on the grid: 60 itself
+    if (ticks == 4) a.slot->skip_ticks_before(Time{200ms});
+  };
+  ex.run_until(Time{75ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"a:start@0", "a:tick@10", "a:tick@40", "a:tick@60", "a:tick@70"}));
+  log.clear();
+  a.slot->set_period(10ms);  // from 75 ms: 85, 95, ... whatever the hint of the tick at 70
+  ex.run_until(Time{100ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"a:tick@85", "a:tick@95"}));
+  log.clear();
+  a.on_tick = [&] { a.slot->skip_ticks_before(Time{1s}); };
+  ex.run_until(Time{110ms});  // the tick at 105 skips to 1 s
+  a.slot->suspend();
+  a.slot->resume();  // a new chain from 110 ms
+  a.on_tick = nullptr;
+  ex.run_until(Time{135ms});
+  EXPECT_EQ(log, (std::vector<std::string>{"a:tick@105", "a:tick@120", "a:tick@130"}));
+}
+
 TEST_F(VirtualTimeExecutorTest, StopReturnsEarly) {
   Recorder& a = make("a");
   a.on_tick = [&] {

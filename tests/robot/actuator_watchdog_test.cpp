@@ -108,6 +108,50 @@ TEST(ActuatorWatchdog, SuspendedControllerStopsTheWheelsWithinTwoControlPeriods)
   EXPECT_EQ(motors->output(), kSafe);
 }
 
+// While commands flow, a sink tick that finds the deadline ahead skips the ticks before it; the
+// instant the wheels stop is the one a tick every period gives (the test above: 440 ms).
+TEST(ActuatorWatchdog, WhileCommandsFlowTheSinkTicksOnceACommandNotEveryPeriod) {
+  kernel::VirtualTimeExecutor ex;
+  os::Node node(ex, {"bot"});
+  auto motors = std::make_shared<RecordingMotors>(ex);
+  ActuatorSinkTask::Options o;
+  o.timeout = 45ms;
+  auto sink = *node.create("wheels", std::make_unique<ActuatorSinkTask>(motors, o), {.period = 10ms});
+  auto ctl = *node.create("ctl", std::make_unique<Driver>(kDrive), {.priority = 2, .period = 30ms});
+  ASSERT_TRUE(node.hook(ctl, sink));
+  ex.run_until(kernel::Time{400ms});
+  // In (400, 700] ms: the controller's 10 ticks (420 to 690) and 10 of the sink's, each the first
+  // of its 10 ms grid at least 45 ms past the command before it (410, 440, ..., 680), not 30.
+  EXPECT_EQ(ex.run_until(kernel::Time{700ms}), 20u);
+  EXPECT_EQ(motors->applied.size(), 23u);  // every command applied: 30 ms to 690 ms
+  EXPECT_EQ(motors->output(), kDrive);
+}
+
+// A shorter timeout set while ticks are skipped for the old one counts from the change.
+TEST(ActuatorWatchdog, AShorterTimeoutIsNotHeldBackByTicksSkippedForTheOldOne) {
+  kernel::VirtualTimeExecutor ex;
+  auto motors = std::make_shared<RecordingMotors>(ex);
+  RobotDevices devices;
+  devices.actuator = [&](std::string_view n) -> std::shared_ptr<Actuator> { return n == "motors" ? motors : nullptr; };
+  os::TaskTypeRegistry registry;
+  ASSERT_TRUE(register_robot_task_types(registry, devices));
+  os::Node node(ex, {.name = "bot", .types = &registry});
+  auto params = os::parse_param_assignments("device=motors timeout=500ms");
+  ASSERT_TRUE(params);
+  auto sink = node.create("actuator_sink", "wheels", *params, os::TaskOptions{.period = 10ms});
+  ASSERT_TRUE(sink) << sink.error();
+  auto ctl = *node.create("ctl", std::make_unique<Driver>(kDrive), {.priority = 2, .period = 30ms});
+  ASSERT_TRUE(node.hook(ctl, *sink));
+  ex.run_until(kernel::Time{105ms});  // the sink's tick at 100 ms skipped those up to 590 (90 + 500)
+  ASSERT_TRUE(node.suspend(ctl));
+  ASSERT_TRUE(node.set_parameter(*sink, "timeout", "40ms"));
+  ex.run_until(kernel::Time{300ms});
+  ASSERT_FALSE(motors->applied.empty());
+  EXPECT_EQ(motors->applied.back().values, kSafe);
+  // The change, applied at 105 ms, restarts the ticks (115, 125, ...): the first at least 40 ms on.
+  EXPECT_EQ(motors->applied.back().time, kernel::Time{145ms});
+}
+
 TEST(ActuatorWatchdog, OffByDefaultAndRefusedCommandsDoNotFeedIt) {
   kernel::VirtualTimeExecutor ex;
   os::Node node(ex, {"bot"});
@@ -151,6 +195,7 @@ TEST(ActuatorWatchdog, TaskTypeTakesTheTimeoutAsADurationAndTicksOnlyWithAWatchd
   EXPECT_EQ(type->param("timeout")->type, os::ParamType::kDuration);
   EXPECT_EQ(std::get<kernel::Duration>(type->param("timeout")->default_value), kernel::Duration{0});
   EXPECT_EQ(type->defaults.period, kernel::Duration{0});  // no ticks for a sink without a watchdog
+  EXPECT_EQ(type->defaults.priority, -1);  // its ticks after a controller's command of the same instant
 
   os::Node node(ex, {.name = "bot", .types = &registry});
   auto params = os::parse_param_assignments("device=motors timeout=45ms");

@@ -70,6 +70,12 @@ class ActivitySlot {
   virtual void resume() = 0;
   virtual void set_priority(int priority) = 0;
   virtual void set_period(Duration period) = 0;
+  // A hint from the activity's own handler: its ticks before `t` would find nothing to do (a
+  // watchdog whose deadline is still ahead). An executor may leave them out; the chain keeps its
+  // phase, so the next tick is the first one of the period's grid at or after `t`, the same
+  // instant it would have acted at anyway. Cleared by set_period() and resume(), which start a
+  // chain afresh. Executors that tick in real time ignore it.
+  virtual void skip_ticks_before(Time /*t*/) {}
   // Stops the activity: on_activity_stop() then on_activity_released(), after any handler that is
   // running returns. Safe to call from the activity's own handler.
   virtual void detach() = 0;

@@ -14,6 +14,7 @@ struct VirtualTimeExecutor::Slot final : ActivitySlot {
   std::uint32_t generation = 0;
   // Bumped to cancel the tick chain in flight (suspend, new period).
   std::uint32_t tick_generation = 0;
+  Time skip_before{0};  // skip_ticks_before(): no tick of the chain before this instant
   bool started = false;
   bool suspended = false;
   bool input_scheduled = false;
@@ -38,6 +39,7 @@ struct VirtualTimeExecutor::Slot final : ActivitySlot {
     if (!suspended || detaching) return;
     suspended = false;
     ++tick_generation;
+    skip_before = Time{0};
     if (started && period.count() > 0) exec->schedule(*this, EventKind::kTick, exec->clock_.now() + period);
     // An input event still queued will simply run now that the slot is awake again.
     if (input_while_suspended && !input_scheduled) {
@@ -47,9 +49,11 @@ struct VirtualTimeExecutor::Slot final : ActivitySlot {
     }
   }
   void set_priority(int p) override { priority = p; }
+  void skip_ticks_before(Time t) override { skip_before = t; }
   void set_period(Duration p) override {
     period = p;
     ++tick_generation;
+    skip_before = Time{0};
     if (started && !suspended && !detaching && p.count() > 0)
       exec->schedule(*this, EventKind::kTick, exec->clock_.now() + p);
   }
@@ -85,6 +89,7 @@ ActivitySlot& VirtualTimeExecutor::attach(Activity& activity, const ActivityOpti
   s->priority = options.priority;
   s->period = options.period;
   s->started = s->suspended = s->input_scheduled = s->input_while_suspended = s->detaching = false;
+  s->skip_before = Time{0};
   activity.on_activity_attached(*s);
   schedule(*s, EventKind::kStart, clock_.now());
   return *s;
@@ -268,9 +273,14 @@ std::uint64_t VirtualTimeExecutor::run_until_idle(Time limit) {
     case EventKind::kTick:
       if (e.tick_generation != s.tick_generation || s.suspended) break;
       s.activity->on_activity_tick();
-      // Scheduled from the event time, not from now, so a period never drifts.
-      if (e.tick_generation == s.tick_generation && !s.suspended && !s.detaching && s.period.count() > 0)
-        schedule(s, EventKind::kTick, e.time + s.period);
+      // Scheduled from the event time, not from now, so a period never drifts; ticks the handler
+      // said it does not need are stepped over on the same grid.
+      if (e.tick_generation == s.tick_generation && !s.suspended && !s.detaching && s.period.count() > 0) {
+        Time next = e.time + s.period;
+        if (s.skip_before > next) [[unlikely]]
+          next += s.period * ((s.skip_before - next + s.period - Duration{1}) / s.period);
+        schedule(s, EventKind::kTick, next);
+      }
       break;
   }
   current_ = nullptr;

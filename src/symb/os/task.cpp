@@ -54,6 +54,12 @@ void Task::send(Port port, std::span<const float> values) {
 
 void Task::notify() { record_->notify(); }
 
+void Task::skip_ticks_before(kernel::Time t) {
+  // A handler's own call: the node set the slot before the task started and keeps it until the
+  // task is stopped.
+  if (record_->slot != nullptr) record_->slot->skip_ticks_before(t);
+}
+
 void Task::probe(std::string_view channel, std::span<const float> values) const {
   if (record_->node.probing()) record_->node.probe(*record_, channel, values);
 }

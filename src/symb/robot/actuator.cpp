@@ -200,7 +200,13 @@ void ActuatorSinkTask::on_message(const os::Message& m) {
 }
 
 void ActuatorSinkTask::on_tick() {
-  if (options_.timeout.count() <= 0 || timed_out_ || now() - last_applied_ < options_.timeout) return;
+  if (options_.timeout.count() <= 0 || timed_out_) return;
+  if (now() - last_applied_ < options_.timeout) {
+    // Commands only move the deadline later, so no tick before it can find the sink silent: a
+    // robot whose controller keeps talking costs the executor a tick a deadline, not a period.
+    skip_ticks_before(last_applied_ + options_.timeout);
+    return;
+  }
   // Once per silence: re-applying every tick would bury the log and fight the shell's ioctls.
   timed_out_ = true;
   timeouts_.bump();
@@ -219,9 +225,11 @@ kernel::Status ActuatorSinkTask::on_parameter_changed(std::string_view name) {
     clamp_warning_.set_interval(options_.warn_interval);
     timeout_warning_.set_interval(options_.warn_interval);
   } else if (name == "timeout") {
-    // A new timeout counts from now, so changing it never stops the wheels at once.
+    // A new timeout counts from now, so changing it never stops the wheels at once. The ticks
+    // skipped for the old deadline start afresh: a shorter timeout must not wait for them.
     last_applied_ = now();
     timed_out_ = false;
+    if (auto info = node().info(id()); info && info->period.count() > 0) (void)node().set_period(id(), info->period);
     arm_watchdog();
   }
   return {};

@@ -26,7 +26,9 @@
 //    from the shell, faulted, deleted), the wheels stop. The check runs at the sink's ticks: the
 //    task needs a period (the actuator_sink type's default is 10 ms), and the wheels stop at the
 //    first tick at least `timeout` after the last applied command, so within timeout + period.
-//    The timer starts when the task starts; a refused command (NaN, wrong count) does not feed it.
+//    A tick that finds the deadline ahead skips the ticks before it (Task::skip_ticks_before):
+//    while commands flow the sink ticks about once a timeout, on the same grid, at the same
+//    instants it would have acted at. The timer starts when the task starts; a refused command (NaN, wrong count) does not feed it.
 #pragma once
 
 #include <array>

@@ -119,6 +119,10 @@ kernel::Status register_robot_task_types(os::TaskTypeRegistry& registry, RobotDe
         return std::make_unique<ActuatorSinkTask>(std::move(r.value().first), std::move(r.value().second));
       });
   sink.defaults.queue_capacity = 8;
+  // Below the controllers (0 and up): a watchdog tick due at the instant of a command comes after
+  // it and hears it, and so finds the deadline a whole timeout ahead (ActuatorSinkTask::on_tick).
+  // Commands themselves are taken at once, whatever the priority.
+  sink.defaults.priority = -1;
   // No period by default: a sink with a watchdog gives itself one (ActuatorSinkTask::arm_watchdog).
   sink.inputs = {{kDataPort, "command", os::kAnyLayout}};
 
