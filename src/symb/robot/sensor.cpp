@@ -154,7 +154,11 @@ SensorStats Sensor::take(std::span<SensorSample> out, std::size_t* taken) {
   std::lock_guard lock(mu_);
   notified_ = false;
   if (mailbox_)
-    while (n < out.size() && !mailbox_->empty()) out[n++] = mailbox_->take();
+    // Copied once, straight into `out` (take() would copy it out, then into `out`).
+    while (n < out.size() && !mailbox_->empty()) {
+      out[n++] = mailbox_->front();
+      mailbox_->pop();
+    }
   stats_.taken += n;
   *taken = n;
   return stats_;

@@ -67,12 +67,12 @@ struct SensorSample {
 
   SensorSample() = default;
   SensorSample(const SensorSample& o) : time(o.time), count(o.count), blob(o.blob) {
-    std::copy_n(o.values.begin(), count, values.begin());
+    os::copy_numbers(values.data(), o.values.data(), count);
   }
   SensorSample& operator=(const SensorSample& o) {
     time = o.time;
     count = o.count;
-    std::copy_n(o.values.begin(), count, values.begin());
+    os::copy_numbers(values.data(), o.values.data(), count);
     blob = o.blob;
     return *this;
   }
