@@ -195,7 +195,7 @@ TEST(ActuatorWatchdog, TaskTypeTakesTheTimeoutAsADurationAndTicksOnlyWithAWatchd
   EXPECT_EQ(type->param("timeout")->type, os::ParamType::kDuration);
   EXPECT_EQ(std::get<kernel::Duration>(type->param("timeout")->default_value), kernel::Duration{0});
   EXPECT_EQ(type->defaults.period, kernel::Duration{0});  // no ticks for a sink without a watchdog
-  EXPECT_EQ(type->defaults.priority, -1);  // its ticks after a controller's command of the same instant
+  EXPECT_EQ(type->defaults.priority, -1);                 // its ticks after a command of the same instant
 
   os::Node node(ex, {.name = "bot", .types = &registry});
   auto params = os::parse_param_assignments("device=motors timeout=45ms");

@@ -28,7 +28,8 @@
 //    first tick at least `timeout` after the last applied command, so within timeout + period.
 //    A tick that finds the deadline ahead skips the ticks before it (Task::skip_ticks_before):
 //    while commands flow the sink ticks about once a timeout, on the same grid, at the same
-//    instants it would have acted at. The timer starts when the task starts; a refused command (NaN, wrong count) does not feed it.
+//    instants it would have acted at. The timer starts when the task starts; a refused command
+//    (NaN, wrong count) does not feed it.
 #pragma once
 
 #include <array>
