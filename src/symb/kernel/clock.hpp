@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 
 #include "symb/kernel/time.hpp"
 
@@ -16,6 +17,14 @@ class Clock {
   virtual ~Clock() = default;
   // The current instant, counted from this clock's epoch.
   virtual Time now() const = 0;
+  // now(), read straight from memory when the clock is a counter there (a virtual clock): a node
+  // asks for the time at every send and at most handlers, and a virtual call each time was a
+  // tenth of a robot step's framework cost outside the handlers' own work.
+  Time read() const { return counter_ != nullptr ? Time{counter_->load(std::memory_order_relaxed)} : now(); }
+
+ protected:
+  // The nanoseconds this clock's now() returns, for a clock that keeps them in one atomic.
+  const std::atomic<std::int64_t>* counter_ = nullptr;
 };
 
 // Monotonic real time, counted from construction.
@@ -34,6 +43,9 @@ class WallClock final : public Clock {
 // shell, a monitor) may read it without a data race; only the executor writes it.
 class VirtualClock final : public Clock {
  public:
+  VirtualClock() { counter_ = &now_; }
+  VirtualClock(const VirtualClock&) = delete;
+  VirtualClock& operator=(const VirtualClock&) = delete;
   Time now() const override { return Time{now_.load(std::memory_order_relaxed)}; }
   // Moves the clock; instants never go backwards, so an earlier value is ignored.
   void advance_to(Time t) {

@@ -34,8 +34,9 @@ const T* blob_as(const Blob* b) {
 // as a few moves of fixed size that overlap where n is not one of those sizes. A copy of a
 // variable count compiles to a call to memmove or to a `rep movs`, whose start-up alone costs
 // more than moving the handful of numbers a message or a sensor sample carries (perf, the 1-robot
-// maze: a sample's copies in Sensor::take were its costliest framework function).
-inline void copy_numbers(float* to, const float* from, std::size_t n) {
+// maze: a sample's copies in Sensor::take were its costliest framework function). Always in
+// line: as a call it went through the PLT to whichever library's copy the loader found first.
+[[gnu::always_inline]] inline void copy_numbers(float* to, const float* from, std::size_t n) {
   const auto move = [&](std::size_t at, std::size_t count) { std::memcpy(to + at, from + at, count * sizeof(float)); };
   if (n >= 8) {
     if (n > 16) {

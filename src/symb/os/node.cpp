@@ -84,6 +84,7 @@ TaskRecord::TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> 
       name(std::move(nm)),
       random(n.seed(), fnv1a(name)) {
   task->record_ = this;
+  task->clock_ = &n.clock();
 }
 
 void TaskRecord::on_activity_attached(kernel::ActivitySlot& s) {

@@ -74,7 +74,8 @@ class Node {
 
   const std::string& name() const { return config_.name; }
   std::uint64_t seed() const { return config_.seed; }
-  kernel::Time now() const { return clock_.now(); }
+  kernel::Time now() const { return clock_.read(); }
+  const kernel::Clock& clock() const { return clock_; }
   SysLog& log() { return log_; }
   const TaskTypeRegistry* types() const { return config_.types; }
   // A fresh stream for `purpose`, the same for the same node seed and purpose.

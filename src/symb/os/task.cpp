@@ -27,7 +27,6 @@ kernel::Status Task::on_parameter(std::string_view name, const ParamValue& value
 Node& Task::node() const { return record_->node; }
 TaskId Task::id() const { return record_->id; }
 const std::string& Task::name() const { return record_->name; }
-kernel::Time Task::now() const { return record_->node.now(); }
 kernel::RandomStream& Task::random() { return record_->random; }
 
 std::size_t Task::pending_messages() const {

@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "symb/kernel/clock.hpp"
 #include "symb/kernel/random_stream.hpp"
 #include "symb/kernel/result.hpp"
 #include "symb/kernel/time.hpp"
@@ -125,7 +126,7 @@ class Task {
   Node& node() const;
   TaskId id() const;
   const std::string& name() const;
-  kernel::Time now() const;
+  kernel::Time now() const { return clock_->read(); }
   // Messages waiting in this task's own queue (a tick may leave its work to one of them). Cheap: no
   // copy, and a lock only under the thread executor.
   std::size_t pending_messages() const;
@@ -169,8 +170,9 @@ class Task {
     void* object = nullptr;
   };
   detail::TaskRecord* record_ = nullptr;
-  bool immediate_ = false;         // take_messages_at_once()
-  std::vector<Binding> bindings_;  // a heap block only for a task that binds parameters
+  const kernel::Clock* clock_ = nullptr;  // the node's, set with record_: now() is in line
+  bool immediate_ = false;                // take_messages_at_once()
+  std::vector<Binding> bindings_;         // a heap block only for a task that binds parameters
 };
 
 }  // namespace symb::os
