@@ -163,7 +163,7 @@ std::size_t VirtualTimeExecutor::wait_injected(std::chrono::nanoseconds timeout)
 [[gnu::always_inline]] void VirtualTimeExecutor::push_event(const Event& e) {
   const Later later;
   std::size_t i = events_.size();
-  events_.emplace_back();
+  events_.extend();
   while (i > 0) {
     const std::size_t parent = (i - 1) / 2;
     if (!later(events_[parent], e)) break;
