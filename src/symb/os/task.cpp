@@ -18,8 +18,9 @@ kernel::Status Task::on_parameter(std::string_view name, const ParamValue& value
     return kernel::Error{"a running " + what + " keeps its " + std::string(name) +
                          ": create a new task (and rehook) to change it"};
   }
-  for (const Binding& b : bindings_)
-    if (b.owner == live->owner) return live->apply(b.object, value, [&] { return on_parameter_changed(name); });
+  if (bindings_)
+    for (const Binding& b : *bindings_)
+      if (b.owner == live->owner) return live->apply(b.object, value, [&] { return on_parameter_changed(name); });
   return kernel::Error{"task type '" + type->name + "' declares '" + std::string(name) +
                        "' live, but its task bound no options that hold it"};
 }
