@@ -53,6 +53,19 @@ class Driver : public os::Task {
 const std::vector<float> kDrive{120, 120, 150, -100};
 const std::vector<float> kSafe{0, 0, 100, -50};
 
+// The robot's task types, with `motors` the one actuator they can name.
+struct MotorTypes {
+  explicit MotorTypes(const std::shared_ptr<RecordingMotors>& motors) {
+    RobotDevices devices;
+    devices.actuator = [motors](std::string_view n) -> std::shared_ptr<Actuator> {
+      return n == "motors" ? motors : nullptr;
+    };
+    registered = register_robot_task_types(registry, std::move(devices));
+  }
+  os::TaskTypeRegistry registry;
+  kernel::Status registered;
+};
+
 std::size_t warnings_containing(os::Node& node, std::string_view text) {
   std::size_t n = 0;
   for (const auto& e : node.log().since(0))
@@ -131,11 +144,9 @@ TEST(ActuatorWatchdog, WhileCommandsFlowTheSinkTicksOnceACommandNotEveryPeriod) 
 TEST(ActuatorWatchdog, AShorterTimeoutIsNotHeldBackByTicksSkippedForTheOldOne) {
   kernel::VirtualTimeExecutor ex;
   auto motors = std::make_shared<RecordingMotors>(ex);
-  RobotDevices devices;
-  devices.actuator = [&](std::string_view n) -> std::shared_ptr<Actuator> { return n == "motors" ? motors : nullptr; };
-  os::TaskTypeRegistry registry;
-  ASSERT_TRUE(register_robot_task_types(registry, devices));
-  os::Node node(ex, {.name = "bot", .types = &registry});
+  MotorTypes types(motors);
+  ASSERT_TRUE(types.registered) << types.registered.error();
+  os::Node node(ex, {.name = "bot", .types = &types.registry});
   auto params = os::parse_param_assignments("device=motors timeout=500ms");
   ASSERT_TRUE(params);
   auto sink = node.create("actuator_sink", "wheels", *params, os::TaskOptions{.period = 10ms});
@@ -185,11 +196,9 @@ TEST(ActuatorWatchdog, OffByDefaultAndRefusedCommandsDoNotFeedIt) {
 TEST(ActuatorWatchdog, TaskTypeTakesTheTimeoutAsADurationAndTicksOnlyWithAWatchdog) {
   kernel::VirtualTimeExecutor ex;
   auto motors = std::make_shared<RecordingMotors>(ex);
-  RobotDevices devices;
-  devices.actuator = [&](std::string_view n) -> std::shared_ptr<Actuator> { return n == "motors" ? motors : nullptr; };
-  os::TaskTypeRegistry registry;
-  ASSERT_TRUE(register_robot_task_types(registry, devices));
-  const os::TaskType* type = registry.find("actuator_sink");
+  MotorTypes types(motors);
+  ASSERT_TRUE(types.registered) << types.registered.error();
+  const os::TaskType* type = types.registry.find("actuator_sink");
   ASSERT_NE(type, nullptr);
   ASSERT_NE(type->param("timeout"), nullptr);
   EXPECT_EQ(type->param("timeout")->type, os::ParamType::kDuration);
@@ -197,7 +206,7 @@ TEST(ActuatorWatchdog, TaskTypeTakesTheTimeoutAsADurationAndTicksOnlyWithAWatchd
   EXPECT_EQ(type->defaults.period, kernel::Duration{0});  // no ticks for a sink without a watchdog
   EXPECT_EQ(type->defaults.priority, -1);                 // its ticks after a command of the same instant
 
-  os::Node node(ex, {.name = "bot", .types = &registry});
+  os::Node node(ex, {.name = "bot", .types = &types.registry});
   auto params = os::parse_param_assignments("device=motors timeout=45ms");
   ASSERT_TRUE(params);
   auto sink = node.create("actuator_sink", "wheels", *params);

@@ -35,7 +35,7 @@ const T* blob_as(const Blob* b) {
 // variable count compiles to a call to memmove or to a `rep movs`, whose start-up alone costs
 // more than moving the handful of numbers a message or a sensor sample carries (perf, the 1-robot
 // maze: a sample's copies in Sensor::take were its costliest framework function). Always in
-// line: as a call it went through the PLT to whichever library's copy the loader found first.
+// line: a call and its return cost about as much as the moves themselves.
 [[gnu::always_inline]] inline void copy_numbers(float* to, const float* from, std::size_t n) {
   const auto move = [&](std::size_t at, std::size_t count) { std::memcpy(to + at, from + at, count * sizeof(float)); };
   if (n >= 8) {

@@ -152,15 +152,19 @@ std::vector<float> ActuatorSinkTask::safe_output() const {
 // The watchdog is checked at ticks. A sink without a watchdog needs none, so the type's default
 // period is 0; one with a watchdog and no period of its own gets ticks at a third of the timeout,
 // which stops the outputs within 4/3 of the timeout.
-void ActuatorSinkTask::arm_watchdog() {
-  if (options_.timeout.count() <= 0) return;
-  if (auto info = node().info(id()); info && info->period.count() == 0)
+void ActuatorSinkTask::arm_watchdog(bool restart) {
+  const auto info = node().info(id());
+  if (!info) return;
+  if (info->period.count() > 0) {
+    if (restart) (void)node().set_period(id(), info->period);
+  } else if (options_.timeout.count() > 0) {
     (void)node().set_period(id(), std::max<kernel::Duration>(options_.timeout / 3, std::chrono::milliseconds(1)));
+  }
 }
 
 void ActuatorSinkTask::on_start() {
   last_applied_ = now();
-  arm_watchdog();
+  arm_watchdog(/*restart=*/false);
   if (!actuator_->is_open())
     if (auto st = actuator_->open(); !st)
       log(os::LogLevel::kWarn, "cannot open '" + actuator_->name() + "': " + st.error());
@@ -229,8 +233,7 @@ kernel::Status ActuatorSinkTask::on_parameter_changed(std::string_view name) {
     // skipped for the old deadline start afresh: a shorter timeout must not wait for them.
     last_applied_ = now();
     timed_out_ = false;
-    if (auto info = node().info(id()); info && info->period.count() > 0) (void)node().set_period(id(), info->period);
-    arm_watchdog();
+    arm_watchdog(/*restart=*/true);
   }
   return {};
 }

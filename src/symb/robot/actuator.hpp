@@ -138,7 +138,9 @@ class ActuatorSinkTask : public os::Task {
   kernel::Status on_parameter_changed(std::string_view name) override;
 
  private:
-  void arm_watchdog();
+  // Gives a task with a timeout and no period of its own ticks to watch it; with `restart`, a
+  // task that has a period starts its tick chain afresh (see on_parameter_changed).
+  void arm_watchdog(bool restart);
 
   // What every command and watchdog tick reads first, together in the object's first lines (in
   // a swarm each robot's sink is out of the cache at each step); the rest after.
