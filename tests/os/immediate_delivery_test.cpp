@@ -1,6 +1,8 @@
 // Tasks that take their messages at once (Task::take_messages_at_once): handled inside the
 // sender's send under a non-concurrent executor, queued as usual everywhere else, with the same
-// accounting, a bounded nesting and a handler that may rewire the node mid-send.
+// accounting, a bounded nesting and a handler that may rewire the node mid-send. And tasks that
+// take their notifications at once (Task::take_notifications_at_once): on_notify inside the
+// notifying handler only when the woken activation would have been the next event anyway.
 #include <algorithm>
 #include <atomic>
 #include <memory>
@@ -288,6 +290,86 @@ TEST(ImmediateDelivery, ASenderHookedToASinkAndToAReceiverThatTakesAtOnceReaches
   EXPECT_EQ(seen, (std::vector<std::size_t>{1, 2, 3}));
   EXPECT_EQ(sink->count, 3u);
   EXPECT_TRUE(node.hook_traffic().closes());
+}
+
+// Counts its notifications and, from the second, what `order` says ran before it.
+class Notified : public Task {
+ public:
+  explicit Notified(bool at_once, std::vector<std::string>* order = nullptr) : order_(order) {
+    if (at_once) take_notifications_at_once();
+  }
+  int count() const { return count_; }
+  using Task::notify;
+
+ protected:
+  void on_notify() override {
+    ++count_;
+    if (order_ != nullptr) order_->push_back("notified");
+  }
+
+ private:
+  std::vector<std::string>* order_;
+  int count_ = 0;
+};
+
+TEST(ImmediateNotification, OnNotifyRunsBeforeTheNotifyFromAHandlerReturns) {
+  kernel::VirtualTimeExecutor ex;
+  Node node(ex, {"bot", 1});
+  auto at_once = std::make_unique<Notified>(true);
+  auto woken = std::make_unique<Notified>(false);
+  Notified* a = at_once.get();
+  Notified* w = woken.get();
+  std::vector<int> seen_at_once, seen_woken;  // each one's count right after the notify
+  auto driver = std::make_unique<Scripted>();
+  driver->tick = [&](Scripted&) {
+    a->notify();
+    w->notify();
+    seen_at_once.push_back(a->count());
+    seen_woken.push_back(w->count());
+  };
+  ASSERT_TRUE(node.create("at_once", std::move(at_once)));
+  ASSERT_TRUE(node.create("woken", std::move(woken)));
+  ASSERT_TRUE(node.create("driver", std::move(driver), {.priority = 5, .period = 10ms}));
+  const std::uint64_t events = ex.run_for(35ms);
+  EXPECT_EQ(seen_at_once, (std::vector<int>{1, 2, 3}));
+  EXPECT_EQ(seen_woken, (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(a->count(), 3);
+  EXPECT_EQ(w->count(), 3);
+  // Three starts, three ticks, three activations of the woken task: none of the other one.
+  EXPECT_EQ(events, 9u);
+}
+
+TEST(ImmediateNotification, AnEventThatComesFirstAtTheInstantStillComesFirst) {
+  kernel::VirtualTimeExecutor ex;
+  Node node(ex, {"bot", 1});
+  std::vector<std::string> order;
+  auto notified = std::make_unique<Notified>(true, &order);
+  Notified* n = notified.get();
+  auto driver = std::make_unique<Scripted>();
+  driver->tick = [&](Scripted&) { n->notify(); };
+  auto other = std::make_unique<Scripted>();
+  other->tick = [&](Scripted&) { order.push_back("other"); };
+  ASSERT_TRUE(node.create("notified", std::move(notified), {.priority = 1}));
+  ASSERT_TRUE(node.create("driver", std::move(driver), {.priority = 5, .period = 10ms}));
+  // Ticks at the driver's instants, above the notified task: a wake would have run after it.
+  ASSERT_TRUE(node.create("other", std::move(other), {.priority = 3, .period = 10ms}));
+  ex.run_for(25ms);
+  EXPECT_EQ(order, (std::vector<std::string>{"other", "notified", "other", "notified"}));
+}
+
+TEST(ImmediateNotification, ANotifyFromOutsideAnyHandlerWakesTheTask) {
+  kernel::VirtualTimeExecutor ex;
+  Node node(ex, {"bot", 1});
+  auto notified = std::make_unique<Notified>(true);
+  Notified* n = notified.get();
+  const TaskId id = *node.create("notified", std::move(notified));
+  ex.run_for(1ms);
+  n->notify();
+  EXPECT_EQ(n->count(), 0);
+  ASSERT_TRUE(node.notify(id));  // under the node's lock: never at once
+  EXPECT_EQ(n->count(), 0);
+  ex.run_for(1ms);
+  EXPECT_EQ(n->count(), 1);  // one activation for both
 }
 
 }  // namespace

@@ -76,6 +76,12 @@ class ActivitySlot {
   // instant it would have acted at anyway. Cleared by set_period() and resume(), which start a
   // chain afresh. Executors that tick in real time ignore it.
   virtual void skip_ticks_before(Time /*t*/) {}
+  // Whether the caller may run this activity's input handling itself, right now, on the calling
+  // thread, instead of waking it: true only for an executor that runs one handler at a time, when
+  // the call comes from inside another activity's handler on its own context (so that a detach
+  // the handling makes is deferred until that handler returns) and this activity is started,
+  // awake, not detaching and has no input scheduled. Executors that cannot say so answer false.
+  virtual bool can_run_inline() const { return false; }
   // Stops the activity: on_activity_stop() then on_activity_released(), after any handler that is
   // running returns. Safe to call from the activity's own handler.
   virtual void detach() = 0;

@@ -50,6 +50,21 @@ struct VirtualTimeExecutor::Slot final : ActivitySlot {
       exec->schedule(*this, EventKind::kInput, exec->clock_.now());
     }
   }
+  bool can_run_inline() const override {
+    // Outside a handler (injected work, a lockstep lane's idle phase) a detach would be carried
+    // out at once, under the caller's feet: no. And only when the input event a wake would make
+    // is the next one to be handled (nothing queued at this instant outranks it): then the run
+    // differs from the woken one only in that the input comes before the rest of the handler
+    // that made it, not after.
+    if (!exec->running_ || exec->current_ == nullptr || exec->current_ == this || !started || suspended || detaching ||
+        input_scheduled)
+      return false;
+    if (!exec->ready_.empty() && exec->ready_.back().priority >= priority) return false;
+    if (!exec->events_.empty() && exec->events_.front().time == exec->clock_.now() &&
+        exec->events_.front().priority >= priority)
+      return false;
+    return exec->runner_.load(std::memory_order_relaxed) == std::this_thread::get_id();
+  }
   void set_priority(int p) override { priority = p; }
   void skip_ticks_before(Time t) override { skip_before = t; }
   void set_period(Duration p) override {

@@ -75,6 +75,7 @@ TaskRecord::TaskRecord(Node& n, TaskId i, std::string nm, std::unique_ptr<Task> 
       task(std::move(t)),
       id(i),
       immediate(!concurrent && task->immediate_),
+      immediate_notify(!concurrent && task->immediate_notify_),
       in_mu(concurrent),
       queue(o.queue_capacity),
       out_mu(concurrent),
@@ -111,7 +112,16 @@ void TaskRecord::prefetch(int level) const {
   }
 }
 
-void TaskRecord::notify() {
+void TaskRecord::notify(bool may_run_here) {
+  // The same conditions as take_now's (can_take_now), and the executor's word that this is the
+  // inside of another activity's handler on its own context, so that a task the handler deletes
+  // is freed only once it is done.
+  if (may_run_here && immediate_notify && !in_handler && !wake_pending && !notified && queue.empty() &&
+      !params_pending.load(std::memory_order_relaxed) && node.immediate_depth_ < Node::kMaxImmediateDepth &&
+      state.load(std::memory_order_relaxed) == TaskState::kRunning && slot != nullptr && slot->can_run_inline()) {
+    take_notification_now();
+    return;
+  }
   kernel::ActivitySlot* wake = nullptr;
   {
     std::lock_guard in(in_mu);
@@ -259,6 +269,16 @@ void TaskRecord::take_now(const Message& m, std::uint32_t edge, QueuePolicy poli
   const InHandler busy(in_handler);
   ++node.immediate_depth_;
   handle_message(m);
+  next_hops = 0;
+  --node.immediate_depth_;
+}
+
+void TaskRecord::take_notification_now() {
+  const InHandler busy(in_handler);
+  ++node.immediate_depth_;
+  // What it sends starts a chain of its own, as from an activation's notification.
+  next_hops = 0;
+  SYMB_GUARDED("on_notify", task->on_notify())
   next_hops = 0;
   --node.immediate_depth_;
 }
@@ -1004,7 +1024,7 @@ Status Node::notify(TaskId receiver) {
   std::lock_guard lock(mu_);
   TaskRecord* r = lookup_locked(receiver);
   if (r == nullptr) return no_task(receiver);
-  r->notify();
+  r->notify(false);  // under mu_: never on_notify here
   return {};
 }
 

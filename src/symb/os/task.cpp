@@ -52,7 +52,7 @@ void Task::send(Port port, std::span<const float> values) {
   record_->node.send_from(*record_, m);
 }
 
-void Task::notify() { record_->notify(); }
+void Task::notify() { record_->notify(true); }
 
 void Task::skip_ticks_before(kernel::Time t) {
   // A handler's own call: the node set the slot before the task started and keeps it until the

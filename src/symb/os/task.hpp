@@ -114,6 +114,16 @@ class Task {
   // task sends from on_message goes out from within its sender's send; a chain of such tasks is
   // cut to a queue at Node::kMaxImmediateDepth.
   void take_messages_at_once() { immediate_ = true; }
+  // Declares, from the constructor, that this task takes its notifications at once: under a
+  // non-concurrent executor, a Node::notify made from inside another activity's handler on the
+  // executor's own context (a simulated device publishing from the world's step) runs on_notify
+  // before notify returns, with no activation of its own, when the task is idle (not inside a
+  // handler, nothing queued, no parameters waiting, running, the nesting below
+  // Node::kMaxImmediateDepth); otherwise it is woken as usual. For a task whose on_notify only
+  // drains a device into messages (SensorTask): at a robot's every step that spares an event and a
+  // wake. The caller must hold no lock on_notify takes (a device's own data lock): a SensorTask
+  // asks for this only for a device called one context at a time, which has none.
+  void take_notifications_at_once() { immediate_notify_ = true; }
 
   // Declares where this task keeps its parameters: `options`, a member of the task, whose type is
   // the config struct of its type's ParamTable or one of that struct's bases. A running task's
@@ -174,6 +184,7 @@ class Task {
   detail::TaskRecord* record_ = nullptr;
   const kernel::Clock* clock_ = nullptr;  // the node's, set with record_: now() is in line
   bool immediate_ = false;                // take_messages_at_once()
+  bool immediate_notify_ = false;         // take_notifications_at_once()
   // A pointer, not the vector: most tasks bind nothing, and 16 bytes a task count in a swarm.
   std::unique_ptr<std::vector<Binding>> bindings_;
 };

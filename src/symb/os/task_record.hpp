@@ -154,8 +154,12 @@ struct TaskRecord final : kernel::Activity {
   void end_in_hook(std::uint32_t edge, std::uint64_t sent, std::uint64_t skipped);
   // Under in_mu: frees the slot when the hook is gone and none of its messages is queued.
   void retire_in_hook_if_done(std::uint32_t edge);
-  // Node::notify's work once the task is found: on_notify() is due, and the task is woken.
-  void notify();
+  // Node::notify's work once the task is found: on_notify() is due, and the task is woken; or,
+  // when `may_run_here` (the caller holds no node lock: Task::notify), for a task that takes
+  // notifications at once and can now (its slot can run inline), on_notify() runs here.
+  void notify(bool may_run_here);
+  // notify's at-once path: on_notify() now, as an activation would run it.
+  void take_notification_now();
   void fault(const char* where, const char* what);
   // Every handler starts here: the test in line, the work (rare) out of line. `params` is set
   // before the task starts and never replaced, so the unlocked test is safe and spares the common
@@ -188,6 +192,8 @@ struct TaskRecord final : kernel::Activity {
   bool notified = false;  // Node::notify: on_notify() is due
   // Task::take_messages_at_once under a non-concurrent executor: see take_now.
   const bool immediate;
+  // Task::take_notifications_at_once under a non-concurrent executor: see notify.
+  const bool immediate_notify;
   // Admitted a message that take_now will hand over later in the same send.
   bool taking_now = false;
   // A handler of this task is running: the guard of take_now, and what lets this task's sends

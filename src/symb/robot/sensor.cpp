@@ -183,6 +183,8 @@ SensorTask::SensorTask(std::shared_ptr<Sensor> sensor, Options options)
       overwrite_warning_(options_.warn_interval) {
   bind_parameters(options_);
   if (!sensor_) throw std::invalid_argument("sensor task: no sensor");
+  // Its notifier runs inside publish(): at once only where that holds no lock the drain takes.
+  if (sensor_->threads() == DeviceThreads::kOneAtATime) take_notifications_at_once();
   if (!options_.ranges.empty()) {
     if (options_.ranges.size() != sensor_->channels().size())
       throw std::invalid_argument("sensor task: " + std::to_string(options_.ranges.size()) + " ranges for " +

@@ -14,7 +14,10 @@
 //    executor's own context (a simulated device) and otherwise handed over through Node::inject,
 //    the one node call a foreign thread may make under every executor; so the same code runs
 //    under the thread executor (at once, on the driver's thread) and under the virtual-time one
-//    (between events, on its thread). The task then drains the mailbox on its own context.
+//    (between events, on its thread). The task then drains the mailbox on its own context. For a
+//    device called one context at a time (no data lock around the notifier) the task takes its
+//    notifications at once (Task::take_notifications_at_once): the drain runs inside publish()
+//    when its activation would have been the next event anyway.
 //  - Every counter is exact: published == not_open + rejected + unheard + queued_total, and
 //    queued_total == taken + overwritten + (samples still in the mailbox).
 //  - Samples published while no task listens are unheard: kept as latest() only, never queued,

@@ -17,8 +17,9 @@
 // and its ActuatorSinkTask within the same virtual instant, and the wheel command that results
 // is used by step k + 1: exactly one control period from reading to action, as on a robot that
 // samples, thinks and drives once per period. Under the VirtualTimeExecutor this holds because
-// the sensor's notification is injected work, which the executor runs right after the runner's
-// tick and before any later event, and handlers take no virtual time. The runner has a high
+// the sensor task drains the sample inside the runner's tick (it takes its notifications at once)
+// or, when an event at the instant outranks it, in an activation right after, before any later
+// event, and handlers take no virtual time. The runner has a high
 // priority so that, at an instant shared with periodic tasks, the world moves first. Under the
 // LockstepExecutor the runner is on the main lane and each robot's node on its own lane: the
 // notification is posted into the robot's idle lane at the step's instant t, the lane runs the
