@@ -115,14 +115,17 @@ class Task {
   // cut to a queue at Node::kMaxImmediateDepth.
   void take_messages_at_once() { immediate_ = true; }
   // Declares, from the constructor, that this task takes its notifications at once: under a
-  // non-concurrent executor, a Node::notify made from inside another activity's handler on the
+  // non-concurrent executor, a notify() made from inside another activity's handler on the
   // executor's own context (a simulated device publishing from the world's step) runs on_notify
   // before notify returns, with no activation of its own, when the task is idle (not inside a
   // handler, nothing queued, no parameters waiting, running, the nesting below
-  // Node::kMaxImmediateDepth); otherwise it is woken as usual. For a task whose on_notify only
-  // drains a device into messages (SensorTask): at a robot's every step that spares an event and a
-  // wake. The caller must hold no lock on_notify takes (a device's own data lock): a SensorTask
-  // asks for this only for a device called one context at a time, which has none.
+  // Node::kMaxImmediateDepth) and no event due at this instant comes before its activation would;
+  // otherwise (and through Node::notify, which holds the node's lock) it is woken as usual. The one
+  // difference from a wake: on_notify comes before the rest of the notifying handler, not after
+  // it. For a task whose on_notify only drains a device into messages (SensorTask): at a robot's
+  // every step that spares an event and a wake. The caller must hold no lock on_notify takes (a
+  // device's own data lock): a SensorTask asks for this only for a device called one context at a
+  // time, which has none.
   void take_notifications_at_once() { immediate_notify_ = true; }
 
   // Declares where this task keeps its parameters: `options`, a member of the task, whose type is
