@@ -2,15 +2,19 @@
 // sender's send under a non-concurrent executor, queued as usual everywhere else, with the same
 // accounting, a bounded nesting and a handler that may rewire the node mid-send. And tasks that
 // take their notifications at once (Task::take_notifications_at_once): on_notify inside the
-// notifying handler only when the woken activation would have been the next event anyway.
+// notifying handler only when the woken activation would have been the next event anyway, also
+// when a lockstep lane is notified just before its window.
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <memory>
+#include <string>
 #include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "symb/kernel/lockstep_executor.hpp"
 #include "symb/kernel/thread_executor.hpp"
 #include "symb/kernel/virtual_time_executor.hpp"
 #include "symb/os/node.hpp"
@@ -370,6 +374,67 @@ TEST(ImmediateNotification, ANotifyFromOutsideAnyHandlerWakesTheTask) {
   EXPECT_EQ(n->count(), 0);
   ex.run_for(1ms);
   EXPECT_EQ(n->count(), 1);  // one activation for both
+}
+
+// The world runner's shape: a task on the main lane of a lockstep executor notifies a task on each
+// robot's lane through for_each_lane_before_its_window(). The call is made in the lane's window
+// as from a handler of the lane, so a task that takes its notifications at once does there
+// instead of costing the lane an activation, and which threads run the lanes changes nothing.
+TEST(ImmediateNotification, ALockstepLaneTakesANotificationMadeBeforeItsWindowAtOnce) {
+  constexpr std::size_t kLanes = 4;
+  struct Run {
+    std::vector<std::vector<int>> seen_at_once, seen_woken;  // per lane, each count after the notify
+    std::vector<int> at_once_count, woken_count;
+    std::uint64_t events = 0;
+  };
+  auto run = [&](unsigned threads) {
+    kernel::LockstepExecutor ex({.threads = threads});
+    Run r;
+    r.seen_at_once.resize(kLanes);
+    r.seen_woken.resize(kLanes);
+    std::vector<std::unique_ptr<Node>> robots;
+    std::vector<Notified*> at_once, woken;
+    for (std::size_t i = 0; i < kLanes; ++i) {
+      robots.push_back(std::make_unique<Node>(ex.lane(i), NodeConfig{"bot", i + 1}));
+      auto a = std::make_unique<Notified>(true);
+      auto w = std::make_unique<Notified>(false);
+      at_once.push_back(a.get());
+      woken.push_back(w.get());
+      EXPECT_TRUE(robots.back()->create("at_once", std::move(a)));
+      EXPECT_TRUE(robots.back()->create("woken", std::move(w)));
+    }
+    Node world(ex, {"world", 100});
+    auto driver = std::make_unique<Scripted>();
+    driver->tick = [&](Scripted&) {
+      ex.for_each_lane_before_its_window(kLanes, [&](std::size_t i) {
+        at_once[i]->notify();
+        woken[i]->notify();
+        r.seen_at_once[i].push_back(at_once[i]->count());
+        r.seen_woken[i].push_back(woken[i]->count());
+      });
+    };
+    EXPECT_TRUE(world.create("driver", std::move(driver), {.priority = 5, .period = 10ms}));
+    // The driver ticks at 10, 20 and 30 ms; each tick's calls open its lanes' window.
+    r.events = ex.run_until(kernel::Time{35ms});
+    for (std::size_t i = 0; i < kLanes; ++i) {
+      r.at_once_count.push_back(at_once[i]->count());
+      r.woken_count.push_back(woken[i]->count());
+    }
+    return r;
+  };
+  const Run one = run(1);
+  for (std::size_t i = 0; i < kLanes; ++i) {
+    EXPECT_EQ(one.seen_at_once[i], (std::vector<int>{1, 2, 3})) << "lane " << i;
+    EXPECT_EQ(one.seen_woken[i], (std::vector<int>{0, 1, 2})) << "lane " << i;
+  }
+  EXPECT_EQ(one.at_once_count, std::vector<int>(kLanes, 3));
+  EXPECT_EQ(one.woken_count, std::vector<int>(kLanes, 3));
+  for (const unsigned threads : {2u, 4u}) {
+    const Run many = run(threads);
+    EXPECT_EQ(many.seen_at_once, one.seen_at_once) << threads << " threads";
+    EXPECT_EQ(many.seen_woken, one.seen_woken) << threads << " threads";
+    EXPECT_EQ(many.events, one.events) << threads << " threads";
+  }
 }
 
 }  // namespace

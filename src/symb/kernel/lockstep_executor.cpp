@@ -159,12 +159,11 @@ std::uint64_t LockstepExecutor::run_lanes(Time end, bool inclusive, bool idle) {
       }
       const std::size_t index = i - w->first_lane;
       VirtualTimeExecutor& lane = *w->ex.lanes_[index];
-      if (!w->ex.before_.empty()) {
-        lane.set_guest(std::this_thread::get_id());
-        for (const auto& [count, fn] : w->ex.before_)
-          if (index < count) fn(index);
-        lane.set_guest(std::thread::id{});
-      }
+      if (!w->ex.before_.empty())
+        lane.call_as_handler([w, index] {
+          for (const auto& [count, fn] : w->ex.before_)
+            if (index < count) fn(index);
+        });
       if (w->idle)
         n += lane.run_until_idle(w->end);
       else if (w->inclusive)

@@ -74,7 +74,9 @@ class LockstepExecutor final : public Executor {
   // Makes call i first in lane i's next window, on the worker that runs the lane (a lane's
   // readings then meet its handlers in that core's cache instead of being written by one pass
   // and read back by another); a run that stops before another window makes them before it
-  // returns. Indices without a lane are called at once, on the calling thread.
+  // returns. Indices without a lane are called at once, on the calling thread. Within a window
+  // the call is made as from a handler of the lane (VirtualTimeExecutor::call_as_handler), so a
+  // task it notifies may take the notification at once, as in a single-lane run.
   void for_each_lane_before_its_window(std::size_t n, std::function<void(std::size_t)> fn) override;
 
   // Handles every event (main lane and lanes) up to and including `until`, then sets every clock

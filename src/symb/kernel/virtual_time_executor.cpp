@@ -56,8 +56,8 @@ struct VirtualTimeExecutor::Slot final : ActivitySlot {
     // is the next one to be handled (nothing queued at this instant outranks it): then the run
     // differs from the woken one only in that the input comes before the rest of the handler
     // that made it, not after.
-    if (!exec->running_ || exec->current_ == nullptr || exec->current_ == this || !started || suspended || detaching ||
-        input_scheduled)
+    if (!exec->running_ || (exec->current_ == nullptr && !exec->in_call_) || exec->current_ == this || !started ||
+        suspended || detaching || input_scheduled)
       return false;
     if (!exec->ready_.empty() && exec->ready_.back().priority >= priority) return false;
     if (!exec->events_.empty() && exec->events_.front().time == exec->clock_.now() &&
@@ -135,6 +135,18 @@ std::size_t VirtualTimeExecutor::run_injected() {
   running_ = was_running;
   finalize_pending();
   return work.size();
+}
+
+void VirtualTimeExecutor::begin_call_as_handler() {
+  assert(!running_ && "call_as_handler is not for inside a run");
+  running_ = in_call_ = true;
+  runner_.store(std::this_thread::get_id(), std::memory_order_relaxed);
+}
+
+void VirtualTimeExecutor::end_call_as_handler() {
+  running_ = in_call_ = false;
+  runner_.store(std::thread::id(), std::memory_order_relaxed);
+  finalize_pending();
 }
 
 std::size_t VirtualTimeExecutor::wait_injected(std::chrono::nanoseconds timeout) {

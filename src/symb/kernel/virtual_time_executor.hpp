@@ -45,6 +45,22 @@ class VirtualTimeExecutor final : public Executor {
   // worker of a lockstep executor's for_each_lane(), which calls into this lane alone while every
   // lane is idle.
   void set_guest(std::thread::id guest) { guest_.store(guest, std::memory_order_relaxed); }
+  // Calls fn() on the calling thread at now() as if a handler of this executor made the call: for
+  // what a lockstep executor calls into a lane just before the lane's window (a device publishing
+  // its robot's readings), while the lane is idle. A detach fn asks for waits for fn's end, and
+  // an activity fn wakes may take its input at once, on the terms it would inside a handler
+  // (ActivitySlot::can_run_inline): the run is the one a wake would give, but for that input
+  // coming before the rest of fn. Not from inside a run of this executor.
+  template <class F>
+  void call_as_handler(F&& fn) {
+    struct Leave {
+      VirtualTimeExecutor& e;
+      ~Leave() { e.end_call_as_handler(); }
+    };
+    begin_call_as_handler();
+    Leave leave{*this};
+    fn();
+  }
   // Runs the injected work now (run_*() also does, between events). Returns how much ran.
   std::size_t run_injected();
   // Waits up to `timeout` of real time for injected work, then runs it: lets a caller pace a
@@ -150,6 +166,8 @@ class VirtualTimeExecutor final : public Executor {
   inline void handle(const Event& e);
   void finalize(Slot& s);
   void finalize_pending();
+  void begin_call_as_handler();
+  void end_call_as_handler();
 
   std::mutex inbox_mu_;
   std::condition_variable inbox_cv_;
@@ -165,6 +183,7 @@ class VirtualTimeExecutor final : public Executor {
   std::vector<Slot*> free_slots_;
   std::vector<Slot*> to_finalize_;
   Slot* current_ = nullptr;
+  bool in_call_ = false;  // inside call_as_handler(): a handler, though no slot's
   std::uint64_t seq_ = 0;
   bool running_ = false;
   // The thread inside run_*(), read by on_own_context() from any thread; empty outside a run.
