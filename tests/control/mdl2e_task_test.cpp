@@ -35,17 +35,27 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 using test_support::ms;
 
 // Sends the IR vector scripted for an instant at its tick of that instant (and nothing else).
+// A vector scripted with `queued_to` is posted into that task's queue instead, as from outside
+// any task: the controller, which takes what is sent to it at once, finds it waiting.
 class Mdl2eSensor : public os::Task {
  public:
-  void script(Time t, IR ir) { script_[t] = std::move(ir); }
+  void script(Time t, IR ir, os::TaskId queued_to = {}) { script_[t] = {std::move(ir), queued_to}; }
 
  protected:
   void on_tick() override {
-    if (auto it = script_.find(now()); it != script_.end()) send(kSensorPort, it->second);
+    auto it = script_.find(now());
+    if (it == script_.end()) return;
+    const auto& [ir, queued_to] = it->second;
+    if (!queued_to.valid()) return send(kSensorPort, ir);
+    os::Message m;
+    m.port = kSensorPort;
+    m.time = now();
+    m.payload = os::Payload(std::span<const float>(ir));
+    ASSERT_TRUE(node().post(queued_to, m));
   }
 
  private:
-  std::map<Time, IR> script_;
+  std::map<Time, std::pair<IR, os::TaskId>> script_;
 };
 
 // Keeps every wheel command with its time.
@@ -219,14 +229,30 @@ TEST(Mdl2eTask, VectorThenTickAtOneInstantStepsOnce) {
   EXPECT_EQ(one[0].left, -80);
   EXPECT_EQ(rig.ctl->stats().skipped_ticks, 1u);
 
-  // A bad vector waiting at a tick: the tick's step is not lost, it is taken on the last good one.
+  // A bad vector handed over before a tick: the tick steps on the last good one.
+  rig.ex.run_until(ms(179));
+  const std::uint64_t tick_steps = rig.ctl->stats().tick_steps;
   rig.sensor->script(ms(180), {1, 2, 3});
   rig.ex.run_until(ms(180));
   const auto kept = rig.rec->at(ms(180));
   ASSERT_EQ(kept.size(), 1u);
   EXPECT_EQ(kept[0].left, -80);
   EXPECT_EQ(rig.ctl->stats().wrong_count, 1u);
+  EXPECT_EQ(rig.ctl->stats().tick_steps, tick_steps + 1);
+  EXPECT_EQ(rig.ctl->stats().skipped_ticks, 1u);
+
+  // A bad vector waiting in the queue at a tick: the tick leaves its step to it, and the step is
+  // not lost to it: it is taken on the last good vector, counted as the tick's.
+  rig.ex.run_until(ms(269));
+  const std::uint64_t tick_steps_before = rig.ctl->stats().tick_steps;
+  rig.sensor->script(ms(270), {1, 2, 3}, rig.ctl_id);
+  rig.ex.run_until(ms(270));
+  const auto deferred = rig.rec->at(ms(270));
+  ASSERT_EQ(deferred.size(), 1u);
+  EXPECT_EQ(deferred[0].left, -80);
+  EXPECT_EQ(rig.ctl->stats().wrong_count, 2u);
   EXPECT_EQ(rig.ctl->stats().skipped_ticks, 2u);
+  EXPECT_EQ(rig.ctl->stats().tick_steps, tick_steps_before + 1);
 }
 
 TEST(Mdl2eTask, ExternalBitsReactAtOnceAndThePlanEndGivesZeros) {

@@ -108,11 +108,11 @@ class Task {
   // inside a handler already; otherwise, and under the thread executor, and for a send from
   // outside any handler (Node::send_as, Node::post), the message is queued as usual. For a task
   // whose on_message only acts on a device, as the paper's standard actuator "changes the robot's
-  // state immediately": at a robot's every step that spares a queue round trip and an event per
-  // command. The message is the one a queue would hand over (time, source, hops), counted as one
-  // (accounting, suppression, tracing), and a throw faults the task as it would. What such a
-  // task sends from on_message goes out from within its sender's send; a chain of such tasks is
-  // cut to a queue at Node::kMaxImmediateDepth.
+  // state immediately", or turns a reading into a command (a controller): at a robot's every
+  // step that spares a queue round trip and an event per message. The message is the one a queue
+  // would hand over (time, source, hops), counted as one (accounting, suppression, tracing), and
+  // a throw faults the task as it would. What such a task sends from on_message goes out from
+  // within its sender's send; a chain of such tasks is cut to a queue at Node::kMaxImmediateDepth.
   void take_messages_at_once() { immediate_ = true; }
   // Declares, from the constructor, that this task takes its notifications at once: under a
   // non-concurrent executor, a notify() made from inside another activity's handler on the

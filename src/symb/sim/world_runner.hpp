@@ -23,8 +23,9 @@
 // priority so that, at an instant shared with periodic tasks, the world moves first. Under the
 // LockstepExecutor the runner is on the main lane and each robot's node on its own lane: the
 // readings are published first in the robot's window [t, t + period) as from a handler of its
-// lane, so the sensor task takes them at once there too, the lane runs the rest of the chain in
-// that window (in parallel with the other lanes), and step k + 1 at
+// lane, so the sensor task takes them at once there too (and the controller and the sink, which
+// take their messages at once, run the rest of the chain inside that call; whatever must queue
+// runs in the lane's window, in parallel with the other lanes), and step k + 1 at
 // t + period reads the wheels after every window has closed: the same instants, so the same run.
 // Robot i's devices must feed a node on executor.lane(i) (ScenarioSession builds them so), and
 // under a non-concurrent executor nothing else may call them (they have no lock:

@@ -56,6 +56,7 @@ Mdl2eTask::Mdl2eTask(std::shared_ptr<const mdl2e::Program> program, Mdl2eTaskOpt
       sensors_(program_->sensor_count, 0.0),
       have_input_(program_->sensor_count == 0) {
   bind_parameters(options_);
+  take_messages_at_once();
 }
 
 void Mdl2eTask::prefetch(int level) const {

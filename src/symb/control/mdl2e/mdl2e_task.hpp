@@ -18,11 +18,14 @@
 //    the queue (that message steps right after, at the same instant) or when a step was already
 //    taken at this instant. So when a vector and a tick meet at one instant, what happens depends
 //    on who runs first, which under virtual time is the higher priority:
-//      - the sensor task above the controller (the type defaults: 1 and 0): the vector is queued
-//        before the tick, one step, on the newest data (should the waiting message turn out to
-//        be bad, the tick's step is taken then);
+//      - the sensor task above the controller (the type defaults: 1 and 0): the vector comes
+//        before the tick, one step, on the newest data (should a message waiting in the queue at
+//        the tick turn out to be bad, the tick's step is taken then);
 //      - the controller above the sensor: the tick steps on the previous vector, then the vector
 //        steps again; two commands at one instant, the last one computed from the newest data.
+//  - Takes its messages at once (Task::take_messages_at_once): under a non-concurrent executor a
+//    vector sent from the sensor task's handler is handled, and the wheel command sent, inside that
+//    send; a robot's step spares the controller's queue round trip and its input event.
 //  - Start: the plan is entered at the first good sensor vector; until then ticks send nothing
 //    (no wheel command is better than one computed from no data; an actuator watchdog stops the
 //    wheels). A program that declares no sensors starts at its first tick or input message.
