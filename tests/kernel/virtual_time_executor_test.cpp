@@ -1,5 +1,6 @@
 #include "symb/kernel/virtual_time_executor.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <deque>
 #include <functional>
@@ -163,6 +164,44 @@ TEST_F(VirtualTimeExecutorTest, SkippedTicksKeepTheChainsGrid) {
   a.on_tick = nullptr;
   ex.run_until(Time{135ms});
   EXPECT_EQ(log, (std::vector<std::string>{"a:tick@105", "a:tick@120", "a:tick@130"}));
+}
+
+// A hint from an input handler reaches a tick already due: new input at 15 ms makes the tick of
+// 20 ms idle, so it is left out (the call says so) and the chain goes on at 30 on its grid. A hint
+// that reaches no pending tick leaves nothing out; in a heap too large to look through the tick
+// runs as due.
+TEST_F(VirtualTimeExecutorTest, AHintFromInputLeavesOutATickAlreadyDue) {
+  Recorder& a = make("a");
+  Recorder& b = make("b");
+  ex.attach(a, {0, 10ms, "a"});
+  ex.attach(b, {1, 15ms, "b"});
+  std::vector<std::uint64_t> left_out;
+  b.on_tick = [&] {
+    if (ex.now() == Time{15ms}) a.slot->wake();
+  };
+  a.on_input = [&] {
+    left_out.push_back(a.slot->skip_ticks_before(Time{21ms}));
+    left_out.push_back(a.slot->skip_ticks_before(Time{25ms}));  // the tick is at 30 now
+  };
+  ex.run_until(Time{45ms});
+  EXPECT_EQ(left_out, (std::vector<std::uint64_t>{1, 0}));
+  EXPECT_EQ(log, (std::vector<std::string>{"b:start@0", "a:start@0", "a:tick@10", "b:tick@15", "a:input@15",
+                                           "b:tick@30", "a:tick@30", "a:tick@40", "b:tick@45"}));
+
+  std::vector<std::string> crowded_log;
+  std::deque<Recorder> others;  // outlives the executor, which stops them as it goes
+  VirtualTimeExecutor crowded;
+  for (int i = 0; i < 20; ++i) crowded.attach(others.emplace_back("o", crowded, crowded_log), {0, 7ms, "o"});
+  Recorder& c = others.emplace_back("c", crowded, crowded_log);
+  crowded.attach(c, {0, 10ms, "c"});
+  std::uint64_t crowded_left_out = 9;
+  c.on_input = [&] { crowded_left_out = c.slot->skip_ticks_before(Time{21ms}); };
+  crowded.run_until(Time{15ms});
+  c.slot->wake();  // its input runs at 15, before the tick of 20
+  crowded_log.clear();
+  crowded.run_until(Time{20ms});
+  EXPECT_EQ(crowded_left_out, 0u);
+  EXPECT_NE(std::find(crowded_log.begin(), crowded_log.end(), "c:tick@20"), crowded_log.end());
 }
 
 TEST_F(VirtualTimeExecutorTest, StopReturnsEarly) {

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -71,11 +72,15 @@ class ActivitySlot {
   virtual void set_priority(int priority) = 0;
   virtual void set_period(Duration period) = 0;
   // A hint from the activity's own handler: its ticks before `t` would find nothing to do (a
-  // watchdog whose deadline is still ahead). An executor may leave them out; the chain keeps its
-  // phase, so the next tick is the first one of the period's grid at or after `t`, the same
-  // instant it would have acted at anyway. Cleared by set_period() and resume(), which start a
-  // chain afresh. Executors that tick in real time ignore it.
-  virtual void skip_ticks_before(Time /*t*/) {}
+  // watchdog whose deadline is still ahead; a controller that has just stepped at this instant on
+  // new input, whose tick of the same instant would step no more). An executor may leave them
+  // out; the chain keeps its phase, so the next tick is the first one of the period's grid at or
+  // after `t`, the same instant it would have acted at anyway. Returns how many ticks that were
+  // already due before `t` it left out now (a tick of this very instant not yet run, from a
+  // message handler), so the activity can count them as the ticks would have; ticks left out
+  // later, as the chain goes on, are not counted. Cleared by set_period() and resume(), which
+  // start a chain afresh. Executors that tick in real time ignore it and return 0.
+  virtual std::uint64_t skip_ticks_before(Time /*t*/) { return 0; }
   // Whether the caller may run this activity's input handling itself, right now, on the calling
   // thread, instead of waking it: true only for an executor that runs one handler at a time, when
   // the call comes from inside another activity's handler on its own context (so that a detach

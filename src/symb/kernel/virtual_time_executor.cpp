@@ -66,7 +66,10 @@ struct VirtualTimeExecutor::Slot final : ActivitySlot {
     return exec->runner_.load(std::memory_order_relaxed) == std::this_thread::get_id();
   }
   void set_priority(int p) override { priority = p; }
-  void skip_ticks_before(Time t) override { skip_before = t; }
+  std::uint64_t skip_ticks_before(Time t) override {
+    skip_before = t;
+    return exec->skip_pending_tick(*this, t);
+  }
   void set_period(Duration p) override {
     period = p;
     ++tick_generation;
@@ -223,6 +226,39 @@ std::size_t VirtualTimeExecutor::wait_injected(std::chrono::nanoseconds timeout)
   }
   events_.pop_back();
   return top;
+}
+
+std::uint64_t VirtualTimeExecutor::skip_pending_tick(Slot& s, Time t) {
+  // A robot's lane holds a handful of events, so the tick is found by a look at each; in a large
+  // heap the look is not worth it: the tick then runs when due and its handler finds nothing to
+  // do, which is what leaving it out spares. During the slot's own tick none is pending (the
+  // next is scheduled after it).
+  constexpr std::size_t kLookLimit = 16;
+  if (s.period.count() <= 0 || s.suspended || s.detaching || events_.size() > kLookLimit) return 0;
+  for (std::size_t i = 0; i < events_.size(); ++i) {
+    const Event& e = events_[i];
+    if (e.slot != &s || e.kind != EventKind::kTick || e.generation != s.generation ||
+        e.tick_generation != s.tick_generation)
+      continue;
+    if (e.time >= t) return 0;
+    // Numbered now, as the tick that would have been scheduled when this one ran: at the instant
+    // it moves to it comes after what was scheduled for that instant before, at its priority.
+    Event moved = e;
+    moved.time += s.period * ((t - e.time + s.period - Duration{1}) / s.period);
+    moved.seq = seq_++;
+    const Later later;
+    for (;;) {  // later than it was: it can only sink
+      std::size_t child = 2 * i + 1;
+      if (child >= events_.size()) break;
+      if (child + 1 < events_.size() && later(events_[child], events_[child + 1])) ++child;
+      if (!later(moved, events_[child])) break;
+      events_[i] = events_[child];
+      i = child;
+    }
+    events_[i] = moved;
+    return 1;
+  }
+  return 0;
 }
 
 void VirtualTimeExecutor::prefetch(int stage) const {

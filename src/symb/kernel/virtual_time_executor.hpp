@@ -158,6 +158,9 @@ class VirtualTimeExecutor final : public Executor {
   // tenth of a message delivery. Here the event stays in registers until its place is found.
   inline void push_event(const Event& e);
   inline Event pop_event();
+  // Slot::skip_ticks_before's work: the slot's tick of its current chain that is due before `t`
+  // moves to the first instant of its grid at or after `t`. Returns 1 if it did, else 0.
+  std::uint64_t skip_pending_tick(Slot& s, Time t);
   // Input scheduled at the current instant (a wake: most events of a step) skips the heap: it
   // joins `ready_`, a short list in handling order, and the next event is the better of its last
   // entry and the heap's top. The order is the heap's own (time, priority, schedule order).

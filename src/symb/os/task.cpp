@@ -54,10 +54,10 @@ void Task::send(Port port, std::span<const float> values) {
 
 void Task::notify() { record_->notify(true); }
 
-void Task::skip_ticks_before(kernel::Time t) {
+std::uint64_t Task::skip_ticks_before(kernel::Time t) {
   // A handler's own call: the node set the slot before the task started and keeps it until the
   // task is stopped.
-  if (record_->slot != nullptr) record_->slot->skip_ticks_before(t);
+  return record_->slot != nullptr ? record_->slot->skip_ticks_before(t) : 0;
 }
 
 void Task::probe(std::string_view channel, std::span<const float> values) const {

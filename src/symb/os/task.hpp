@@ -145,11 +145,13 @@ class Task {
   // Messages waiting in this task's own queue (a tick may leave its work to one of them). Cheap: no
   // copy, and a lock only under the thread executor.
   std::size_t pending_messages() const;
-  // From on_tick: this task's ticks before `t` would do nothing (kernel::ActivitySlot::
+  // From a handler: this task's ticks before `t` would do nothing (kernel::ActivitySlot::
   // skip_ticks_before), so the executor may leave them out; the next tick is then the first one of
   // the period's grid at or after `t`. For a deadline checked at ticks (a watchdog) that moves
-  // with the traffic: what the task does is the same, with fewer activations.
-  void skip_ticks_before(kernel::Time t);
+  // with the traffic, or a tick of this instant that new input has made idle (a controller that
+  // just stepped): what the task does is the same, with fewer activations. Returns how many
+  // ticks already due before `t` were left out by this call, for the task to count.
+  std::uint64_t skip_ticks_before(kernel::Time t);
   // Sends to every task hooked to this one. Timestamped with the node clock.
   void send(Port port, const Payload& payload);
   void send(Port port, std::span<const float> values);

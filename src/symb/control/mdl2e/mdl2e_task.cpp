@@ -165,6 +165,9 @@ void Mdl2eTask::step(bool at_tick) {
   const mdl2e::Output out = interpreter_.step(t, {sensors_, external_});
   stepped_ = true;
   last_step_ = t;
+  // A tick of this instant still to come would find this step and skip: the executor may leave
+  // it out (one event fewer at every robot's step in a swarm), counted as the tick would count it.
+  if (!at_tick) counters_.skipped_ticks.bump(skip_ticks_before(t + kernel::Duration{1}));
   for (const mdl2e::Event& e : out.event_list()) {
     if (e.kind == EventKind::kTaskAction) {
       carry_out(e);
